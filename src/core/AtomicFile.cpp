@@ -1,0 +1,128 @@
+#include "core/AtomicFile.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <unistd.h>
+
+namespace terrain {
+
+namespace {
+std::filesystem::path temporaryNameFor(const std::filesystem::path& path)
+{
+    // Unique per process and per call, so concurrent writers of different outputs never collide.
+    static std::atomic<unsigned> counter{0};
+    auto name = path.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+    return path.parent_path() / name;
+}
+}  // namespace
+
+AtomicFile::AtomicFile(std::FILE* file, std::filesystem::path path, std::filesystem::path temporaryPath)
+    : mFile(file), mPath(std::move(path)), mTemporaryPath(std::move(temporaryPath))
+{
+}
+
+Expected<AtomicFile> AtomicFile::create(const std::filesystem::path& path)
+{
+    auto temporary = temporaryNameFor(path);
+    std::FILE* file = std::fopen(temporary.c_str(), "wb");
+    if (!file) {
+        return makeError(path.string(), ": cannot create output file: ", std::strerror(errno));
+    }
+    return AtomicFile(file, path, std::move(temporary));
+}
+
+AtomicFile::AtomicFile(AtomicFile&& other) noexcept
+    : mFile(std::exchange(other.mFile, nullptr)),
+      mPath(std::move(other.mPath)),
+      mTemporaryPath(std::move(other.mTemporaryPath)),
+      mSize(other.mSize),
+      mErrno(other.mErrno)
+{
+}
+
+AtomicFile& AtomicFile::operator=(AtomicFile&& other) noexcept
+{
+    if (this != &other) {
+        discard();
+        mFile = std::exchange(other.mFile, nullptr);
+        mPath = std::move(other.mPath);
+        mTemporaryPath = std::move(other.mTemporaryPath);
+        mSize = other.mSize;
+        mErrno = other.mErrno;
+    }
+    return *this;
+}
+
+AtomicFile::~AtomicFile() { discard(); }
+
+void AtomicFile::discard()
+{
+    if (mFile) {
+        std::fclose(mFile);
+        mFile = nullptr;
+        std::error_code ignored;
+        std::filesystem::remove(mTemporaryPath, ignored);
+    }
+}
+
+void AtomicFile::write(const void* data, std::size_t size)
+{
+    if (mErrno != 0 || size == 0) {
+        return;
+    }
+    if (std::fwrite(data, 1, size, mFile) != size) {
+        mErrno = errno ? errno : EIO;
+    }
+    mSize += size;
+}
+
+void AtomicFile::writeAt(std::uint64_t offset, const void* data, std::size_t size)
+{
+    if (mErrno != 0) {
+        return;
+    }
+    if (std::fseek(mFile, static_cast<long>(offset), SEEK_SET) != 0 || std::fwrite(data, 1, size, mFile) != size ||
+        std::fseek(mFile, 0, SEEK_END) != 0) {
+        mErrno = errno ? errno : EIO;
+    }
+    mSize = std::max<std::uint64_t>(mSize, offset + size);
+}
+
+Status AtomicFile::commit()
+{
+    if (!mFile) {
+        return makeError(mPath.string(), ": output already committed or discarded");
+    }
+    int error = mErrno;
+    if (error == 0 && std::fflush(mFile) != 0) {
+        error = errno;
+    }
+    if (error == 0 && ::fsync(::fileno(mFile)) != 0) {
+        error = errno;
+    }
+    if (error != 0) {
+        discard();
+        return makeError(mPath.string(), ": write failed: ", std::strerror(error));
+    }
+    std::fclose(mFile);
+    mFile = nullptr;
+    std::error_code ec;
+    std::filesystem::rename(mTemporaryPath, mPath, ec);
+    if (ec) {
+        std::filesystem::remove(mTemporaryPath, ec);
+        return makeError(mPath.string(), ": cannot rename temporary output into place: ", ec.message());
+    }
+    return {};
+}
+
+Status writeFileAtomically(const std::filesystem::path& path, std::span<const std::uint8_t> bytes)
+{
+    auto file = AtomicFile::create(path);
+    TERRAIN_TRY(file);
+    file->write(bytes);
+    return file->commit();
+}
+
+}  // namespace terrain

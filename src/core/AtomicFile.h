@@ -1,0 +1,53 @@
+// Output files that appear whole or not at all: written under a temporary name in the same directory,
+// flushed, then renamed over the final name. An interrupted or failed write leaves no partial file.
+#pragma once
+
+#include "core/Expected.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <span>
+
+namespace terrain {
+
+class AtomicFile {
+public:
+    /// Opens `<path>.tmp-<pid>-<n>` for writing. Fails with a message naming the path.
+    static Expected<AtomicFile> create(const std::filesystem::path& path);
+
+    AtomicFile(AtomicFile&& other) noexcept;
+    AtomicFile& operator=(AtomicFile&& other) noexcept;
+    AtomicFile(const AtomicFile&) = delete;
+    AtomicFile& operator=(const AtomicFile&) = delete;
+    /// Removes the temporary file unless commit() succeeded.
+    ~AtomicFile();
+
+    /// Appends bytes; errors are remembered and reported by commit().
+    void write(const void* data, std::size_t size);
+    void write(std::span<const std::uint8_t> bytes) { write(bytes.data(), bytes.size()); }
+    /// Overwrites bytes at an absolute offset (e.g. a header patched after the body); errors reported by commit().
+    void writeAt(std::uint64_t offset, const void* data, std::size_t size);
+    /// Bytes written so far (the current end of file).
+    std::uint64_t size() const { return mSize; }
+    /// Flushes, syncs and renames to the final path. Fails with a message naming the path.
+    Status commit();
+
+    const std::filesystem::path& path() const { return mPath; }
+    const std::filesystem::path& temporaryPath() const { return mTemporaryPath; }
+
+private:
+    AtomicFile(std::FILE* file, std::filesystem::path path, std::filesystem::path temporaryPath);
+    void discard();
+
+    std::FILE* mFile = nullptr;
+    std::filesystem::path mPath;
+    std::filesystem::path mTemporaryPath;
+    std::uint64_t mSize = 0;
+    int mErrno = 0;
+};
+
+/// Writes a whole buffer atomically.
+Status writeFileAtomically(const std::filesystem::path& path, std::span<const std::uint8_t> bytes);
+
+}  // namespace terrain

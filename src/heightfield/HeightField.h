@@ -1,0 +1,41 @@
+// In-memory height fields as read from their files (paper 4.1), before any quantization.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace terrain {
+
+/// A regular grid of height samples exactly as the file stores them ("native units").
+///
+/// Orientation: sample (i, j) lies at world (originX + i * spacing, originY + j * spacing): i grows
+/// east, j grows north, so row j = 0 is the SOUTH edge. Readers of north-up images (PNG, raw) flip rows.
+/// Heights in metres are `verticalOffset + verticalScale * native`.
+struct HeightField {
+    int width = 0;   ///< samples along x (east), >= 1
+    int height = 0;  ///< samples along y (north), >= 1
+    /// width * height native values, index j * width + i. NaN marks a no-data sample (the reader turns the
+    /// format's own marker into NaN).
+    std::vector<float> samples;
+    /// True when every native value is an integer (PNG, raw 16-bit, .ter, integer .bt): such input can be
+    /// stored losslessly with a quantization step of one native unit.
+    bool integerSamples = true;
+    /// Metres between neighbouring samples when the file says so; empty for formats without spacing (PNG, raw).
+    std::optional<double> spacing;
+    /// Metres per native unit when the file says so (.bt vertical scale, .ter SCAL/HeightScale).
+    std::optional<double> verticalScale;
+    /// Metres added after scaling when the file says so (.ter BaseHeight); 0 otherwise.
+    double verticalOffset = 0.0;
+    /// World position (metres) of sample (0, 0) when the file is georeferenced in a metric projection.
+    double originX = 0.0;
+    double originY = 0.0;
+    /// One line saying what was read, e.g. "PNG 16-bit gray 1025x1025"; for summaries and `tengine-tool info`.
+    std::string description;
+
+    float at(int i, int j) const { return samples[static_cast<std::size_t>(j) * width + i]; }
+    float& at(int i, int j) { return samples[static_cast<std::size_t>(j) * width + i]; }
+};
+
+}  // namespace terrain
