@@ -1,0 +1,230 @@
+// prep: height field -> .map (paper 4.4.1). Argument parsing and reporting only; the work is buildMap().
+#include "core/Memory.h"
+#include "core/Parse.h"
+#include "core/ParallelFor.h"
+#include "heightfield/HeightFieldIo.h"
+#include "quadtree/QuadtreeBuilder.h"
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+namespace {
+
+using namespace terrain;
+
+constexpr const char* kUsage = R"(usage: prep <heightfield> [options]
+
+Builds a terrain map (.map) from a height field: PNG (8/16-bit gray), VTP .bt, Terragen .ter, or raw 16-bit.
+
+  -t FILE.png          texture stretched over the terrain (default: colours generated from height and slope)
+  -w FILE.png          weight map for pruning: white keeps the full resolution, black only the root (3.2.13)
+  -h METRES            sample spacing, when the file gives none (default 1)
+  -v SCALE             vertical scale (metres per file unit), when the file gives none (default 1)
+  -o FILE.map          output (default: the input's name with the extension .map)
+  --offset METRES      added to every height after -v (default 0)
+  --chunk N            samples per node side, 2^k+1 (default 65)
+  --max-error METRES   L-infinity bound on stored heights; 0 = lossless (default 0)
+  --texture-size T     texels per node side, 2^k+1 (default: the chunk size)
+  --threads N          worker threads (default: all cores)
+  --raw-size WxH       size of a raw 16-bit input (required for .raw/.r16/.bin)
+  --raw-signed         raw samples are signed 16-bit (default unsigned)
+  --raw-big-endian     raw samples are big-endian (default little-endian)
+  --nodata V           treat the file value V as no-data (filled from neighbours)
+  --help               this text
+)";
+
+struct Arguments {
+    std::filesystem::path input;
+    std::optional<std::filesystem::path> output;
+    BuildOptions build;
+    HeightFieldReadOptions read;
+};
+
+Expected<Arguments> parseArguments(int argc, char** argv)
+{
+    Arguments args;
+    args.build.threads = defaultThreadCount();
+    std::vector<std::string> positional;
+    for (int i = 1; i < argc; ++i) {
+        std::string arg = argv[i];
+        auto value = [&]() -> Expected<std::string> {
+            if (i + 1 >= argc) {
+                return makeError(arg, " needs a value");
+            }
+            return std::string(argv[++i]);
+        };
+        auto number = [&]() -> Expected<double> {
+            auto text = value();
+            TERRAIN_TRY(text);
+            auto parsed = parseDouble(*text);
+            if (!parsed.ok()) {
+                return makeError(arg, ": ", parsed.error().message);
+            }
+            return parsed;
+        };
+        auto integer = [&]() -> Expected<int> {
+            auto text = value();
+            TERRAIN_TRY(text);
+            auto parsed = parseInteger(*text);
+            if (!parsed.ok() || *parsed < -(1 << 30) || *parsed > (1 << 30)) {
+                return makeError(arg, ": '", *text, "' is not an integer");
+            }
+            return static_cast<int>(*parsed);
+        };
+        if (arg == "-t" || arg == "-w" || arg == "-o") {
+            auto path = value();
+            TERRAIN_TRY(path);
+            (arg == "-t" ? args.build.texture : arg == "-w" ? args.build.weights : args.output) = *path;
+        } else if (arg == "-h" || arg == "-v" || arg == "--offset" || arg == "--max-error" || arg == "--nodata") {
+            auto v = number();
+            TERRAIN_TRY(v);
+            if (arg == "-h") {
+                if (!(*v > 0)) {
+                    return makeError("-h: spacing must be positive, got ", *v);
+                }
+                args.build.spacing = *v;
+            } else if (arg == "-v") {
+                if (!(*v > 0)) {
+                    return makeError("-v: vertical scale must be positive, got ", *v);
+                }
+                args.build.verticalScale = *v;
+            } else if (arg == "--offset") {
+                args.build.offset = *v;
+            } else if (arg == "--max-error") {
+                if (*v < 0) {
+                    return makeError("--max-error: must be >= 0, got ", *v);
+                }
+                args.build.maxError = *v;
+            } else {
+                args.read.noData = *v;
+            }
+        } else if (arg == "--chunk" || arg == "--texture-size" || arg == "--threads") {
+            auto v = integer();
+            TERRAIN_TRY(v);
+            (arg == "--chunk" ? args.build.chunkSize : arg == "--texture-size" ? args.build.textureSize : args.build.threads) = *v;
+        } else if (arg == "--raw-size") {
+            auto text = value();
+            TERRAIN_TRY(text);
+            auto x = text->find('x');
+            auto w = parseInteger(text->substr(0, x == std::string::npos ? 0 : x));
+            auto h = parseInteger(x == std::string::npos ? "" : text->substr(x + 1));
+            if (!w.ok() || !h.ok() || *w < 1 || *h < 1 || *w > (1 << 30) || *h > (1 << 30)) {
+                return makeError("--raw-size: '", *text, "' is not WIDTHxHEIGHT");
+            }
+            args.read.rawWidth = static_cast<int>(*w);
+            args.read.rawHeight = static_cast<int>(*h);
+        } else if (arg == "--raw-signed") {
+            args.read.rawSigned = true;
+        } else if (arg == "--raw-big-endian") {
+            args.read.rawBigEndian = true;
+        } else if (!arg.empty() && arg[0] == '-' && arg != "-") {
+            return makeError("unknown option '", arg, "' (see prep --help)");
+        } else {
+            positional.push_back(arg);
+        }
+    }
+    if (positional.size() != 1) {
+        return makeError(positional.empty() ? "no height field given" : "more than one height field given",
+                         " (see prep --help)");
+    }
+    args.input = positional.front();
+    return args;
+}
+
+class ProgressBar {
+public:
+    explicit ProgressBar(bool enabled) : mEnabled(enabled) {}
+    void update(double fraction, std::string_view stage)
+    {
+        if (!mEnabled) {
+            return;
+        }
+        std::lock_guard lock(mMutex);
+        constexpr int kWidth = 40;
+        int filled = static_cast<int>(fraction * kWidth + 0.5);
+        std::fprintf(stderr, "\r[%.*s%*s] %3d%% %-24.*s", filled, "########################################",
+                     kWidth - filled, "", static_cast<int>(fraction * 100 + 0.5), static_cast<int>(stage.size()),
+                     stage.data());
+        std::fflush(stderr);
+        mShown = true;
+    }
+    void finish()
+    {
+        if (mShown) {
+            std::fprintf(stderr, "\r%*s\r", 72, "");
+        }
+    }
+
+private:
+    bool mEnabled;
+    bool mShown = false;
+    std::mutex mMutex;
+};
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    for (int i = 1; i < argc; ++i) {
+        if (std::strcmp(argv[i], "--help") == 0) {
+            std::fputs(kUsage, stdout);
+            return 0;
+        }
+    }
+    auto args = parseArguments(argc, argv);
+    if (!args.ok()) {
+        std::fprintf(stderr, "prep: %s\n", args.error().message.c_str());
+        return 2;
+    }
+    auto field = readHeightField(args->input, args->read);
+    if (!field.ok()) {
+        std::fprintf(stderr, "prep: %s\n", field.error().message.c_str());
+        return 1;
+    }
+    std::filesystem::path output = args->output ? *args->output : std::filesystem::path(args->input).replace_extension(".map");
+
+    ProgressBar bar(::isatty(STDERR_FILENO) != 0);
+    args->build.progress = [&](double fraction, std::string_view stage) { bar.update(fraction, stage); };
+    args->build.warn = [&](std::string_view message) {
+        bar.finish();
+        std::fprintf(stderr, "prep: warning: %.*s\n", static_cast<int>(message.size()), message.data());
+    };
+    const std::string description = field->description;
+    auto report = buildMap(std::move(field.value()), args->build, output);
+    bar.finish();
+    if (!report.ok()) {
+        std::fprintf(stderr, "prep: %s: %s\n", args->input.c_str(), report.error().message.c_str());
+        return 1;
+    }
+    const MapHeader& h = report->header;
+    const double inputSamples = static_cast<double>(report->inputWidth) * report->inputHeight;
+    std::printf("prep: wrote %s\n", output.c_str());
+    std::printf("  input     %s: %d x %d samples, spacing %g m\n", description.c_str(), report->inputWidth,
+                report->inputHeight, h.sampleSpacing);
+    if (h.noDataFilled > 0) {
+        std::printf("            %llu no-data samples filled from their neighbours\n",
+                    static_cast<unsigned long long>(h.noDataFilled));
+    }
+    std::printf("  quadtree  %u levels, %llu nodes of %u x %u samples (grid %llu x %llu), textures %u x %u\n",
+                h.levels, static_cast<unsigned long long>(report->nodes), h.chunkSize, h.chunkSize,
+                static_cast<unsigned long long>(h.gridSize()), static_cast<unsigned long long>(h.gridSize()),
+                h.textureSize, h.textureSize);
+    std::printf("  heights   step %g m, %s\n", h.heightStep,
+                h.maxErrorBound == 0 ? "lossless"
+                                     : ("max error " + std::to_string(h.maxErrorBound) + " m").c_str());
+    std::printf("  file      %s: heights %s (%.2f bits per input sample, %.2f per stored sample),\n",
+                formatBytes(report->fileBytes).c_str(), formatBytes(report->heightBytes).c_str(),
+                8.0 * static_cast<double>(report->heightBytes) / inputSamples,
+                8.0 * static_cast<double>(report->heightBytes) / static_cast<double>(report->storedSamples));
+    std::printf("            textures %s (%.2f bits per input sample)\n", formatBytes(report->textureBytes).c_str(),
+                8.0 * static_cast<double>(report->textureBytes) / inputSamples);
+    std::printf("  time      %.2f s, %.1f million input samples per second (%d threads)\n", report->seconds,
+                inputSamples / report->seconds / 1e6, args->build.threads);
+    return 0;
+}

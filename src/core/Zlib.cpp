@@ -1,0 +1,53 @@
+#include "core/Zlib.h"
+
+#include "core/Check.h"
+
+#include <zlib.h>
+
+namespace terrain {
+
+std::vector<std::uint8_t> zlibCompress(std::span<const std::uint8_t> bytes, int level)
+{
+    uLongf size = ::compressBound(static_cast<uLong>(bytes.size()));
+    std::vector<std::uint8_t> out(size);
+    int result = ::compress2(out.data(), &size, bytes.data(), static_cast<uLong>(bytes.size()), level);
+    TERRAIN_ASSERT(result == Z_OK);
+    out.resize(size);
+    return out;
+}
+
+Expected<std::vector<std::uint8_t>> zlibDecompress(std::span<const std::uint8_t> bytes, std::size_t expectedSize)
+{
+    std::vector<std::uint8_t> out(expectedSize + 1);  // one spare byte detects streams that decode too long
+    z_stream stream{};
+    if (::inflateInit(&stream) != Z_OK) {
+        return makeError("zlib initialisation failed");
+    }
+    stream.next_in = const_cast<Bytef*>(bytes.data());
+    stream.avail_in = static_cast<uInt>(bytes.size());
+    stream.next_out = out.data();
+    stream.avail_out = static_cast<uInt>(out.size());
+    int result = ::inflate(&stream, Z_FINISH);
+    std::size_t produced = out.size() - stream.avail_out;
+    std::size_t unread = stream.avail_in;
+    ::inflateEnd(&stream);
+    if (result != Z_STREAM_END) {
+        if (result == Z_DATA_ERROR) {
+            return makeError("compressed data is corrupt");
+        }
+        if (produced > expectedSize) {
+            return makeError("decodes to more than the expected ", expectedSize, " bytes");
+        }
+        return makeError("compressed data ends early (", produced, " of ", expectedSize, " bytes)");
+    }
+    if (produced != expectedSize) {
+        return makeError("decodes to ", produced, " bytes, expected ", expectedSize);
+    }
+    if (unread != 0) {
+        return makeError(unread, " bytes of trailing data after the compressed stream");
+    }
+    out.resize(expectedSize);
+    return out;
+}
+
+}  // namespace terrain

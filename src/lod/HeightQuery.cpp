@@ -1,0 +1,59 @@
+#include "lod/HeightQuery.h"
+
+#include "quadtree/TemplateTriangulation.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace terrain {
+
+Expected<HeightSample> staticHeightAt(const MapFile& map, double x, double y)
+{
+    const MapHeader& h = map.header();
+    // Position in samples of the finest static grid.
+    const double gx = (x - h.originX) / h.sampleSpacing;
+    const double gy = (y - h.originY) / h.sampleSpacing;
+    const double eps = 1e-9;
+    if (!(gx >= h.validX0 - eps && gx <= h.validX0 + h.validWidth - 1 + eps && gy >= h.validY0 - eps &&
+          gy <= h.validY0 + h.validHeight - 1 + eps)) {
+        return makeError(map.name(), ": position (", x, ", ", y, ") is outside the terrain, which spans x ",
+                         h.originX + h.validX0 * h.sampleSpacing, " .. ",
+                         h.originX + (h.validX0 + h.validWidth - 1) * h.sampleSpacing, " and y ",
+                         h.originY + h.validY0 * h.sampleSpacing, " .. ",
+                         h.originY + (h.validY0 + h.validHeight - 1) * h.sampleSpacing, " m");
+    }
+    // Descend to the finest static node containing the point.
+    const double leafCells = static_cast<double>(h.gridSize() - 1);
+    NodeId id = NodeId::root();
+    auto node = map.loadNode(id, {});
+    TERRAIN_TRY(node);
+    while (true) {
+        const DirectoryEntry* entry = map.find(id);
+        if (!entry || !entry->hasChildren) {
+            break;
+        }
+        const double half = leafCells / std::ldexp(1.0, id.level + 1);
+        const double cx = (id.x * 2 + 1) * half, cy = (id.y * 2 + 1) * half;
+        int quadrant = (gx >= cx ? 1 : 0) | (gy >= cy ? 2 : 0);
+        NodeId child = id.child(quadrant);
+        auto next = map.loadNode(child, node->heights);
+        TERRAIN_TRY(next);
+        node = std::move(next);
+        id = child;
+    }
+    // Interpolate inside the node's window.
+    const double stride = std::ldexp(1.0, static_cast<int>(h.levels) - 1 - id.level);
+    const double n1 = h.chunkSize - 1.0;
+    const double lx = std::clamp(gx / stride - id.x * n1, 0.0, n1);
+    const double ly = std::clamp(gy / stride - id.y * n1, 0.0, n1);
+    const int ix = std::min(static_cast<int>(lx), static_cast<int>(n1) - 1);
+    const int iy = std::min(static_cast<int>(ly), static_cast<int>(n1) - 1);
+    const int w = map.window().size();
+    auto code = [&](int i, int j) -> double {
+        return node->heights[static_cast<std::size_t>(j + kBorder) * w + i + kBorder];
+    };
+    double c = interpolateQuad(code(ix, iy), code(ix + 1, iy), code(ix, iy + 1), code(ix + 1, iy + 1), lx - ix, ly - iy);
+    return HeightSample{h.heightOffset + h.heightStep * c, id};
+}
+
+}  // namespace terrain

@@ -1,0 +1,272 @@
+#include "quadtree/MapFormat.h"
+
+#include "core/ByteIo.h"
+
+#include <algorithm>
+#include <cmath>
+#include <zlib.h>
+
+namespace terrain {
+
+namespace {
+constexpr std::size_t kSourceBytes = 96;
+constexpr std::uint32_t kMaxChunkSize = 1025;
+constexpr std::uint32_t kMaxTextureSize = 4097;
+
+bool isPowerOfTwoPlusOne(std::uint32_t n) { return n >= 3 && ((n - 1) & (n - 2)) == 0; }
+}  // namespace
+
+std::uint32_t crc32Of(std::span<const std::uint8_t> bytes)
+{
+    uLong crc = ::crc32(0L, Z_NULL, 0);
+    // zlib takes uInt lengths: feed in pieces so payloads over 4 GiB are still summed correctly.
+    std::size_t done = 0;
+    while (done < bytes.size()) {
+        auto piece = static_cast<uInt>(std::min<std::size_t>(bytes.size() - done, 1u << 30));
+        crc = ::crc32(crc, bytes.data() + done, piece);
+        done += piece;
+    }
+    return static_cast<std::uint32_t>(crc);
+}
+
+double MapHeader::spacingAt(int level) const
+{
+    return sampleSpacing * std::ldexp(1.0, static_cast<int>(levels) - 1 - level);
+}
+
+std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& h)
+{
+    std::vector<std::uint8_t> bytes;
+    ByteWriter w(bytes);
+    w.putBytes(kMapMagic.data(), kMapMagic.size());
+    w.put(h.version);
+    w.put(static_cast<std::uint32_t>(kHeaderBytes));
+    w.put(h.chunkSize);
+    w.put(static_cast<std::uint32_t>(kBorder));
+    w.put(h.levels);
+    w.put(h.textureSize);
+    w.put(h.heightCoding);
+    w.put(h.textureCoding);
+    w.put(h.quantizerBin);
+    w.put(h.sampleSpacing);
+    w.put(h.heightOffset);
+    w.put(h.heightStep);
+    w.put(h.maxErrorBound);
+    w.put(h.originX);
+    w.put(h.originY);
+    w.put(h.validX0);
+    w.put(h.validY0);
+    w.put(h.validWidth);
+    w.put(h.validHeight);
+    w.put(h.noDataFilled);
+    w.put(h.nodeCount);
+    w.put(h.directoryOffset);
+    w.put(h.directoryBytes);
+    w.put(h.directoryCrc);
+    w.putFixedString(h.source, kSourceBytes - 1);
+    w.put(std::uint8_t{0});
+    w.padTo(kHeaderBytes - 4);
+    w.put(crc32Of(bytes));
+    std::array<std::uint8_t, kHeaderBytes> out{};
+    std::copy(bytes.begin(), bytes.end(), out.begin());
+    return out;
+}
+
+Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std::string& name)
+{
+    if (bytes.size() < kHeaderBytes) {
+        return makeError(name, ": not a terrain map: file is ", bytes.size(), " bytes, shorter than the ",
+                         kHeaderBytes, "-byte header");
+    }
+    if (!std::equal(kMapMagic.begin(), kMapMagic.end(), bytes.begin())) {
+        return makeError(name, ": not a terrain map (wrong magic bytes; expected a file written by prep)");
+    }
+    ByteReader r(bytes.first(kHeaderBytes));
+    r.skip(kMapMagic.size());
+    MapHeader h;
+    h.version = r.get<std::uint32_t>();
+    if (h.version != kMapVersion) {
+        return makeError(name, ": map format version ", h.version, ", this build reads version ", kMapVersion,
+                         " (re-run prep on the source height field)");
+    }
+    std::uint32_t storedCrc = ByteReader(bytes.subspan(kHeaderBytes - 4, 4)).get<std::uint32_t>();
+    std::uint32_t actualCrc = crc32Of(bytes.first(kHeaderBytes - 4));
+    if (storedCrc != actualCrc) {
+        return makeError(name, ": header checksum mismatch (file is corrupt)");
+    }
+    auto headerBytes = r.get<std::uint32_t>();
+    h.chunkSize = r.get<std::uint32_t>();
+    auto border = r.get<std::uint32_t>();
+    h.levels = r.get<std::uint32_t>();
+    h.textureSize = r.get<std::uint32_t>();
+    h.heightCoding = r.get<std::uint32_t>();
+    h.textureCoding = r.get<std::uint32_t>();
+    h.quantizerBin = r.get<std::uint32_t>();
+    h.sampleSpacing = r.get<double>();
+    h.heightOffset = r.get<double>();
+    h.heightStep = r.get<double>();
+    h.maxErrorBound = r.get<double>();
+    h.originX = r.get<double>();
+    h.originY = r.get<double>();
+    h.validX0 = r.get<std::uint32_t>();
+    h.validY0 = r.get<std::uint32_t>();
+    h.validWidth = r.get<std::uint32_t>();
+    h.validHeight = r.get<std::uint32_t>();
+    h.noDataFilled = r.get<std::uint64_t>();
+    h.nodeCount = r.get<std::uint32_t>();
+    h.directoryOffset = r.get<std::uint64_t>();
+    h.directoryBytes = r.get<std::uint64_t>();
+    h.directoryCrc = r.get<std::uint32_t>();
+    h.source = r.getFixedString(kSourceBytes);
+
+    auto bad = [&](auto&&... what) { return makeError(name, ": invalid header: ", what...); };
+    if (headerBytes != kHeaderBytes) {
+        return bad("header size ", headerBytes, ", expected ", kHeaderBytes);
+    }
+    if (border != kBorder) {
+        return bad("node border ", border, ", expected ", kBorder);
+    }
+    if (!isPowerOfTwoPlusOne(h.chunkSize) || h.chunkSize > kMaxChunkSize) {
+        return bad("chunk size ", h.chunkSize, " is not 2^k+1 in [3, ", kMaxChunkSize, "]");
+    }
+    if (h.levels < 1 || h.levels > 24) {
+        return bad("level count ", h.levels, " outside [1, 24]");
+    }
+    if (!isPowerOfTwoPlusOne(h.textureSize) || h.textureSize > kMaxTextureSize) {
+        return bad("texture size ", h.textureSize, " is not 2^k+1 in [3, ", kMaxTextureSize, "]");
+    }
+    if (h.heightCoding != kHeightCodingKobbeltResidual || h.textureCoding != kTextureCodingMedRgb8) {
+        return bad("unknown height coding ", h.heightCoding, " or texture coding ", h.textureCoding);
+    }
+    if (h.quantizerBin < 1 || h.quantizerBin % 2 == 0) {
+        return bad("quantizer bin ", h.quantizerBin, " is not a positive odd number");
+    }
+    if (!(h.sampleSpacing > 0) || !std::isfinite(h.sampleSpacing) || !(h.heightStep > 0) ||
+        !std::isfinite(h.heightStep) || !std::isfinite(h.heightOffset) || !std::isfinite(h.originX) ||
+        !std::isfinite(h.originY)) {
+        return bad("spacing, height step, offset or origin not a positive finite number");
+    }
+    std::uint64_t grid = h.gridSize();
+    if (h.validWidth < 1 || h.validHeight < 1 || std::uint64_t{h.validX0} + h.validWidth > grid ||
+        std::uint64_t{h.validY0} + h.validHeight > grid) {
+        return bad("valid region ", h.validX0, ",", h.validY0, " ", h.validWidth, "x", h.validHeight,
+                   " does not fit the ", grid, "x", grid, " grid");
+    }
+    if (h.nodeCount < 1 || h.directoryBytes != std::uint64_t{h.nodeCount} * kDirectoryEntryBytes ||
+        h.directoryOffset < kHeaderBytes) {
+        return bad("directory of ", h.nodeCount, " nodes at offset ", h.directoryOffset, " with ",
+                   h.directoryBytes, " bytes is inconsistent");
+    }
+    return h;
+}
+
+std::vector<std::uint8_t> encodeDirectory(std::span<const DirectoryEntry> entries)
+{
+    std::vector<std::uint8_t> bytes;
+    bytes.reserve(entries.size() * kDirectoryEntryBytes);
+    ByteWriter w(bytes);
+    for (const auto& e : entries) {
+        w.put(static_cast<std::uint8_t>(e.id.level));
+        w.put(static_cast<std::uint8_t>((e.hasChildren ? 1 : 0) | (e.hasFilledNoData ? 2 : 0)));
+        w.put(std::uint16_t{0});
+        w.put(e.id.x);
+        w.put(e.id.y);
+        w.put(e.offset);
+        w.put(e.heightBytes);
+        w.put(e.textureBytes);
+        w.put(e.crc);
+        w.put(e.deltaM);
+        w.put(e.deltaC);
+        w.put(e.minCode);
+        w.put(e.maxCode);
+        w.put(std::uint32_t{0});
+    }
+    return bytes;
+}
+
+Expected<std::vector<DirectoryEntry>> decodeDirectory(std::span<const std::uint8_t> bytes, const MapHeader& header,
+                                                      const std::string& name)
+{
+    if (bytes.size() != std::uint64_t{header.nodeCount} * kDirectoryEntryBytes) {
+        return makeError(name, ": directory is ", bytes.size(), " bytes, expected ",
+                         std::uint64_t{header.nodeCount} * kDirectoryEntryBytes);
+    }
+    if (crc32Of(bytes) != header.directoryCrc) {
+        return makeError(name, ": directory checksum mismatch (file is corrupt)");
+    }
+    std::vector<DirectoryEntry> entries(header.nodeCount);
+    ByteReader r(bytes);
+    for (auto& e : entries) {
+        e.id.level = r.get<std::uint8_t>();
+        auto flags = r.get<std::uint8_t>();
+        e.hasChildren = (flags & 1) != 0;
+        e.hasFilledNoData = (flags & 2) != 0;
+        r.get<std::uint16_t>();
+        e.id.x = r.get<std::uint32_t>();
+        e.id.y = r.get<std::uint32_t>();
+        e.offset = r.get<std::uint64_t>();
+        e.heightBytes = r.get<std::uint32_t>();
+        e.textureBytes = r.get<std::uint32_t>();
+        e.crc = r.get<std::uint32_t>();
+        e.deltaM = r.get<float>();
+        e.deltaC = r.get<float>();
+        e.minCode = r.get<std::uint16_t>();
+        e.maxCode = r.get<std::uint16_t>();
+        r.get<std::uint32_t>();
+
+        auto bad = [&](auto&&... what) {
+            return makeError(name, ": directory entry for node ", e.id.toString(), ": ", what...);
+        };
+        if (e.id.level >= static_cast<int>(header.levels)) {
+            return bad("level beyond the map's ", header.levels, " levels");
+        }
+        std::uint32_t side = 1u << e.id.level;
+        if (e.id.x >= side || e.id.y >= side) {
+            return bad("position outside its level");
+        }
+        if (e.offset < kHeaderBytes || e.offset + e.payloadBytes() > header.directoryOffset || e.heightBytes == 0 ||
+            e.textureBytes == 0) {
+            return bad("payload at ", e.offset, " with ", e.payloadBytes(), " bytes lies outside the node area");
+        }
+        if (e.minCode > e.maxCode || !(e.deltaC >= e.deltaM) || !(e.deltaM >= 0)) {
+            return bad("inconsistent bounds or errors");
+        }
+        if (e.hasChildren && e.id.level + 1 >= static_cast<int>(header.levels)) {
+            return bad("flagged with children but is on the deepest level");
+        }
+    }
+    std::sort(entries.begin(), entries.end(),
+              [](const DirectoryEntry& a, const DirectoryEntry& b) { return a.id.key() < b.id.key(); });
+    auto find = [&](const NodeId& id) -> const DirectoryEntry* {
+        auto it = std::lower_bound(entries.begin(), entries.end(), id.key(),
+                                   [](const DirectoryEntry& e, std::uint64_t key) { return e.id.key() < key; });
+        return it != entries.end() && it->id == id ? &*it : nullptr;
+    };
+    for (std::size_t i = 1; i < entries.size(); ++i) {
+        if (entries[i].id == entries[i - 1].id) {
+            return makeError(name, ": directory lists node ", entries[i].id.toString(), " twice");
+        }
+    }
+    if (entries.front().id != NodeId::root()) {
+        return makeError(name, ": directory has no root node");
+    }
+    for (const auto& e : entries) {
+        if (!e.id.isRoot()) {
+            const auto* parent = find(e.id.parent());
+            if (!parent || !parent->hasChildren) {
+                return makeError(name, ": node ", e.id.toString(), " has no parent node in the directory");
+            }
+        }
+        if (e.hasChildren) {
+            for (int q = 0; q < 4; ++q) {
+                if (!find(e.id.child(q))) {
+                    return makeError(name, ": node ", e.id.toString(), " is missing its child ",
+                                     e.id.child(q).toString());
+                }
+            }
+        }
+    }
+    return entries;
+}
+
+}  // namespace terrain

@@ -1,0 +1,105 @@
+// The .map file format (paper 3.2.14, figure 3.8): a fixed header, node payloads with siblings stored
+// together, and a directory at the end. All integers little-endian. Full description: docs/map-format.md.
+//
+//   [header: kHeaderBytes]  [payload] [payload] ...  [directory: nodeCount * kDirectoryEntryBytes]
+//
+// A node's payload is its height stream followed by its texture stream; the directory entry gives both
+// sizes and a CRC32 over the payload. The header has its own CRC32 (last 4 bytes) and the directory's CRC32.
+#pragma once
+
+#include "core/Expected.h"
+#include "quadtree/NodeId.h"
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace terrain {
+
+inline constexpr std::array<std::uint8_t, 8> kMapMagic = {0x89, 'T', 'M', 'A', 'P', '\r', '\n', 0x1a};
+inline constexpr std::uint32_t kMapVersion = 1;
+inline constexpr std::size_t kHeaderBytes = 256;
+inline constexpr std::size_t kDirectoryEntryBytes = 48;
+/// Samples of border kept on every side of a node's heights, used by subdivision (3.4.3 "Borders"):
+/// the 4-point rule needs two parent samples beyond a child's edge to produce the child's own border.
+inline constexpr int kBorder = 2;
+
+/// Height coding of node payloads. The only one so far: Kobbelt 4-point prediction from the parent's
+/// window (root: previous sample), residuals divided by the quantizer bin, zigzag varints, zlib.
+inline constexpr std::uint32_t kHeightCodingKobbeltResidual = 1;
+/// Texture coding: RGB8 planes, LOCO-I median predictor, residual bytes, zlib.
+inline constexpr std::uint32_t kTextureCodingMedRgb8 = 1;
+
+/// Everything needed to interpret a map: geometry of the grid and of the chunks, height quantization.
+struct MapHeader {
+    std::uint32_t version = kMapVersion;
+    std::uint32_t chunkSize = 65;    ///< N: samples per node side, 2^k + 1
+    std::uint32_t levels = 1;        ///< static levels; leaves of level levels-1 have the input's spacing
+    std::uint32_t textureSize = 65;  ///< T: texels per node side, 2^k + 1; corner texels centred on the corners
+    std::uint32_t heightCoding = kHeightCodingKobbeltResidual;
+    std::uint32_t textureCoding = kTextureCodingMedRgb8;
+    std::uint32_t quantizerBin = 1;  ///< 2 * E + 1 codes: residuals are multiples of this (1 = lossless)
+    double sampleSpacing = 1.0;      ///< metres between samples at the finest static level
+    double heightOffset = 0.0;       ///< metres = heightOffset + heightStep * code
+    double heightStep = 1.0;         ///< metres per 16-bit code
+    double maxErrorBound = 0.0;      ///< guaranteed L-infinity error of stored heights vs input (metres)
+    double originX = 0.0;            ///< world position (metres) of grid sample (0, 0) = south-west corner
+    double originY = 0.0;
+    std::uint32_t validX0 = 0;  ///< the input's samples inside the padded grid (the rest is padding)
+    std::uint32_t validY0 = 0;
+    std::uint32_t validWidth = 0;
+    std::uint32_t validHeight = 0;
+    std::uint64_t noDataFilled = 0;  ///< input samples that had no data and were filled from neighbours
+    std::uint32_t nodeCount = 0;
+    std::uint64_t directoryOffset = 0;
+    std::uint64_t directoryBytes = 0;
+    std::uint32_t directoryCrc = 0;
+    std::string source;  ///< what prep read, e.g. "PNG 16-bit gray 1025x1025" (at most 95 bytes)
+
+    /// Samples per side of the whole padded grid at the finest level: (N - 1) * 2^(levels-1) + 1.
+    std::uint64_t gridSize() const { return std::uint64_t{chunkSize - 1} * (std::uint64_t{1} << (levels - 1)) + 1; }
+    /// Samples per side of the grid at `level`.
+    std::uint64_t levelGridSize(int level) const { return std::uint64_t{chunkSize - 1} * (std::uint64_t{1} << level) + 1; }
+    /// Samples per node side including the border on both sides.
+    int windowSize() const { return static_cast<int>(chunkSize) + 2 * kBorder; }
+    /// Metres between samples of a node at `level` (may be deeper than the static levels).
+    double spacingAt(int level) const;
+    /// Metres covered by one node side at `level`.
+    double nodeSizeAt(int level) const { return spacingAt(level) * (chunkSize - 1); }
+    double heightOf(std::uint16_t code) const { return heightOffset + heightStep * code; }
+};
+
+/// One directory entry: where a node's payload is and what the LOD selection needs without loading it.
+struct DirectoryEntry {
+    NodeId id;
+    bool hasChildren = false;
+    bool hasFilledNoData = false;  ///< some of its samples were no-data in the input
+    std::uint64_t offset = 0;      ///< file offset of the payload
+    std::uint32_t heightBytes = 0;
+    std::uint32_t textureBytes = 0;
+    std::uint32_t crc = 0;       ///< CRC32 of the payload (heightBytes + textureBytes bytes)
+    float deltaM = 0.0f;         ///< metres: own simplification error (3.2.5)
+    float deltaC = 0.0f;         ///< metres: nested error, eq. 3.1 (max over children + deltaM)
+    std::uint16_t minCode = 0;   ///< nested bounding box in height codes (3.2.12)
+    std::uint16_t maxCode = 0;
+
+    std::uint64_t payloadBytes() const { return std::uint64_t{heightBytes} + textureBytes; }
+};
+
+/// Serializes the header into kHeaderBytes bytes, including its CRC.
+std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& header);
+/// Parses and validates a header; `name` is used in messages (the file's path).
+Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std::string& name);
+
+std::vector<std::uint8_t> encodeDirectory(std::span<const DirectoryEntry> entries);
+/// Parses and validates the directory against the header: sorted unique ids, ids inside their level,
+/// payloads inside the node area of the file, a complete quadtree (root present; every node flagged
+/// with children has all four; every other node's parent is present and flagged).
+Expected<std::vector<DirectoryEntry>> decodeDirectory(std::span<const std::uint8_t> bytes, const MapHeader& header,
+                                                      const std::string& name);
+
+std::uint32_t crc32Of(std::span<const std::uint8_t> bytes);
+
+}  // namespace terrain

@@ -1,0 +1,118 @@
+#include "quadtree/MapVerifier.h"
+
+#include "quadtree/SimplificationError.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <optional>
+
+namespace terrain {
+
+namespace {
+
+struct Checked {
+    std::uint16_t minCode = 65535;
+    std::uint16_t maxCode = 0;
+    float deltaC = 0.0f;
+};
+
+class Verifier {
+public:
+    Verifier(const MapFile& map, const std::function<void(double)>& progress) : mMap(map), mProgress(progress) {}
+
+    std::vector<std::string> run()
+    {
+        auto root = mMap.loadNode(NodeId::root(), {});
+        if (!root.ok()) {
+            mProblems.push_back(root.error().message);
+            return mProblems;
+        }
+        visit(*root);
+        return mProblems;
+    }
+
+private:
+    void problem(const NodeId& id, const std::string& what)
+    {
+        mProblems.push_back(mMap.name() + ": node " + id.toString() + ": " + what);
+    }
+
+    // Returns the subtree's nested bounds and error, or nothing if the node could not be decoded.
+    std::optional<Checked> visit(const StaticNode& node)
+    {
+        const DirectoryEntry& entry = *mMap.find(node.id);
+        const NodeWindow& window = mMap.window();
+        const WindowRect inside = window.insideRect(node.id);
+        Checked checked;
+        for (int y = inside.y0; y <= inside.y1; ++y) {
+            for (int x = inside.x0; x <= inside.x1; ++x) {
+                auto code = node.heights[static_cast<std::size_t>(y) * window.size() + x];
+                checked.minCode = std::min(checked.minCode, code);
+                checked.maxCode = std::max(checked.maxCode, code);
+            }
+        }
+        ++mDone;
+        if (mProgress) {
+            mProgress(static_cast<double>(mDone) / static_cast<double>(mMap.directory().size()));
+        }
+        if (entry.hasChildren) {
+            std::array<StaticNode, 4> children;
+            float worst = 0.0f;
+            for (int q = 0; q < 4; ++q) {
+                auto child = mMap.loadNode(node.id.child(q), node.heights);
+                if (!child.ok()) {
+                    mProblems.push_back(child.error().message);
+                    return std::nullopt;
+                }
+                children[q] = std::move(child.value());
+                auto sub = visit(children[q]);
+                if (!sub) {
+                    return std::nullopt;
+                }
+                checked.minCode = std::min(checked.minCode, sub->minCode);
+                checked.maxCode = std::max(checked.maxCode, sub->maxCode);
+                worst = std::max(worst, sub->deltaC);
+            }
+            const int n = static_cast<int>(mMap.header().chunkSize);
+            const int w = window.size();
+            double deltaM = mMap.header().heightStep * simplificationErrorCodes(n, [&](int a, int b) -> std::int32_t {
+                int q = (a >= n - 1 ? 1 : 0) | (b >= n - 1 ? 2 : 0);
+                int u = a - (q & 1) * (n - 1), v = b - (q >> 1) * (n - 1);
+                return children[q].heights[static_cast<std::size_t>(v + kBorder) * w + u + kBorder];
+            });
+            if (std::abs(deltaM - entry.deltaM) > 1e-4 * std::max(1.0, deltaM)) {
+                problem(node.id, "delta_m is " + std::to_string(entry.deltaM) + " m but the decoded heights give " +
+                                     std::to_string(deltaM) + " m");
+            }
+            float nested = worst + entry.deltaM;
+            if (std::abs(nested - entry.deltaC) > 1e-4f * std::max(1.0f, nested)) {
+                problem(node.id, "delta_c is " + std::to_string(entry.deltaC) + " m but its children's nest to " +
+                                     std::to_string(nested) + " m (eq. 3.1)");
+            }
+        } else if (entry.deltaM != 0.0f || entry.deltaC != 0.0f) {
+            problem(node.id, "a leaf has a non-zero error");
+        }
+        if (checked.minCode != entry.minCode || checked.maxCode != entry.maxCode) {
+            problem(node.id, "bounding box codes " + std::to_string(entry.minCode) + ".." + std::to_string(entry.maxCode) +
+                                 " differ from the decoded subtree's " + std::to_string(checked.minCode) + ".." +
+                                 std::to_string(checked.maxCode));
+        }
+        checked.deltaC = entry.deltaC;
+        return checked;
+    }
+
+    const MapFile& mMap;
+    const std::function<void(double)>& mProgress;
+    std::vector<std::string> mProblems;
+    std::size_t mDone = 0;
+};
+
+}  // namespace
+
+std::vector<std::string> verifyMap(const MapFile& map, const std::function<void(double)>& progress)
+{
+    return Verifier(map, progress).run();
+}
+
+}  // namespace terrain

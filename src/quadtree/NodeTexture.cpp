@@ -1,0 +1,232 @@
+#include "quadtree/NodeTexture.h"
+
+#include "core/Check.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace terrain {
+
+namespace {
+
+struct Colour {
+    double r, g, b;
+};
+
+Colour mix(const Colour& a, const Colour& b, double t)
+{
+    t = std::clamp(t, 0.0, 1.0);
+    return {a.r + (b.r - a.r) * t, a.g + (b.g - a.g) * t, a.b + (b.b - a.b) * t};
+}
+
+double smoothstep(double e0, double e1, double x)
+{
+    double t = std::clamp((x - e0) / (e1 - e0), 0.0, 1.0);
+    return t * t * (3 - 2 * t);
+}
+
+// Unlit albedo palette, linear 0..1 (hand-picked to read as meadow, forest, dry slope, rock and snow).
+constexpr Colour kMeadow{0.36, 0.45, 0.22};
+constexpr Colour kForest{0.20, 0.30, 0.15};
+constexpr Colour kDryGround{0.50, 0.44, 0.33};
+constexpr Colour kRock{0.47, 0.45, 0.42};
+constexpr Colour kSteepRock{0.38, 0.36, 0.34};
+constexpr Colour kSnow{0.93, 0.94, 0.96};
+/// Slopes (rise over run) where ground turns to rock: about 30 to 45 degrees.
+constexpr double kRockSlopeStart = 0.58;
+constexpr double kRockSlopeFull = 1.0;
+
+void toBytes(const double* c, std::uint8_t* rgb)
+{
+    for (int k = 0; k < 3; ++k) {
+        rgb[k] = static_cast<std::uint8_t>(std::lround(std::clamp(c[k], 0.0, 1.0) * 255.0));
+    }
+}
+
+}  // namespace
+
+HeightColouring::HeightColouring(const QuantizedGrid& grid, const MapHeader& header, double heightMin,
+                                 double heightMax)
+    : mGrid(grid), mHeader(header), mHeightMin(heightMin), mHeightMax(std::max(heightMax, heightMin + 1e-6))
+{
+}
+
+void HeightColouring::colourAt(std::int64_t x, std::int64_t y, double* rgb) const
+{
+    const std::int64_t last = mGrid.size() - 1;
+    x = std::clamp<std::int64_t>(x, 0, last);
+    y = std::clamp<std::int64_t>(y, 0, last);
+    auto h = [&](std::int64_t i, std::int64_t j) {
+        return mHeader.heightOf(mGrid.at(static_cast<std::uint64_t>(std::clamp<std::int64_t>(i, 0, last)),
+                                         static_cast<std::uint64_t>(std::clamp<std::int64_t>(j, 0, last))));
+    };
+    double height = h(x, y);
+    double dzdx = (h(x + 1, y) - h(x - 1, y)) / (2 * mHeader.sampleSpacing);
+    double dzdy = (h(x, y + 1) - h(x, y - 1)) / (2 * mHeader.sampleSpacing);
+    double slope = std::sqrt(dzdx * dzdx + dzdy * dzdy);
+    double t = (height - mHeightMin) / (mHeightMax - mHeightMin);
+
+    Colour c = mix(kMeadow, kForest, smoothstep(0.10, 0.35, t));
+    c = mix(c, kDryGround, smoothstep(0.45, 0.65, t));
+    c = mix(c, kRock, smoothstep(0.65, 0.82, t));
+    c = mix(c, kSteepRock, smoothstep(kRockSlopeStart, kRockSlopeFull, slope));
+    // Snow lies on the highest ground where it is not too steep to hold.
+    double snow = smoothstep(0.80, 0.90, t) * (1.0 - smoothstep(0.7, 1.2, slope));
+    c = mix(c, kSnow, snow);
+    rgb[0] = c.r;
+    rgb[1] = c.g;
+    rgb[2] = c.b;
+}
+
+void HeightColouring::colour(double gx, double gy, double footprint, std::uint8_t* rgb) const
+{
+    double sum[3] = {0, 0, 0};
+    double c[3];
+    if (footprint <= 1.0) {
+        // Bilinear blend of the colours at the four surrounding samples.
+        auto x0 = static_cast<std::int64_t>(std::floor(gx));
+        auto y0 = static_cast<std::int64_t>(std::floor(gy));
+        double fx = gx - static_cast<double>(x0), fy = gy - static_cast<double>(y0);
+        const double weights[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+        for (int k = 0; k < 4; ++k) {
+            if (weights[k] == 0) {
+                continue;
+            }
+            colourAt(x0 + (k & 1), y0 + (k >> 1), c);
+            for (int i = 0; i < 3; ++i) {
+                sum[i] += weights[k] * c[i];
+            }
+        }
+    } else {
+        // Box average over the samples under the texel.
+        auto half = footprint / 2;
+        auto xa = static_cast<std::int64_t>(std::ceil(gx - half)), xb = static_cast<std::int64_t>(std::floor(gx + half));
+        auto ya = static_cast<std::int64_t>(std::ceil(gy - half)), yb = static_cast<std::int64_t>(std::floor(gy + half));
+        int count = 0;
+        for (auto y = ya; y <= yb; ++y) {
+            for (auto x = xa; x <= xb; ++x) {
+                colourAt(x, y, c);
+                for (int i = 0; i < 3; ++i) {
+                    sum[i] += c[i];
+                }
+                ++count;
+            }
+        }
+        for (double& s : sum) {
+            s /= std::max(count, 1);
+        }
+    }
+    toBytes(sum, rgb);
+}
+
+ImageTexture::ImageTexture(const Image& rgb, const MapHeader& header) : mImage(rgb)
+{
+    TERRAIN_EXPECTS(rgb.channels == 3 && rgb.width >= 1 && rgb.height >= 1, "texture must be RGB");
+    mScaleX = header.validWidth > 1 ? (rgb.width - 1.0) / (header.validWidth - 1.0) : 0.0;
+    mScaleY = header.validHeight > 1 ? (rgb.height - 1.0) / (header.validHeight - 1.0) : 0.0;
+    mX0 = header.validX0;
+    mY0 = header.validY0;
+}
+
+void ImageTexture::colour(double gx, double gy, double footprint, std::uint8_t* rgb) const
+{
+    // Image coordinates: x east, row 0 north.
+    double px = (gx - mX0) * mScaleX;
+    double py = (mImage.height - 1) - (gy - mY0) * mScaleY;
+    auto pixel = [&](std::int64_t x, std::int64_t y) {
+        return mImage.pixel(static_cast<int>(std::clamp<std::int64_t>(x, 0, mImage.width - 1)),
+                            static_cast<int>(std::clamp<std::int64_t>(y, 0, mImage.height - 1)));
+    };
+    double sum[3] = {0, 0, 0};
+    double pixelsPerTexel = footprint * std::max(mScaleX, mScaleY);
+    if (pixelsPerTexel <= 1.0) {
+        auto x0 = static_cast<std::int64_t>(std::floor(px));
+        auto y0 = static_cast<std::int64_t>(std::floor(py));
+        double fx = px - static_cast<double>(x0), fy = py - static_cast<double>(y0);
+        const double weights[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+        for (int k = 0; k < 4; ++k) {
+            const std::uint8_t* p = pixel(x0 + (k & 1), y0 + (k >> 1));
+            for (int i = 0; i < 3; ++i) {
+                sum[i] += weights[k] * p[i] / 255.0;
+            }
+        }
+    } else {
+        double half = pixelsPerTexel / 2;
+        auto xa = static_cast<std::int64_t>(std::ceil(px - half)), xb = static_cast<std::int64_t>(std::floor(px + half));
+        auto ya = static_cast<std::int64_t>(std::ceil(py - half)), yb = static_cast<std::int64_t>(std::floor(py + half));
+        int count = 0;
+        for (auto y = ya; y <= yb; ++y) {
+            for (auto x = xa; x <= xb; ++x) {
+                const std::uint8_t* p = pixel(x, y);
+                for (int i = 0; i < 3; ++i) {
+                    sum[i] += p[i] / 255.0;
+                }
+                ++count;
+            }
+        }
+        for (double& s : sum) {
+            s /= std::max(count, 1);
+        }
+    }
+    toBytes(sum, rgb);
+}
+
+void sampleNodeTexture(const TextureSource& source, const MapHeader& header, const NodeId& id,
+                       std::span<std::uint8_t> rgb)
+{
+    const int size = static_cast<int>(header.textureSize);
+    TERRAIN_EXPECTS(rgb.size() == static_cast<std::size_t>(size) * size * 3, "texture must have size*size RGB texels");
+    const double stride = std::ldexp(1.0, static_cast<int>(header.levels) - 1 - id.level);
+    const double samplesPerTexel = stride * (header.chunkSize - 1) / (size - 1);
+    const double x0 = static_cast<double>(id.x) * (header.chunkSize - 1) * stride;
+    const double y0 = static_cast<double>(id.y) * (header.chunkSize - 1) * stride;
+    for (int ty = 0; ty < size; ++ty) {
+        for (int tx = 0; tx < size; ++tx) {
+            source.colour(x0 + tx * samplesPerTexel, y0 + ty * samplesPerTexel, samplesPerTexel,
+                          &rgb[(static_cast<std::size_t>(ty) * size + tx) * 3]);
+        }
+    }
+}
+
+void downsampleChildTextures(const std::array<std::span<const std::uint8_t>, 4>& children, int size,
+                             std::span<std::uint8_t> parent)
+{
+    const int combined = 2 * size - 1;  // texels per side of the four children side by side (edges shared)
+    auto at = [&](int cx, int cy, int channel) -> int {
+        int qx = cx >= size - 1 ? 1 : 0;  // texels on the children's shared edge are equal in both
+        int qy = cy >= size - 1 ? 1 : 0;
+        int lx = cx - qx * (size - 1), ly = cy - qy * (size - 1);
+        return children[static_cast<std::size_t>(qx + 2 * qy)][(static_cast<std::size_t>(ly) * size + lx) * 3 + channel];
+    };
+    for (int ty = 0; ty < size; ++ty) {
+        for (int tx = 0; tx < size; ++tx) {
+            int cx = 2 * tx, cy = 2 * ty;
+            bool edgeX = tx == 0 || tx == size - 1;
+            bool edgeY = ty == 0 || ty == size - 1;
+            for (int channel = 0; channel < 3; ++channel) {
+                int sum = 0, weight = 0;
+                for (int dy = -1; dy <= 1; ++dy) {
+                    if (edgeY && dy != 0) {
+                        continue;
+                    }
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        if (edgeX && dx != 0) {
+                            continue;
+                        }
+                        int x = cx + dx, y = cy + dy;
+                        if (x < 0 || y < 0 || x >= combined || y >= combined) {
+                            continue;
+                        }
+                        int w = (2 - std::abs(dx)) * (2 - std::abs(dy));
+                        sum += w * at(x, y, channel);
+                        weight += w;
+                    }
+                }
+                parent[(static_cast<std::size_t>(ty) * size + tx) * 3 + channel] =
+                    static_cast<std::uint8_t>((sum + weight / 2) / weight);
+            }
+        }
+    }
+}
+
+}  // namespace terrain

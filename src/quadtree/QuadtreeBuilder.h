@@ -1,0 +1,51 @@
+// prep's engine (paper 3.2.1-3.2.14, 4.1): a height field in, a .map file out.
+#pragma once
+
+#include "core/Expected.h"
+#include "heightfield/HeightField.h"
+#include "quadtree/MapFormat.h"
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace terrain {
+
+struct BuildOptions {
+    int chunkSize = 65;                      ///< N, 2^k + 1 in [3, 1025]
+    std::optional<double> spacing;           ///< -h: metres between samples, used when the file has none
+    std::optional<double> verticalScale;     ///< -v: metres per native unit, used when the file has none
+    double offset = 0.0;                     ///< --offset: metres added after scaling
+    double maxError = 0.0;                   ///< --max-error: L-infinity bound in metres, 0 = lossless
+    int textureSize = 0;                     ///< --texture-size: 2^k + 1; 0 = the chunk size
+    int threads = 1;
+    std::optional<std::filesystem::path> texture;  ///< -t: RGB texture stretched over the input
+    std::optional<std::filesystem::path> weights;  ///< -w: gray weight map for pruning (3.2.13)
+    int zlibLevel = 6;
+    /// Called now and then with the fraction done (0..1) and the current stage.
+    std::function<void(double, std::string_view)> progress;
+    /// Called for each warning (an option that had no effect, a default that was assumed).
+    std::function<void(std::string_view)> warn;
+};
+
+/// What a build produced, for prep's summary and for benchmarks.
+struct BuildReport {
+    MapHeader header;
+    int inputWidth = 0;
+    int inputHeight = 0;
+    std::uint64_t nodes = 0;
+    std::uint64_t fileBytes = 0;
+    std::uint64_t heightBytes = 0;   ///< node height streams
+    std::uint64_t textureBytes = 0;  ///< node texture streams
+    std::uint64_t storedSamples = 0; ///< node window samples, borders included
+    double seconds = 0.0;
+};
+
+/// Builds the map of `field` into `output` (written to a temporary name and renamed). The field is
+/// consumed: its samples are released once quantized, to keep peak memory low. Errors name the file or
+/// option at fault.
+Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, const std::filesystem::path& output);
+
+}  // namespace terrain

@@ -1,0 +1,164 @@
+#include "quadtree/QuantizedGrid.h"
+
+#include "core/Check.h"
+#include "core/Memory.h"
+#include "core/ParallelFor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace terrain {
+
+namespace {
+constexpr double kMaxCodes = 65535.0;
+/// Codes spanned by non-integer data, leaving room for the lossy margin below 65535.
+constexpr double kFloatCodes = 65000.0;
+}  // namespace
+
+Expected<Quantization> chooseQuantization(const HeightField& field, double scale, double baseOffset, double maxError)
+{
+    if (!(scale > 0) || !std::isfinite(scale)) {
+        return makeError("vertical scale ", scale, " must be a positive finite number");
+    }
+    if (!(maxError >= 0) || !std::isfinite(maxError)) {
+        return makeError("maximum error ", maxError, " must be a finite number >= 0");
+    }
+    double lo = std::numeric_limits<double>::infinity();
+    double hi = -lo;
+    for (float v : field.samples) {
+        lo = std::min<double>(lo, v);
+        hi = std::max<double>(hi, v);
+    }
+    TERRAIN_EXPECTS(std::isfinite(lo) && std::isfinite(hi), "fill no-data samples before quantizing");
+    double range = hi - lo;
+
+    Quantization q;
+    q.nativeMin = lo;
+    if (field.integerSamples && range + 1 <= kMaxCodes) {
+        // Lossless: one code per native unit; the lossy margin must still fit.
+        q.nativePerCode = 1.0;
+        q.step = scale;
+        auto e = static_cast<std::uint32_t>(std::floor(maxError / q.step + 1e-9));
+        e = std::min<std::uint32_t>(e, static_cast<std::uint32_t>((kMaxCodes - range) / 2));
+        q.margin = e;
+        q.bin = 2 * e + 1;
+        q.errorBound = e * q.step;
+    } else {
+        // Non-integer data: the finest step that fits 16 bits, rounding adds half a step of error.
+        q.nativePerCode = std::max(range, 1e-9) / kFloatCodes;
+        for (;;) {
+            q.step = q.nativePerCode * scale;
+            double remaining = maxError - q.step / 2;
+            auto e = remaining > 0 ? static_cast<std::uint32_t>(std::floor(remaining / q.step + 1e-9)) : 0u;
+            if (range / q.nativePerCode + 2.0 * e + 1 <= kMaxCodes) {
+                q.margin = e;
+                q.bin = 2 * e + 1;
+                q.errorBound = q.step / 2 + e * q.step;
+                break;
+            }
+            q.nativePerCode *= 1.05;
+        }
+    }
+    q.offset = baseOffset + scale * lo - q.step * q.margin;
+    return q;
+}
+
+QuantizedGrid::QuantizedGrid(std::uint32_t size)
+    : mSize(size), mCodes(static_cast<std::size_t>(size) * size)
+{
+}
+
+Expected<QuantizedGrid> QuantizedGrid::build(const HeightField& field, const Quantization& q, std::uint32_t size)
+{
+    TERRAIN_EXPECTS(size >= static_cast<std::uint32_t>(std::max(field.width, field.height)),
+                    "grid must be at least as large as the field");
+    TERRAIN_TRY(checkAllocation(std::uint64_t{size} * size * 2,
+                                "the " + std::to_string(size) + "x" + std::to_string(size) + " quantized height grid"));
+    QuantizedGrid grid(size);
+    for (std::uint32_t y = 0; y < size; ++y) {
+        int sy = std::min<int>(static_cast<int>(y), field.height - 1);
+        for (std::uint32_t x = 0; x < size; ++x) {
+            int sx = std::min<int>(static_cast<int>(x), field.width - 1);
+            double code = std::round((field.at(sx, sy) - q.nativeMin) / q.nativePerCode) + q.margin;
+            grid.at(x, y) = static_cast<std::uint16_t>(std::clamp(code, 0.0, kMaxCodes));
+        }
+    }
+    return grid;
+}
+
+void QuantizedGrid::extractWindow(const MapHeader& header, const NodeId& id, std::span<std::uint16_t> window) const
+{
+    NodeWindow geometry(header);
+    const int w = geometry.size();
+    const WindowRect inside = geometry.insideRect(id);
+    const std::uint64_t stride = std::uint64_t{1} << (header.levels - 1 - static_cast<std::uint32_t>(id.level));
+    const std::int64_t firstX = std::int64_t{id.x} * (header.chunkSize - 1) - kBorder;
+    const std::int64_t firstY = std::int64_t{id.y} * (header.chunkSize - 1) - kBorder;
+    for (int y = inside.y0; y <= inside.y1; ++y) {
+        auto gy = static_cast<std::uint64_t>(firstY + y) * stride;
+        for (int x = inside.x0; x <= inside.x1; ++x) {
+            auto gx = static_cast<std::uint64_t>(firstX + x) * stride;
+            window[static_cast<std::size_t>(y) * w + x] = at(gx, gy);
+        }
+    }
+    fillOutside(window, w, inside);
+}
+
+void QuantizedGrid::reconstructLossy(const MapHeader& header, std::uint32_t bin, int threads)
+{
+    NodeWindow geometry(header);
+    const int w = geometry.size();
+    const int n = static_cast<int>(header.chunkSize);
+    const int levels = static_cast<int>(header.levels);
+
+    // Root: raster order, each sample predicted from the previous reconstructed one.
+    {
+        const std::uint64_t stride = std::uint64_t{1} << (levels - 1);
+        std::vector<std::uint16_t> window(geometry.sampleCount());
+        WindowRect inside = geometry.insideRect(NodeId::root());
+        for (int y = inside.y0; y <= inside.y1; ++y) {
+            for (int x = inside.x0; x <= inside.x1; ++x) {
+                auto& code = at(static_cast<std::uint64_t>(x - kBorder) * stride, static_cast<std::uint64_t>(y - kBorder) * stride);
+                std::int32_t predicted = rootPrediction(window, w, inside, x, y);
+                code = static_cast<std::uint16_t>(predicted + quantizeResidual(code - predicted, bin));
+                window[static_cast<std::size_t>(y) * w + x] = code;
+            }
+        }
+    }
+    // Each level from the reconstructed level above. A child writes only the samples it owns (u, v in
+    // [0, N-2], plus N-1 on the grid's far edges), so no two threads write one sample, and reads only
+    // samples of the level above, which no thread writes during this level.
+    for (int level = 0; level + 1 < levels; ++level) {
+        const std::uint32_t side = 1u << level;
+        const std::uint64_t childStride = std::uint64_t{1} << (levels - 2 - level);
+        const std::uint32_t childSide = side * 2;
+        parallelFor(std::size_t{side} * side, threads, [&](std::size_t index) {
+            NodeId id{level, static_cast<std::uint32_t>(index % side), static_cast<std::uint32_t>(index / side)};
+            std::vector<std::uint16_t> parent(geometry.sampleCount());
+            std::vector<std::int32_t> prediction(geometry.sampleCount());
+            extractWindow(header, id, parent);
+            for (int quadrant = 0; quadrant < 4; ++quadrant) {
+                NodeId child = id.child(quadrant);
+                predictChildWindow(parent, w, n, quadrant, prediction);
+                int lastU = child.x + 1 == childSide ? n - 1 : n - 2;
+                int lastV = child.y + 1 == childSide ? n - 1 : n - 2;
+                for (int v = 0; v <= lastV; ++v) {
+                    for (int u = 0; u <= lastU; ++u) {
+                        if ((u & 1) == 0 && (v & 1) == 0) {
+                            continue;
+                        }
+                        auto gx = (std::uint64_t{child.x} * (n - 1) + u) * childStride;
+                        auto gy = (std::uint64_t{child.y} * (n - 1) + v) * childStride;
+                        std::int32_t predicted =
+                            prediction[static_cast<std::size_t>(v + kBorder) * w + u + kBorder];
+                        auto& code = at(gx, gy);
+                        code = static_cast<std::uint16_t>(predicted + quantizeResidual(code - predicted, bin));
+                    }
+                }
+            }
+        });
+    }
+}
+
+}  // namespace terrain
