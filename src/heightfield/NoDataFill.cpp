@@ -23,6 +23,9 @@ std::uint64_t fillNoData(HeightField& field)
 
     // Frontier: holes with at least one valid neighbour. Each ring is filled from values of earlier rings
     // only (computed first, assigned after), so the result does not depend on the scan order.
+    if (countValid(field) == field.samples.size()) {
+        return 0;
+    }
     std::vector<std::size_t> frontier;
     std::vector<std::uint8_t> queued(field.samples.size(), 0);
     auto pushNeighbours = [&](int x, int y, std::vector<std::size_t>& into) {
@@ -36,10 +39,22 @@ std::uint64_t fillNoData(HeightField& field)
             }
         }
     };
+    // The first ring: holes next to a valid sample.
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
             if (!isHole(x, y)) {
-                pushNeighbours(x, y, frontier);
+                continue;
+            }
+            bool rim = false;
+            for (int dy = -1; dy <= 1 && !rim; ++dy) {
+                for (int dx = -1; dx <= 1 && !rim; ++dx) {
+                    int nx = x + dx, ny = y + dy;
+                    rim = nx >= 0 && ny >= 0 && nx < w && ny < h && !isHole(nx, ny);
+                }
+            }
+            if (rim) {
+                queued[index(x, y)] = 1;
+                frontier.push_back(index(x, y));
             }
         }
     }

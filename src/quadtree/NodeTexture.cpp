@@ -39,7 +39,7 @@ constexpr double kRockSlopeFull = 1.0;
 void toBytes(const double* c, std::uint8_t* rgb)
 {
     for (int k = 0; k < 3; ++k) {
-        rgb[k] = static_cast<std::uint8_t>(std::lround(std::clamp(c[k], 0.0, 1.0) * 255.0));
+        rgb[k] = static_cast<std::uint8_t>(std::clamp(c[k], 0.0, 1.0) * 255.0 + 0.5);
     }
 }
 
@@ -191,40 +191,49 @@ void sampleNodeTexture(const TextureSource& source, const MapHeader& header, con
 void downsampleChildTextures(const std::array<std::span<const std::uint8_t>, 4>& children, int size,
                              std::span<std::uint8_t> parent)
 {
-    const int combined = 2 * size - 1;  // texels per side of the four children side by side (edges shared)
-    auto at = [&](int cx, int cy, int channel) -> int {
-        int qx = cx >= size - 1 ? 1 : 0;  // texels on the children's shared edge are equal in both
-        int qy = cy >= size - 1 ? 1 : 0;
-        int lx = cx - qx * (size - 1), ly = cy - qy * (size - 1);
-        return children[static_cast<std::size_t>(qx + 2 * qy)][(static_cast<std::size_t>(ly) * size + lx) * 3 + channel];
-    };
-    for (int ty = 0; ty < size; ++ty) {
-        for (int tx = 0; tx < size; ++tx) {
-            int cx = 2 * tx, cy = 2 * ty;
-            bool edgeX = tx == 0 || tx == size - 1;
-            bool edgeY = ty == 0 || ty == size - 1;
-            for (int channel = 0; channel < 3; ++channel) {
-                int sum = 0, weight = 0;
-                for (int dy = -1; dy <= 1; ++dy) {
-                    if (edgeY && dy != 0) {
-                        continue;
-                    }
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        if (edgeX && dx != 0) {
-                            continue;
-                        }
-                        int x = cx + dx, y = cy + dy;
-                        if (x < 0 || y < 0 || x >= combined || y >= combined) {
-                            continue;
-                        }
-                        int w = (2 - std::abs(dx)) * (2 - std::abs(dy));
-                        sum += w * at(x, y, channel);
-                        weight += w;
-                    }
-                }
-                parent[(static_cast<std::size_t>(ty) * size + tx) * 3 + channel] =
-                    static_cast<std::uint8_t>((sum + weight / 2) / weight);
+    TERRAIN_EXPECTS(parent.size() == static_cast<std::size_t>(size) * size * 3, "texture must have size*size RGB texels");
+    // The four children side by side (their shared edges coincide): (2 size - 1)^2 RGB texels.
+    const int combined = 2 * size - 1;
+    const std::size_t rowBytes = static_cast<std::size_t>(combined) * 3;
+    std::vector<std::uint8_t> all(rowBytes * combined);
+    for (int q = 0; q < 4; ++q) {
+        const int x0 = (q & 1) * (size - 1), y0 = (q >> 1) * (size - 1);
+        for (int y = 0; y < size; ++y) {
+            std::copy_n(&children[q][static_cast<std::size_t>(y) * size * 3], static_cast<std::size_t>(size) * 3,
+                        &all[static_cast<std::size_t>(y0 + y) * rowBytes + static_cast<std::size_t>(x0) * 3]);
+        }
+    }
+    // Horizontal [1 2 1] at even columns (edge columns copied), then vertical at even rows (edge rows
+    // copied): both nodes sharing an edge filter it only along itself, from identical texels.
+    std::vector<std::uint16_t> horizontal(static_cast<std::size_t>(combined) * size * 3);
+    for (int y = 0; y < combined; ++y) {
+        const std::uint8_t* row = &all[static_cast<std::size_t>(y) * rowBytes];
+        std::uint16_t* out = &horizontal[static_cast<std::size_t>(y) * size * 3];
+        for (int c = 0; c < 3; ++c) {
+            out[c] = static_cast<std::uint16_t>(4 * row[c]);
+            out[(size - 1) * 3 + c] = static_cast<std::uint16_t>(4 * row[(combined - 1) * 3 + c]);
+        }
+        for (int tx = 1; tx < size - 1; ++tx) {
+            const std::uint8_t* p = row + (2 * tx) * 3;
+            for (int c = 0; c < 3; ++c) {
+                out[tx * 3 + c] = static_cast<std::uint16_t>(p[c - 3] + 2 * p[c] + p[c + 3]);
             }
+        }
+    }
+    const std::size_t stride = static_cast<std::size_t>(size) * 3;
+    for (int ty = 0; ty < size; ++ty) {
+        const std::uint16_t* mid = &horizontal[static_cast<std::size_t>(2 * ty) * stride];
+        std::uint8_t* out = &parent[static_cast<std::size_t>(ty) * stride];
+        if (ty == 0 || ty == size - 1) {
+            for (std::size_t i = 0; i < stride; ++i) {
+                out[i] = static_cast<std::uint8_t>((mid[i] + 2) / 4);
+            }
+            continue;
+        }
+        const std::uint16_t* below = mid - stride;
+        const std::uint16_t* above = mid + stride;
+        for (std::size_t i = 0; i < stride; ++i) {
+            out[i] = static_cast<std::uint8_t>((below[i] + 2 * mid[i] + above[i] + 8) / 16);
         }
     }
 }
