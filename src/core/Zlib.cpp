@@ -2,6 +2,7 @@
 
 #include "core/Check.h"
 
+#include <memory>
 #include <zlib.h>
 
 namespace terrain {
@@ -9,11 +10,11 @@ namespace terrain {
 std::vector<std::uint8_t> zlibCompress(std::span<const std::uint8_t> bytes, int level)
 {
     uLongf size = ::compressBound(static_cast<uLong>(bytes.size()));
-    std::vector<std::uint8_t> out(size);
-    int result = ::compress2(out.data(), &size, bytes.data(), static_cast<uLong>(bytes.size()), level);
+    // Scratch without zero-filling (this runs for every node), then an exact-size copy.
+    std::unique_ptr<std::uint8_t[]> scratch(new std::uint8_t[size]);
+    int result = ::compress2(scratch.get(), &size, bytes.data(), static_cast<uLong>(bytes.size()), level);
     TERRAIN_ASSERT(result == Z_OK);
-    out.resize(size);
-    return out;
+    return std::vector<std::uint8_t>(scratch.get(), scratch.get() + size);
 }
 
 Expected<std::vector<std::uint8_t>> zlibDecompress(std::span<const std::uint8_t> bytes, std::size_t expectedSize)

@@ -30,6 +30,8 @@ struct HeightFieldReadOptions {
 /// large allocation).
 Expected<HeightField> readHeightField(const std::filesystem::path& path, const HeightFieldReadOptions& options = {});
 
+/// Format readers (readHeightField picks one). Orientation and units as HeightField.h describes; each
+/// format's own no-data marker reads as NaN (.bt: -32768 in any sample type, VTP's INVALID_ELEVATION).
 Expected<HeightField> readPngHeightField(const std::filesystem::path& path, const HeightFieldReadOptions& options = {});
 Expected<HeightField> readBtHeightField(const std::filesystem::path& path, const HeightFieldReadOptions& options = {});
 Expected<HeightField> readTerHeightField(const std::filesystem::path& path, const HeightFieldReadOptions& options = {});
@@ -39,8 +41,19 @@ Expected<HeightField> readRawHeightField(const std::filesystem::path& path, cons
 enum class BtSampleType { Int16, Int32, Float32 };
 
 /// Writers, used by tests to make hand-made files and by tools to export. Each writes to a temporary name
-/// and renames, so a failed write leaves no partial file. NaN samples are written as the format's no-data
-/// marker where it has one (.bt: -32768 for int16, INT32_MIN for int32, NaN... see implementation).
+/// and renames, so a failed write leaves no partial file. Native values are written, rounded and clamped to
+/// the sample type's range. NaN samples become the format's no-data marker where it has one: .bt -32768
+/// for every sample type (VTP's INVALID_ELEVATION; finite int16 values stop at -32767), signed raw -32768
+/// (the SRTM void, read back with options.noData). PNG, .ter and unsigned raw have no marker and refuse NaN.
+/// Format notes:
+/// - PNG: 8 or 16 bits; spacing and vertical mapping are not stored.
+/// - .bt: horizontal units metres, extents from originX/Y and spacing (1 m when absent). Version 1.3 stores
+///   verticalScale; when the mapping does not fit (an offset, or a scale before 1.3) heights are written in
+///   metres instead, with scale 1.
+/// - .ter: SCAL = spacing (30 m when absent). A field whose mapping is already a Terragen one with int16
+///   natives (as read from a .ter) is written unchanged; otherwise heights in metres are re-encoded with
+///   BaseHeight at mid-range and the smallest HeightScale that fits, within half a step
+///   (SCAL * HeightScale / 65536 m).
 Status writePngHeightField(const std::filesystem::path& path, const HeightField& field, int bitDepth = 16);
 Status writeBtHeightField(const std::filesystem::path& path, const HeightField& field, BtSampleType type,
                           int minorVersion = 3);

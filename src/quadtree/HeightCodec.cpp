@@ -7,6 +7,7 @@
 #include "core/Zlib.h"
 
 #include <algorithm>
+#include <memory>
 
 namespace terrain {
 
@@ -101,9 +102,11 @@ void predictChildWindow(std::span<const std::uint16_t> parent, int size, int chu
         int m = (u - 1) / 2;
         return {p0 + m - 1, 4, kTap};
     };
-    // Horizontal pass into rows of the parent that any child row needs, then the vertical pass.
-    std::vector<std::int32_t> rows(static_cast<std::size_t>(size) * size, 0);
-    for (int py = 0; py < size; ++py) {
+    // Horizontal pass over the parent rows some child row needs, then the vertical pass.
+    std::unique_ptr<std::int32_t[]> rows(new std::int32_t[static_cast<std::size_t>(size) * size]);  // no zero fill
+    const int firstRow = stencil(1, py0).first;
+    const int lastRow = stencil(size - 2, py0).first + 3;
+    for (int py = firstRow; py <= lastRow; ++py) {
         for (int c = 0; c < size; ++c) {
             Stencil s = stencil(c, px0);
             std::int32_t sum = 0;

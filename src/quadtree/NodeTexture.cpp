@@ -47,41 +47,52 @@ void toBytes(const double* c, std::uint8_t* rgb)
 
 HeightColouring::HeightColouring(const QuantizedGrid& grid, const MapHeader& header, double heightMin,
                                  double heightMax)
-    : mGrid(grid), mHeader(header), mHeightMin(heightMin), mHeightMax(std::max(heightMax, heightMin + 1e-6))
+    : mGrid(grid), mHeader(header), mTable(static_cast<std::size_t>(kTableSteps) * kTableSteps * 3)
 {
+    heightMax = std::max(heightMax, heightMin + header.heightStep);
+    mCodeMin = (heightMin - header.heightOffset) / header.heightStep;
+    mHeightStepsPerCode = (kTableSteps - 1) * header.heightStep / (heightMax - heightMin);
+    mSlopeStepsPerCode = (kTableSteps - 1) * header.heightStep / (2 * header.sampleSpacing) / kTableMaxSlope;
+    // The palette depends on height fraction and slope only: tabulate it once.
+    for (int i = 0; i < kTableSteps; ++i) {
+        const double t = i / (kTableSteps - 1.0);
+        for (int j = 0; j < kTableSteps; ++j) {
+            const double slope = j * kTableMaxSlope / (kTableSteps - 1.0);
+            Colour c = mix(kMeadow, kForest, smoothstep(0.10, 0.35, t));
+            c = mix(c, kDryGround, smoothstep(0.45, 0.65, t));
+            c = mix(c, kRock, smoothstep(0.65, 0.82, t));
+            c = mix(c, kSteepRock, smoothstep(kRockSlopeStart, kRockSlopeFull, slope));
+            // Snow lies on the highest ground where it is not too steep to hold.
+            c = mix(c, kSnow, smoothstep(0.80, 0.90, t) * (1.0 - smoothstep(0.7, 1.2, slope)));
+            const double rgb[3] = {c.r, c.g, c.b};
+            toBytes(rgb, &mTable[(static_cast<std::size_t>(i) * kTableSteps + j) * 3]);
+        }
+    }
 }
 
-void HeightColouring::colourAt(std::int64_t x, std::int64_t y, double* rgb) const
+const std::uint8_t* HeightColouring::colourAt(std::int64_t x, std::int64_t y) const
 {
     const std::int64_t last = mGrid.size() - 1;
     x = std::clamp<std::int64_t>(x, 0, last);
     y = std::clamp<std::int64_t>(y, 0, last);
-    auto h = [&](std::int64_t i, std::int64_t j) {
-        return mHeader.heightOf(mGrid.at(static_cast<std::uint64_t>(std::clamp<std::int64_t>(i, 0, last)),
-                                         static_cast<std::uint64_t>(std::clamp<std::int64_t>(j, 0, last))));
+    auto code = [&](std::int64_t i, std::int64_t j) -> double {
+        return mGrid.at(static_cast<std::uint64_t>(i), static_cast<std::uint64_t>(j));
     };
-    double height = h(x, y);
-    double dzdx = (h(x + 1, y) - h(x - 1, y)) / (2 * mHeader.sampleSpacing);
-    double dzdy = (h(x, y + 1) - h(x, y - 1)) / (2 * mHeader.sampleSpacing);
-    double slope = std::sqrt(dzdx * dzdx + dzdy * dzdy);
-    double t = (height - mHeightMin) / (mHeightMax - mHeightMin);
-
-    Colour c = mix(kMeadow, kForest, smoothstep(0.10, 0.35, t));
-    c = mix(c, kDryGround, smoothstep(0.45, 0.65, t));
-    c = mix(c, kRock, smoothstep(0.65, 0.82, t));
-    c = mix(c, kSteepRock, smoothstep(kRockSlopeStart, kRockSlopeFull, slope));
-    // Snow lies on the highest ground where it is not too steep to hold.
-    double snow = smoothstep(0.80, 0.90, t) * (1.0 - smoothstep(0.7, 1.2, slope));
-    c = mix(c, kSnow, snow);
-    rgb[0] = c.r;
-    rgb[1] = c.g;
-    rgb[2] = c.b;
+    const double dx = code(std::min(x + 1, last), y) - code(std::max<std::int64_t>(x - 1, 0), y);
+    const double dy = code(x, std::min(y + 1, last)) - code(x, std::max<std::int64_t>(y - 1, 0));
+    const auto i = static_cast<int>(std::clamp((code(x, y) - mCodeMin) * mHeightStepsPerCode + 0.5, 0.0, kTableSteps - 1.0));
+    const auto j = static_cast<int>(std::min(std::sqrt(dx * dx + dy * dy) * mSlopeStepsPerCode + 0.5, kTableSteps - 1.0));
+    return &mTable[(static_cast<std::size_t>(i) * kTableSteps + j) * 3];
 }
 
 void HeightColouring::colour(double gx, double gy, double footprint, std::uint8_t* rgb) const
 {
     double sum[3] = {0, 0, 0};
-    double c[3];
+    if (footprint <= 1.0 && gx == std::floor(gx) && gy == std::floor(gy)) {
+        // A texel on a sample (leaves whose texture matches the chunk).
+        std::copy_n(colourAt(static_cast<std::int64_t>(gx), static_cast<std::int64_t>(gy)), 3, rgb);
+        return;
+    }
     if (footprint <= 1.0) {
         // Bilinear blend of the colours at the four surrounding samples.
         auto x0 = static_cast<std::int64_t>(std::floor(gx));
@@ -92,7 +103,7 @@ void HeightColouring::colour(double gx, double gy, double footprint, std::uint8_
             if (weights[k] == 0) {
                 continue;
             }
-            colourAt(x0 + (k & 1), y0 + (k >> 1), c);
+            const std::uint8_t* c = colourAt(x0 + (k & 1), y0 + (k >> 1));
             for (int i = 0; i < 3; ++i) {
                 sum[i] += weights[k] * c[i];
             }
@@ -105,7 +116,7 @@ void HeightColouring::colour(double gx, double gy, double footprint, std::uint8_
         int count = 0;
         for (auto y = ya; y <= yb; ++y) {
             for (auto x = xa; x <= xb; ++x) {
-                colourAt(x, y, c);
+                const std::uint8_t* c = colourAt(x, y);
                 for (int i = 0; i < 3; ++i) {
                     sum[i] += c[i];
                 }
@@ -116,7 +127,9 @@ void HeightColouring::colour(double gx, double gy, double footprint, std::uint8_
             s /= std::max(count, 1);
         }
     }
-    toBytes(sum, rgb);
+    for (int i = 0; i < 3; ++i) {
+        rgb[i] = static_cast<std::uint8_t>(std::min(sum[i] + 0.5, 255.0));
+    }
 }
 
 ImageTexture::ImageTexture(const Image& rgb, const MapHeader& header) : mImage(rgb)

@@ -11,6 +11,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <vector>
 
 namespace terrain {
 
@@ -32,12 +33,19 @@ public:
     void colour(double gx, double gy, double footprint, std::uint8_t* rgb) const override;
 
 private:
-    void colourAt(std::int64_t x, std::int64_t y, double* rgb) const;
+    /// Palette resolution: height fraction and slope steps of the lookup table.
+    static constexpr int kTableSteps = 256;
+    /// Slope (rise over run) at the table's last column; steeper ground is coloured as this.
+    static constexpr double kTableMaxSlope = 2.0;
+
+    const std::uint8_t* colourAt(std::int64_t x, std::int64_t y) const;
 
     const QuantizedGrid& mGrid;
     const MapHeader& mHeader;
-    double mHeightMin;
-    double mHeightMax;
+    double mCodeMin;          ///< code of the lowest valid height
+    double mHeightStepsPerCode;  ///< table rows per code
+    double mSlopeStepsPerCode;   ///< table columns per code of height difference over 2 samples
+    std::vector<std::uint8_t> mTable;  ///< kTableSteps^2 RGB colours, [height step][slope step]
 };
 
 /// A user texture (`prep -t`) stretched over the input's valid region: image pixel centres sit on the

@@ -22,28 +22,29 @@ std::uint8_t medPredict(int left, int up, int upLeft)
     return static_cast<std::uint8_t>(left + up - upLeft);
 }
 
-template <class Visit>
-void forEachTexel(int size, Visit visit)
+/// Visits the planes' texels in coding order, passing each texel's value and its MED prediction from
+/// already-visited texels. `Code(value, prediction)` returns the texel's final value (encoder: the value;
+/// decoder: the value rebuilt from the residual).
+template <class Code>
+void forEachTexel(std::span<std::uint8_t> rgb, int size, Code code)
 {
+    const std::size_t row = static_cast<std::size_t>(size) * 3;
     for (int c = 0; c < 3; ++c) {
-        for (int y = 0; y < size; ++y) {
-            for (int x = 0; x < size; ++x) {
-                visit(c, x, y);
+        std::uint8_t* p = rgb.data() + c;
+        // Row 0: west neighbour.
+        p[0] = code(p[0], 0);
+        for (int x = 1; x < size; ++x) {
+            p[x * 3] = code(p[x * 3], p[(x - 1) * 3]);
+        }
+        for (int y = 1; y < size; ++y) {
+            std::uint8_t* cur = p + y * row;
+            const std::uint8_t* below = cur - row;
+            cur[0] = code(cur[0], below[0]);
+            for (int x = 1; x < size; ++x) {
+                cur[x * 3] = code(cur[x * 3], medPredict(cur[(x - 1) * 3], below[x * 3], below[(x - 1) * 3]));
             }
         }
     }
-}
-
-std::uint8_t predictAt(std::span<const std::uint8_t> rgb, int size, int c, int x, int y)
-{
-    auto at = [&](int xx, int yy) -> int { return rgb[(static_cast<std::size_t>(yy) * size + xx) * 3 + c]; };
-    if (y == 0) {
-        return x == 0 ? 0 : static_cast<std::uint8_t>(at(x - 1, 0));
-    }
-    if (x == 0) {
-        return static_cast<std::uint8_t>(at(0, y - 1));
-    }
-    return medPredict(at(x - 1, y), at(x, y - 1), at(x - 1, y - 1));
 }
 
 }  // namespace
@@ -51,11 +52,12 @@ std::uint8_t predictAt(std::span<const std::uint8_t> rgb, int size, int c, int x
 std::vector<std::uint8_t> encodeTexture(std::span<const std::uint8_t> rgb, int size, int zlibLevel)
 {
     TERRAIN_EXPECTS(rgb.size() == static_cast<std::size_t>(size) * size * 3, "texture must have size*size RGB texels");
+    std::vector<std::uint8_t> texels(rgb.begin(), rgb.end());
     std::vector<std::uint8_t> residuals;
     residuals.reserve(rgb.size());
-    forEachTexel(size, [&](int c, int x, int y) {
-        auto value = rgb[(static_cast<std::size_t>(y) * size + x) * 3 + c];
-        residuals.push_back(static_cast<std::uint8_t>(value - predictAt(rgb, size, c, x, y)));
+    forEachTexel(texels, size, [&](std::uint8_t value, std::uint8_t prediction) {
+        residuals.push_back(static_cast<std::uint8_t>(value - prediction));
+        return value;
     });
     return zlibCompress(residuals, zlibLevel);
 }
@@ -67,10 +69,9 @@ Status decodeTexture(std::span<const std::uint8_t> stream, int size, std::span<s
     if (!residuals.ok()) {
         return makeError("texture stream: ", residuals.error().message);
     }
-    std::size_t i = 0;
-    forEachTexel(size, [&](int c, int x, int y) {
-        rgb[(static_cast<std::size_t>(y) * size + x) * 3 + c] =
-            static_cast<std::uint8_t>(residuals.value()[i++] + predictAt(rgb, size, c, x, y));
+    const std::uint8_t* next = residuals->data();
+    forEachTexel(rgb, size, [&](std::uint8_t, std::uint8_t prediction) {
+        return static_cast<std::uint8_t>(*next++ + prediction);
     });
     return {};
 }
