@@ -3,6 +3,7 @@
 #include "core/Parse.h"
 #include "lod/HeightQuery.h"
 #include "quadtree/MapFile.h"
+#include "heightfield/Image.h"
 #include "quadtree/MapVerifier.h"
 
 #include <algorithm>
@@ -21,6 +22,8 @@ constexpr const char* kUsage = R"(usage: tengine-tool COMMAND FILE.map [argument
   info FILE.map           header, levels, nodes and errors per level, storage
   verify FILE.map         check structure, every checksum, bounds and errors; exit 1 on any problem
   height FILE.map X Y     static terrain height (metres) at world position X, Y (metres); exit 1 outside
+  texture FILE.map LEVEL/X/Y OUT.png
+                          write a static node's texture as a PNG (north up)
 
 Options: --reader stream|memory_mapped (default stream)
 )";
@@ -99,6 +102,33 @@ int verify(const MapFile& map)
     return 0;
 }
 
+int texture(const MapFile& map, const std::string& node, const std::string& output)
+{
+    NodeId id;
+    unsigned level = 0;
+    char tail = 0;
+    if (std::sscanf(node.c_str(), "%u/%u/%u%c", &level, &id.x, &id.y, &tail) != 3 || level > NodeId::kMaxLevel) {
+        return fail("texture: '" + node + "' is not a node LEVEL/X/Y");
+    }
+    id.level = static_cast<int>(level);
+    auto loaded = map.loadPath(id);
+    if (!loaded.ok()) {
+        return fail(loaded.error().message);
+    }
+    const int size = static_cast<int>(map.header().textureSize);
+    Image image{size, size, 3, std::vector<std::uint8_t>(loaded->texture.size())};
+    for (int y = 0; y < size; ++y) {  // node rows run south to north, image rows north to south
+        std::copy_n(&loaded->texture[static_cast<std::size_t>(size - 1 - y) * size * 3], static_cast<std::size_t>(size) * 3,
+                    image.pixel(0, y));
+    }
+    auto written = writePngImage(output, image);
+    if (!written.ok()) {
+        return fail(written.error().message);
+    }
+    std::printf("%s: node %s texture written to %s\n", map.name().c_str(), id.toString().c_str(), output.c_str());
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
@@ -129,7 +159,7 @@ int main(int argc, char** argv)
         return 2;
     }
     const std::string& command = args[0];
-    if (command != "info" && command != "verify" && command != "height") {
+    if (command != "info" && command != "verify" && command != "height" && command != "texture") {
         std::fprintf(stderr, "tengine-tool: unknown command '%s'\n%s", command.c_str(), kUsage);
         return 2;
     }
@@ -142,6 +172,12 @@ int main(int argc, char** argv)
     }
     if (command == "verify") {
         return verify(**map);
+    }
+    if (command == "texture") {
+        if (args.size() != 4) {
+            return fail("texture needs LEVEL/X/Y and an output PNG");
+        }
+        return texture(**map, args[2], args[3]);
     }
     if (args.size() != 4) {
         return fail("height needs X and Y (metres)");
