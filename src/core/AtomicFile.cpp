@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <fcntl.h>
 #include <unistd.h>
 
 namespace terrain {
@@ -25,6 +26,17 @@ AtomicFile::AtomicFile(std::FILE* file, std::filesystem::path path, std::filesys
 
 Expected<AtomicFile> AtomicFile::create(const std::filesystem::path& path)
 {
+    // Preferably an unnamed file in the target directory (O_TMPFILE): if the process dies before commit,
+    // even by SIGKILL, nothing at all is left behind. Filesystems without it get a named temporary.
+    auto directory = path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path();
+    int fd = ::open(directory.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0644);
+    if (fd >= 0) {
+        std::FILE* file = ::fdopen(fd, "wb");
+        if (file) {
+            return AtomicFile(file, path, {});
+        }
+        ::close(fd);
+    }
     auto temporary = temporaryNameFor(path);
     std::FILE* file = std::fopen(temporary.c_str(), "wb");
     if (!file) {
@@ -62,8 +74,10 @@ void AtomicFile::discard()
     if (mFile) {
         std::fclose(mFile);
         mFile = nullptr;
-        std::error_code ignored;
-        std::filesystem::remove(mTemporaryPath, ignored);
+        if (!mTemporaryPath.empty()) {
+            std::error_code ignored;
+            std::filesystem::remove(mTemporaryPath, ignored);
+        }
     }
 }
 
@@ -105,6 +119,18 @@ Status AtomicFile::commit()
     if (error != 0) {
         discard();
         return makeError(mPath.string(), ": write failed: ", std::strerror(error));
+    }
+    if (mTemporaryPath.empty()) {
+        // Give the unnamed file a name next to the target, then rename that over the target (linkat
+        // cannot replace an existing file).
+        auto temporary = temporaryNameFor(mPath);
+        auto procPath = "/proc/self/fd/" + std::to_string(::fileno(mFile));
+        if (::linkat(AT_FDCWD, procPath.c_str(), AT_FDCWD, temporary.c_str(), AT_SYMLINK_FOLLOW) != 0) {
+            int linkError = errno;
+            discard();
+            return makeError(mPath.string(), ": cannot give the output a name: ", std::strerror(linkError));
+        }
+        mTemporaryPath = temporary;
     }
     std::fclose(mFile);
     mFile = nullptr;

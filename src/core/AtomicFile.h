@@ -1,5 +1,7 @@
-// Output files that appear whole or not at all: written under a temporary name in the same directory,
-// flushed, then renamed over the final name. An interrupted or failed write leaves no partial file.
+// Output files that appear whole or not at all: written to an unnamed file in the target directory
+// (O_TMPFILE; a named temporary where the filesystem lacks it), flushed, synced, then named and renamed
+// over the final name. An interrupted or failed write leaves no partial file; with O_TMPFILE not even a
+// temporary survives a killed process.
 #pragma once
 
 #include "core/Expected.h"
@@ -13,7 +15,7 @@ namespace terrain {
 
 class AtomicFile {
 public:
-    /// Opens `<path>.tmp-<pid>-<n>` for writing. Fails with a message naming the path.
+    /// Opens the output for writing. Fails with a message naming the path.
     static Expected<AtomicFile> create(const std::filesystem::path& path);
 
     AtomicFile(AtomicFile&& other) noexcept;
@@ -34,7 +36,6 @@ public:
     Status commit();
 
     const std::filesystem::path& path() const { return mPath; }
-    const std::filesystem::path& temporaryPath() const { return mTemporaryPath; }
 
 private:
     AtomicFile(std::FILE* file, std::filesystem::path path, std::filesystem::path temporaryPath);

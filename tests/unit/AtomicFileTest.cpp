@@ -2,7 +2,10 @@
 
 #include "TestSupport.h"
 
+#include <cstdlib>
 #include <fstream>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <gtest/gtest.h>
 
 namespace terrain {
@@ -49,6 +52,24 @@ TEST(AtomicFileTest, AbandonedWriteKeepsThePreviousFile)
         file->write("new", 3);
     }
     EXPECT_EQ(readAll(dir / "out.bin"), "old");
+}
+
+TEST(AtomicFileTest, KilledWriterLeavesNothing)
+{
+    // A process that dies mid-write (no destructors, no commit), as prep does under SIGKILL.
+    test::ScratchDir dir;
+    pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        auto file = AtomicFile::create(dir / "out.map");
+        if (file.ok()) {
+            file->write("partial", 7);
+        }
+        std::_Exit(0);
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    EXPECT_TRUE(dir.list().empty()) << "left behind: " << (dir.list().empty() ? "" : dir.list().front());
 }
 
 TEST(AtomicFileTest, UnwritableDirectoryIsAClearError)
