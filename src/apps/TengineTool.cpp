@@ -1,12 +1,19 @@
 // tengine-tool: inspect (info), check (verify) and query (height) terrain maps.
 #include "core/Memory.h"
 #include "core/Parse.h"
+#include "lod/CameraPath.h"
 #include "lod/HeightQuery.h"
+#include "lod/StaticNodeSource.h"
+#include "lod/TerrainStreamer.h"
 #include "quadtree/MapFile.h"
 #include "heightfield/Image.h"
 #include "quadtree/MapVerifier.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <thread>
 #include <cstdio>
 #include <cstring>
 #include <map>
@@ -24,6 +31,13 @@ constexpr const char* kUsage = R"(usage: tengine-tool COMMAND FILE.map [argument
   height FILE.map X Y     static terrain height (metres) at world position X, Y (metres); exit 1 outside
   texture FILE.map LEVEL/X/Y OUT.png
                           write a static node's texture as a PNG (north up)
+  select FILE.map --camera X,Y,Z,YAW,PITCH [--tau 2] [--size 1280x720] [--fov 60]
+                          the nodes the viewer would draw from that camera (degrees; yaw 0 = north),
+                          after loading everything they need
+  stream FILE.map --path FILE.path [--cache 512] [--queue 8] [--workers 1] [--fps 30] [--tau 2]
+                 [--size 1280x720] [--fov 60] [--fast]
+                          replay a camera path through the selector, cache and loader in real time (or
+                          as fast as possible) and print loading and selection figures
 
 Options: --reader stream|memory_mapped (default stream)
 )";
@@ -129,6 +143,203 @@ int texture(const MapFile& map, const std::string& node, const std::string& outp
     return 0;
 }
 
+/// Options of select and stream: "--name value" pairs after the map.
+struct ViewOptions {
+    Camera camera;
+    double tau = 2.0;
+    std::string path;
+    StreamerOptions streamer;
+    double fps = 30.0;
+    bool fast = false;
+};
+
+Expected<ViewOptions> parseViewOptions(const std::vector<std::string>& args, std::size_t first, bool wantPath)
+{
+    ViewOptions view;
+    bool haveCamera = false;
+    auto degrees = [](double d) { return d * std::numbers::pi / 180.0; };
+    for (std::size_t i = first; i < args.size(); ++i) {
+        const std::string& arg = args[i];
+        if (arg == "--fast") {
+            view.fast = true;
+            continue;
+        }
+        if (i + 1 >= args.size()) {
+            return makeError(arg, " needs a value");
+        }
+        const std::string& value = args[++i];
+        auto number = [&](double lo, double hi) -> Expected<double> {
+            auto v = parseDouble(value);
+            if (!v.ok() || *v < lo || *v > hi) {
+                return makeError(arg, ": '", value, "' is not a number in [", lo, ", ", hi, "]");
+            }
+            return v;
+        };
+        if (arg == "--camera") {
+            std::vector<double> parts;
+            std::size_t start = 0;
+            while (start <= value.size()) {
+                auto comma = value.find(',', start);
+                auto piece = parseDouble(value.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+                if (!piece.ok()) {
+                    return makeError("--camera: '", value, "' is not X,Y,Z,YAW,PITCH");
+                }
+                parts.push_back(*piece);
+                if (comma == std::string::npos) {
+                    break;
+                }
+                start = comma + 1;
+            }
+            if (parts.size() != 5 || std::abs(parts[4]) > 90) {
+                return makeError("--camera: '", value, "' is not X,Y,Z,YAW,PITCH (degrees, pitch in [-90, 90])");
+            }
+            view.camera.position = {parts[0], parts[1], parts[2]};
+            view.camera.yaw = degrees(parts[3]);
+            view.camera.pitch = degrees(parts[4]);
+            haveCamera = true;
+        } else if (arg == "--tau") {
+            auto v = number(0.01, 1000);
+            TERRAIN_TRY(v);
+            view.tau = *v;
+        } else if (arg == "--fov") {
+            auto v = number(1, 179);
+            TERRAIN_TRY(v);
+            view.camera.verticalFov = degrees(*v);
+        } else if (arg == "--fps") {
+            auto v = number(1, 1000);
+            TERRAIN_TRY(v);
+            view.fps = *v;
+        } else if (arg == "--cache" || arg == "--queue" || arg == "--workers") {
+            auto v = number(arg == "--workers" ? 0 : 1, 1 << 24);
+            TERRAIN_TRY(v);
+            if (*v != std::floor(*v)) {
+                return makeError(arg, ": '", value, "' is not an integer");
+            }
+            if (arg == "--cache") {
+                view.streamer.cacheSize = static_cast<std::size_t>(*v);
+            } else if (arg == "--queue") {
+                view.streamer.queueLimit = static_cast<std::size_t>(*v);
+            } else {
+                view.streamer.workers = static_cast<int>(*v);
+            }
+        } else if (arg == "--size") {
+            unsigned w = 0, h = 0;
+            char tail = 0;
+            if (std::sscanf(value.c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384) {
+                return makeError("--size: '", value, "' is not WIDTHxHEIGHT");
+            }
+            view.camera.viewportWidth = static_cast<int>(w);
+            view.camera.viewportHeight = static_cast<int>(h);
+        } else if (arg == "--path" && wantPath) {
+            view.path = value;
+        } else {
+            return makeError("unknown option '", arg, "'");
+        }
+    }
+    if (!wantPath && !haveCamera) {
+        return makeError("select needs --camera X,Y,Z,YAW,PITCH");
+    }
+    if (wantPath && view.path.empty()) {
+        return makeError("stream needs --path FILE.path");
+    }
+    return view;
+}
+
+std::uint64_t trianglesPerNode(const MapHeader& h)
+{
+    const std::uint64_t cells = h.chunkSize - 1;
+    return 2 * cells * cells + 4 * 2 * cells;  // surface plus skirts
+}
+
+int select(const MapFile& map, const ViewOptions& view)
+{
+    MapLodTree tree(map);
+    StaticNodeSource source(map);
+    StreamerOptions options = view.streamer;
+    options.cacheSize = std::max<std::size_t>(options.cacheSize, map.directory().size());
+    auto streamer = TerrainStreamer::create(tree, source, options);
+    if (!streamer.ok()) {
+        return fail(streamer.error().message);
+    }
+    std::string loadError;
+    (*streamer)->onLoadError([&](const std::string& message) { loadError = message; });
+    // Select, load what is missing, repeat until the selection wants nothing more.
+    FrameStats stats;
+    for (int round = 0; round < 64; ++round) {
+        stats = (*streamer)->update(view.camera, view.tau);
+        if (stats.requested == 0) {
+            break;
+        }
+        (*streamer)->drain();
+    }
+    if (!loadError.empty()) {
+        std::fprintf(stderr, "tengine-tool: %s\n", loadError.c_str());
+    }
+    const auto& selection = (*streamer)->selection();
+    std::printf("level      x      y  morph  distance(m)\n");
+    for (const auto& node : selection.nodes) {
+        std::printf("%5d %6u %6u  %5.3f  %11.1f\n", node.id.level, node.id.x, node.id.y, node.morph, node.distance);
+    }
+    std::printf("nodes %zu, triangles %llu (with skirts), culled %zu\n", selection.nodes.size(),
+                static_cast<unsigned long long>(selection.nodes.size() * trianglesPerNode(map.header())),
+                selection.culledNodes);
+    return loadError.empty() ? 0 : 1;
+}
+
+int stream(const MapFile& map, const ViewOptions& view)
+{
+    auto path = CameraPath::load(view.path);
+    if (!path.ok()) {
+        return fail(path.error().message);
+    }
+    MapLodTree tree(map);
+    StaticNodeSource source(map);
+    auto streamer = TerrainStreamer::create(tree, source, view.streamer);
+    if (!streamer.ok()) {
+        return fail(streamer.error().message);
+    }
+    std::uint64_t loadErrors = 0;
+    (*streamer)->onLoadError([&](const std::string& message) {
+        ++loadErrors;
+        std::fprintf(stderr, "tengine-tool: %s\n", message.c_str());
+    });
+    Camera camera = view.camera;
+    const auto frames = static_cast<std::size_t>(std::floor(path->duration() * view.fps)) + 1;
+    std::vector<double> selectMicros;
+    selectMicros.reserve(frames);
+    std::size_t peakResident = 0, framesWaiting = 0, refused = 0;
+    const auto start = std::chrono::steady_clock::now();
+    for (std::size_t frame = 0; frame < frames; ++frame) {
+        const double t = path->startTime() + static_cast<double>(frame) / view.fps;
+        if (!view.fast) {
+            std::this_thread::sleep_until(start + std::chrono::duration<double>(t - path->startTime()));
+        }
+        path->evaluate(t).applyTo(camera);
+        FrameStats stats = (*streamer)->update(camera, view.tau);
+        selectMicros.push_back(stats.selectionSeconds * 1e6);
+        peakResident = std::max(peakResident, (*streamer)->cache().size());
+        framesWaiting += stats.requested > 0 ? 1 : 0;
+        refused += stats.refused;
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const auto server = (*streamer)->serverStats();
+    std::sort(selectMicros.begin(), selectMicros.end());
+    auto percentile = [&](double p) { return selectMicros[static_cast<std::size_t>(p * static_cast<double>(selectMicros.size() - 1))]; };
+    std::printf("frames                 %zu over %.1f s of path (%s, %.1f s wall)\n", frames, path->duration(),
+                view.fast ? "as fast as possible" : "real time", seconds);
+    std::printf("groups loaded          %llu (%.1f nodes/s), cancelled %llu, rejected (queue full) %llu, failed %llu\n",
+                static_cast<unsigned long long>(server.completed), 4.0 * static_cast<double>(server.completed) / seconds,
+                static_cast<unsigned long long>(server.cancelled), static_cast<unsigned long long>(server.rejected),
+                static_cast<unsigned long long>(server.failed));
+    std::printf("resident nodes         peak %zu of %zu (cache), %llu evictions, %zu groups refused\n", peakResident,
+                (*streamer)->cache().capacity(), static_cast<unsigned long long>((*streamer)->cache().evictions()), refused);
+    std::printf("frames waiting         %zu of %zu wanted a node that was not resident yet\n", framesWaiting, frames);
+    std::printf("selection per frame    median %.1f us, p95 %.1f us, max %.1f us\n", percentile(0.5), percentile(0.95),
+                selectMicros.back());
+    std::printf("peak memory            %s\n", formatBytes(peakResidentBytes()).c_str());
+    return loadErrors == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
@@ -159,7 +370,8 @@ int main(int argc, char** argv)
         return 2;
     }
     const std::string& command = args[0];
-    if (command != "info" && command != "verify" && command != "height" && command != "texture") {
+    if (command != "info" && command != "verify" && command != "height" && command != "texture" &&
+        command != "select" && command != "stream") {
         std::fprintf(stderr, "tengine-tool: unknown command '%s'\n%s", command.c_str(), kUsage);
         return 2;
     }
@@ -172,6 +384,13 @@ int main(int argc, char** argv)
     }
     if (command == "verify") {
         return verify(**map);
+    }
+    if (command == "select" || command == "stream") {
+        auto view = parseViewOptions(args, 2, command == "stream");
+        if (!view.ok()) {
+            return fail(command + ": " + view.error().message);
+        }
+        return command == "select" ? select(**map, *view) : stream(**map, *view);
     }
     if (command == "texture") {
         if (args.size() != 4) {

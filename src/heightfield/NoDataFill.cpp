@@ -14,7 +14,7 @@ std::uint64_t countValid(const HeightField& field)
     return valid;
 }
 
-std::uint64_t fillNoData(HeightField& field)
+std::uint64_t fillNoData(HeightField& field, std::vector<std::uint8_t>* filled)
 {
     const int w = field.width;
     const int h = field.height;
@@ -58,7 +58,7 @@ std::uint64_t fillNoData(HeightField& field)
             }
         }
     }
-    std::uint64_t filled = 0;
+    std::uint64_t filledCount = 0;
     std::vector<float> values;
     std::vector<std::size_t> next;
     while (!frontier.empty()) {
@@ -81,14 +81,17 @@ std::uint64_t fillNoData(HeightField& field)
         for (std::size_t k = 0; k < frontier.size(); ++k) {
             field.samples[frontier[k]] = values[k];
         }
-        filled += frontier.size();
+        filledCount += frontier.size();
         next.clear();
         for (std::size_t i : frontier) {
             pushNeighbours(static_cast<int>(i % w), static_cast<int>(i / w), next);
         }
         frontier.swap(next);
     }
-    return filled;
+    if (filled) {
+        filled->swap(queued);  // every queued sample was a hole, and every hole gets queued
+    }
+    return filledCount;
 }
 
 }  // namespace terrain

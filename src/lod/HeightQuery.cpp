@@ -35,6 +35,22 @@ Expected<HeightSample> staticHeightAt(const MapFile& map, double x, double y)
         const double half = leafCells / std::ldexp(1.0, id.level + 1);
         const double cx = (id.x * 2 + 1) * half, cy = (id.y * 2 + 1) * half;
         int quadrant = (gx >= cx ? 1 : 0) | (gy >= cy ? 2 : 0);
+        // A point on the line between children lies in both: take the one whose subtree goes deeper (the
+        // other may be a leaf pruned early, e.g. a node wholly in the padding).
+        const int tieX = gx == cx ? 1 : 0, tieY = gy == cy ? 2 : 0;
+        if (tieX | tieY) {
+            for (int other : {quadrant ^ tieX, quadrant ^ tieY, quadrant ^ tieX ^ tieY}) {
+                const DirectoryEntry* candidate = map.find(id.child(quadrant));
+                if (candidate && candidate->hasChildren) {
+                    break;
+                }
+                quadrant = other;
+            }
+            const DirectoryEntry* chosen = map.find(id.child(quadrant));
+            if (!chosen || !chosen->hasChildren) {
+                quadrant = (gx >= cx ? 1 : 0) | (gy >= cy ? 2 : 0);
+            }
+        }
         NodeId child = id.child(quadrant);
         auto next = map.loadNode(child, node->heights);
         TERRAIN_TRY(next);

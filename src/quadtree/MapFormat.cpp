@@ -224,7 +224,8 @@ Expected<std::vector<DirectoryEntry>> decodeDirectory(std::span<const std::uint8
         if (e.id.x >= side || e.id.y >= side) {
             return bad("position outside its level");
         }
-        if (e.offset < kHeaderBytes || e.offset + e.payloadBytes() > header.directoryOffset || e.heightBytes == 0 ||
+        if (e.offset < kHeaderBytes || e.offset > header.directoryOffset ||
+            e.payloadBytes() > header.directoryOffset - e.offset || e.heightBytes == 0 ||
             e.textureBytes == 0) {
             return bad("payload at ", e.offset, " with ", e.payloadBytes(), " bytes lies outside the node area");
         }

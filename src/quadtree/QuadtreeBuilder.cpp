@@ -102,6 +102,7 @@ private:
 
 /// What a processed node hands its parent.
 struct NodeSummary {
+    bool hasFilledNoData = false;  ///< the node's square holds input samples that were no-data
     float deltaM = 0.0f;
     float deltaC = 0.0f;
     std::uint16_t minCode = 0;
@@ -121,9 +122,9 @@ struct EncodedBlock {
 class Builder {
 public:
     Builder(const MapHeader& header, const QuantizedGrid& grid, const TreeShape& shape, const TextureSource& texture,
-            const BuildOptions& options, std::atomic<std::uint64_t>& done)
-        : mHeader(header), mGrid(grid), mShape(shape), mTexture(texture), mOptions(options), mWindow(header),
-          mDone(done)
+            const std::vector<std::uint8_t>& filledMask, const BuildOptions& options, std::atomic<std::uint64_t>& done)
+        : mHeader(header), mGrid(grid), mShape(shape), mTexture(texture), mFilledMask(filledMask), mOptions(options),
+          mWindow(header), mDone(done)
     {
     }
 
@@ -148,10 +149,11 @@ public:
                 summary.maxCode = std::max(summary.maxCode, code);
             }
         }
-        const std::size_t textureBytes = std::size_t{mHeader.textureSize} * mHeader.textureSize * 3;
         if (!mShape.hasChildren(id)) {
-            summary.texture.resize(textureBytes);
-            sampleNodeTexture(mTexture, mHeader, id, summary.texture);
+            // A leaf of the stored tree: its texture comes from the same pyramid as its neighbours', even
+            // when it was pruned above the finest level, so edges shared with them match exactly.
+            summary.texture = texturePyramid(id);
+            summary.hasFilledNoData = containsFilledSample(id);
             ++mDone;
             return summary;
         }
@@ -168,12 +170,13 @@ public:
             emit(child, encodeNodeHeights(mWindow, child, childWindow, window, mHeader.quantizerBin, mOptions.zlibLevel),
                  children[q], out);
             worstChild = std::max(worstChild, children[q].deltaC);
+            summary.hasFilledNoData = summary.hasFilledNoData || children[q].hasFilledNoData;
             summary.minCode = std::min(summary.minCode, children[q].minCode);
             summary.maxCode = std::max(summary.maxCode, children[q].maxCode);
         }
         summary.deltaM = static_cast<float>(simplificationErrorCodes(mGrid, mHeader, id) * mHeader.heightStep);
         summary.deltaC = worstChild + summary.deltaM;  // eq. 3.1
-        summary.texture.resize(textureBytes);
+        summary.texture.resize(std::size_t{mHeader.textureSize} * mHeader.textureSize * 3);
         downsampleChildTextures({children[0].texture, children[1].texture, children[2].texture, children[3].texture},
                                 static_cast<int>(mHeader.textureSize), summary.texture);
         ++mDone;
@@ -190,12 +193,49 @@ public:
     }
 
 private:
+    /// The texture of `id` as the pyramid from the finest level makes it.
+    std::vector<std::uint8_t> texturePyramid(const NodeId& id) const
+    {
+        std::vector<std::uint8_t> texture(std::size_t{mHeader.textureSize} * mHeader.textureSize * 3);
+        if (id.level + 1 == static_cast<int>(mHeader.levels)) {
+            sampleNodeTexture(mTexture, mHeader, id, texture);
+            return texture;
+        }
+        std::array<std::vector<std::uint8_t>, 4> children;
+        for (int q = 0; q < 4; ++q) {
+            children[q] = texturePyramid(id.child(q));
+        }
+        downsampleChildTextures({children[0], children[1], children[2], children[3]},
+                                static_cast<int>(mHeader.textureSize), texture);
+        return texture;
+    }
+
+    /// Whether the node's square (edges included) holds an input sample that was no-data.
+    bool containsFilledSample(const NodeId& id) const
+    {
+        if (mFilledMask.empty()) {
+            return false;
+        }
+        const std::uint64_t size = std::uint64_t{mHeader.chunkSize - 1} << (mHeader.levels - 1 - static_cast<std::uint32_t>(id.level));
+        const std::uint64_t x1 = std::min<std::uint64_t>(id.x * size + size, mHeader.validWidth - 1);
+        const std::uint64_t y1 = std::min<std::uint64_t>(id.y * size + size, mHeader.validHeight - 1);
+        for (std::uint64_t y = id.y * size; y <= y1; ++y) {
+            for (std::uint64_t x = id.x * size; x <= x1; ++x) {
+                if (mFilledMask[y * mHeader.validWidth + x]) {
+                    return true;
+                }
+            }
+        }
+        return false;
+    }
+
     void emit(const NodeId& id, std::vector<std::uint8_t> heights, const NodeSummary& summary, EncodedBlock& out) const
     {
         auto texture = encodeTexture(summary.texture, static_cast<int>(mHeader.textureSize), mOptions.zlibLevel);
         DirectoryEntry entry;
         entry.id = id;
         entry.hasChildren = mShape.hasChildren(id);
+        entry.hasFilledNoData = summary.hasFilledNoData;
         entry.offset = out.bytes.size();
         entry.heightBytes = static_cast<std::uint32_t>(heights.size());
         entry.textureBytes = static_cast<std::uint32_t>(texture.size());
@@ -216,6 +256,7 @@ private:
     const QuantizedGrid& mGrid;
     const TreeShape& mShape;
     const TextureSource& mTexture;
+    const std::vector<std::uint8_t>& mFilledMask;  ///< validWidth x validHeight, empty when nothing was filled
     const BuildOptions& mOptions;
     NodeWindow mWindow;
     std::atomic<std::uint64_t>& mDone;
@@ -284,7 +325,8 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     if (countValid(field) == 0) {
         return makeError("height field has no valid sample (every sample is no-data)");
     }
-    const std::uint64_t filled = fillNoData(field);
+    std::vector<std::uint8_t> filledMask;
+    const std::uint64_t filled = fillNoData(field, &filledMask);
 
     MapHeader header;
     header.chunkSize = static_cast<std::uint32_t>(options.chunkSize);
@@ -361,7 +403,7 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     file->write(encodeHeader(header).data(), kHeaderBytes);  // patched at the end
 
     std::atomic<std::uint64_t> done{0};
-    Builder builder(header, *grid, shape, *textureSource, options, done);
+    Builder builder(header, *grid, shape, *textureSource, filledMask, options, done);
     std::vector<DirectoryEntry> directory;
     directory.reserve(totalNodes);
     auto append = [&](EncodedBlock& block) {
@@ -378,11 +420,10 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     };
 
     // Subtrees below `split` are independent: workers build them in parallel, each into its own block,
-    // and blocks are appended in subtree order, so the file does not depend on the thread count.
-    int split = 0;
-    while (split + 1 < static_cast<int>(header.levels) && (1 << (2 * split)) < 8 * options.threads) {
-        ++split;
-    }
+    // and blocks are appended in subtree order. The split depends on the tree only, so the file does not
+    // depend on the thread count.
+    constexpr int kSplitLevel = 3;  ///< up to 64 subtrees: enough to keep any likely core count busy
+    const int split = std::min(kSplitLevel, static_cast<int>(header.levels) - 1);
     const std::vector<NodeId> subtrees = shape.nodesAt(split);
     std::vector<NodeSummary> subtreeSummaries(subtrees.size());
     std::vector<std::unique_ptr<EncodedBlock>> pending(subtrees.size());

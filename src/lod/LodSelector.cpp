@@ -1,0 +1,137 @@
+// Level-of-detail selection: listing 3.7 (3.4.2) with hierarchical frustum culling (listing 3.4,
+// 3.2.12), front-to-back children, child requests (3.2.14-3.2.15) and De Boer's morph factor (eq. 3.5).
+#include "lod/LodSelector.h"
+
+#include "core/Check.h"
+#include "core/Frustum.h"
+#include "quadtree/MapFile.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace terrain {
+
+double QuadtreeExtent::nodeSize(int level) const { return std::ldexp(rootSize, -level); }
+
+Aabb QuadtreeExtent::box(const NodeId& id, double zMin, double zMax) const
+{
+    double size = nodeSize(id.level);
+    double x0 = originX + static_cast<double>(id.x) * size;
+    double y0 = originY + static_cast<double>(id.y) * size;
+    return {{x0, y0, zMin}, {x0 + size, y0 + size, zMax}};
+}
+
+MapLodTree::MapLodTree(const MapFile& map) : mMap(map) {}
+
+QuadtreeExtent MapLodTree::extent() const
+{
+    const MapHeader& h = mMap.header();
+    return {h.originX, h.originY, h.nodeSizeAt(0)};
+}
+
+NodeInfo MapLodTree::info(const NodeId& id) const
+{
+    const DirectoryEntry* e = mMap.find(id);
+    TERRAIN_EXPECTS(e != nullptr, "node is not in the map's directory");
+    const MapHeader& h = mMap.header();
+    return {e->hasChildren, e->deltaC, h.heightOf(e->minCode), h.heightOf(e->maxCode)};
+}
+
+double lodDistanceFactor(const Camera& camera, double tauPixels)
+{
+    TERRAIN_EXPECTS(tauPixels > 0.0, "the screen-space error threshold tau must be > 0 pixels");
+    camera.expectValid();
+    return static_cast<double>(camera.viewportHeight) / (2.0 * tauPixels * std::abs(std::tan(camera.verticalFov * 0.5)));
+}
+
+namespace {
+
+struct Selector {
+    const LodTree& tree;
+    const ChildrenResident& resident;
+    QuadtreeExtent extent;
+    Frustum frustum;
+    glm::dvec3 eye;
+    double c = 0.0;
+    LodSelection& out;
+
+    void select(const NodeId& id, double d, double dm, double dmParent, bool isRoot)
+    {
+        float morph = 1.0f;
+        if (!isRoot && dmParent > dm) {
+            morph = static_cast<float>(std::clamp(1.0 - (d - dm) / (dmParent - dm), 0.0, 1.0));
+        }
+        double size = extent.nodeSize(id.level);
+        glm::dvec3 origin{extent.originX + static_cast<double>(id.x) * size,
+                          extent.originY + static_cast<double>(id.y) * size, 0.0};
+        out.nodes.push_back({id, morph, d, origin - eye, size});
+    }
+
+    /// `id` passed culling; `d` is its distance, `info` its information.
+    void visit(const NodeId& id, const NodeInfo& info, double d, double dmParent, bool isRoot)
+    {
+        ++out.visitedNodes;
+        double dm = static_cast<double>(info.deltaC) * c;
+        if (!(d < dm) || !info.hasChildren) {
+            select(id, d, dm, dmParent, isRoot);
+            return;
+        }
+        if (resident && !resident(id)) {
+            out.requests.push_back({id, d});
+            select(id, d, dm, dmParent, isRoot);
+            return;
+        }
+        struct Child {
+            NodeId id;
+            NodeInfo info;
+            double d;
+        };
+        Child children[4];
+        int count = 0;
+        for (int q = 0; q < 4; ++q) {
+            NodeId child = id.child(q);
+            NodeInfo childInfo = tree.info(child);
+            Aabb box = extent.box(child, childInfo.zMin, childInfo.zMax);
+            if (!frustum.intersects(box)) {
+                ++out.culledNodes;
+                continue;
+            }
+            // Insertion sort by distance; strict < keeps quadrant order among equal distances.
+            Child entry{child, childInfo, distanceToAabb(eye, box)};
+            int at = count;
+            while (at > 0 && entry.d < children[at - 1].d) {
+                children[at] = children[at - 1];
+                --at;
+            }
+            children[at] = entry;
+            ++count;
+        }
+        for (int k = 0; k < count; ++k) {
+            visit(children[k].id, children[k].info, children[k].d, dm, false);
+        }
+    }
+};
+
+}  // namespace
+
+void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, const ChildrenResident& resident,
+                 LodSelection& out)
+{
+    out.nodes.clear();
+    out.requests.clear();
+    out.visitedNodes = 0;
+    out.culledNodes = 0;
+    Selector s{tree, resident, tree.extent(), Frustum::fromCamera(camera), camera.position,
+               lodDistanceFactor(camera, tauPixels), out};
+    TERRAIN_EXPECTS(s.extent.rootSize > 0.0, "the quadtree's root size must be > 0");
+    NodeId root = NodeId::root();
+    NodeInfo info = tree.info(root);
+    Aabb box = s.extent.box(root, info.zMin, info.zMax);
+    if (!s.frustum.intersects(box)) {
+        ++out.culledNodes;
+        return;
+    }
+    s.visit(root, info, distanceToAabb(camera.position, box), 0.0, true);
+}
+
+}  // namespace terrain

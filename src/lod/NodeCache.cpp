@@ -1,0 +1,93 @@
+// LRU node cache (paper 3.2.14) with the reachability rule of this engine.
+#include "lod/NodeCache.h"
+
+#include "core/Check.h"
+
+namespace terrain {
+
+NodeCache::NodeCache(std::size_t capacity) : mCapacity(capacity)
+{
+    TERRAIN_EXPECTS(capacity >= 5, "the cache must hold at least the root and one group of four");
+    mGroups.reserve(capacity / 4 + 1);
+}
+
+void NodeCache::setRoot(NodePtr root)
+{
+    TERRAIN_EXPECTS(root && root->id.isRoot(), "the root must be node 0/0/0");
+    mRoot = std::move(root);
+}
+
+const ChildNodes* NodeCache::children(const NodeId& parent) const
+{
+    auto it = mGroups.find(parent.key());
+    return it == mGroups.end() ? nullptr : &it->second.nodes;
+}
+
+const ChildNodes* NodeCache::touchChildren(const NodeId& parent)
+{
+    auto it = mGroups.find(parent.key());
+    if (it == mGroups.end()) {
+        ++mMisses;
+        return nullptr;
+    }
+    ++mHits;
+    Group& group = it->second;
+    group.lastUsed = mFrame;
+    mLru.splice(mLru.begin(), mLru, group.lru);
+    return &group.nodes;
+}
+
+bool NodeCache::isResident(const NodeId& id) const
+{
+    return id.isRoot() ? static_cast<bool>(mRoot) : mGroups.count(id.parent().key()) != 0;
+}
+
+bool NodeCache::evictOne()
+{
+    for (auto it = mLru.rbegin(); it != mLru.rend(); ++it) {
+        auto found = mGroups.find(*it);
+        TERRAIN_ASSERT(found != mGroups.end());
+        const Group& group = found->second;
+        if (group.lastUsed == mFrame) {
+            continue;  // drawn or traversed this frame
+        }
+        bool hasResidentChildren = false;
+        for (const auto& node : group.nodes) {
+            hasResidentChildren = hasResidentChildren || mGroups.count(node->id.key()) != 0;
+        }
+        if (hasResidentChildren) {
+            continue;  // evicting it would orphan its descendants
+        }
+        mLru.erase(found->second.lru);
+        mGroups.erase(found);
+        ++mEvictions;
+        return true;
+    }
+    return false;
+}
+
+NodeCache::Insert NodeCache::insertChildren(const NodeId& parent, ChildNodes children)
+{
+    for (int q = 0; q < 4; ++q) {
+        TERRAIN_EXPECTS(children[static_cast<std::size_t>(q)] && children[static_cast<std::size_t>(q)]->id == parent.child(q),
+                        "children must be the four children of parent, in quadrant order");
+    }
+    if (mGroups.count(parent.key()) != 0) {
+        return Insert::AlreadyResident;
+    }
+    if (!isResident(parent)) {
+        return Insert::ParentNotResident;  // evicted while its children were loading
+    }
+    while (size() + 4 > mCapacity) {
+        if (!evictOne()) {
+            return Insert::NoRoom;
+        }
+    }
+    mLru.push_front(parent.key());
+    // A group arrives because the traversal wants it: it counts as used this frame, so a later insertion in
+    // the same frame cannot evict it again.
+    mGroups.emplace(parent.key(), Group{std::move(children), mFrame, mLru.begin()});
+    return Insert::Inserted;
+}
+
+}  // namespace terrain

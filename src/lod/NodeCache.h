@@ -1,0 +1,66 @@
+// The working set of resident nodes (paper 3.2.14): LRU with a fixed capacity (`quad_cache_size`).
+//
+// Nodes enter and leave in sibling groups of four (the children of one parent), as they are loaded
+// (3.2.14: siblings are always loaded together). The root is always resident. Eviction takes the least
+// recently used group that was not used this frame and none of whose nodes has resident children, so it
+// never removes a node drawn this frame and never leaves a resident node unreachable from the root. When no
+// group can go, an insertion is refused instead of overfilling the cache (the paper's 4.5 defect).
+// Render thread only; not thread-safe.
+#pragma once
+
+#include "lod/NodeData.h"
+
+#include <cstdint>
+#include <list>
+#include <unordered_map>
+
+namespace terrain {
+
+class NodeCache {
+public:
+    /// `capacity` in nodes (root included), at least 5.
+    explicit NodeCache(std::size_t capacity);
+
+    void setRoot(NodePtr root);
+    const NodePtr& root() const { return mRoot; }
+
+    /// Starts a frame: groups touched from now on are protected from eviction until the next beginFrame.
+    void beginFrame() { ++mFrame; }
+
+    /// The four children of `parent` if they are resident, else null. Does not count as a use.
+    const ChildNodes* children(const NodeId& parent) const;
+    /// Marks the children of `parent` used this frame (the traversal descends into them). Returns them, or
+    /// null (and counts a miss) when they are not resident.
+    const ChildNodes* touchChildren(const NodeId& parent);
+    /// True for the root and for every node of a resident group.
+    bool isResident(const NodeId& id) const;
+
+    enum class Insert { Inserted, AlreadyResident, ParentNotResident, NoRoom };
+    /// Makes the children of `parent` resident, evicting least recently used groups as needed.
+    Insert insertChildren(const NodeId& parent, ChildNodes children);
+
+    std::size_t size() const { return 1 + 4 * mGroups.size(); }
+    std::size_t capacity() const { return mCapacity; }
+    std::uint64_t hits() const { return mHits; }
+    std::uint64_t misses() const { return mMisses; }
+    std::uint64_t evictions() const { return mEvictions; }
+
+private:
+    struct Group {
+        ChildNodes nodes;
+        std::uint64_t lastUsed = 0;
+        std::list<std::uint64_t>::iterator lru;  ///< position in mLru (front = most recent)
+    };
+    bool evictOne();
+
+    std::size_t mCapacity;
+    NodePtr mRoot;
+    std::unordered_map<std::uint64_t, Group> mGroups;  ///< by parent key
+    std::list<std::uint64_t> mLru;                      ///< parent keys, most recently used first
+    std::uint64_t mFrame = 1;
+    std::uint64_t mHits = 0;
+    std::uint64_t mMisses = 0;
+    std::uint64_t mEvictions = 0;
+};
+
+}  // namespace terrain

@@ -1,0 +1,88 @@
+#include "lod/TerrainStreamer.h"
+
+#include "core/Check.h"
+
+#include <chrono>
+
+namespace terrain {
+
+TerrainStreamer::TerrainStreamer(const LodTree& tree, NodeSource& source, const StreamerOptions& options)
+    : mTree(tree), mCache(options.cacheSize), mServer(source, {options.workers, options.queueLimit})
+{
+}
+
+Expected<std::unique_ptr<TerrainStreamer>> TerrainStreamer::create(const LodTree& tree, NodeSource& source,
+                                                                   const StreamerOptions& options)
+{
+    if (options.cacheSize < 5) {
+        return makeError("quad_cache_size ", options.cacheSize, " must be at least 5 (the root and four children)");
+    }
+    if (options.queueLimit < 1) {
+        return makeError("the request queue limit must be at least 1");
+    }
+    auto root = source.loadRoot();
+    TERRAIN_TRY(root);
+    std::unique_ptr<TerrainStreamer> streamer(new TerrainStreamer(tree, source, options));
+    streamer->mCache.setRoot(std::move(root.value()));
+    return streamer;
+}
+
+NodePtr TerrainStreamer::node(const NodeId& id) const
+{
+    if (id.isRoot()) {
+        return mCache.root();
+    }
+    const ChildNodes* group = mCache.children(id.parent());
+    return group ? (*group)[static_cast<std::size_t>(id.quadrant())] : nullptr;
+}
+
+std::size_t TerrainStreamer::collect(std::size_t& refused)
+{
+    std::size_t inserted = 0;
+    for (auto& done : mServer.takeCompleted()) {
+        if (!done.children.ok()) {
+            if (mReport) {
+                mReport(done.children.error().message);
+            }
+            continue;  // never requested again: the parent keeps being drawn
+        }
+        if (mCache.insertChildren(done.parent, std::move(done.children.value())) == NodeCache::Insert::Inserted) {
+            ++inserted;
+        } else {
+            ++refused;
+        }
+    }
+    return inserted;
+}
+
+FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels)
+{
+    FrameStats stats;
+    mCache.beginFrame();
+    stats.inserted = collect(stats.refused);
+
+    const auto start = std::chrono::steady_clock::now();
+    selectNodes(mTree, camera, tauPixels, [this](const NodeId& parent) { return mCache.touchChildren(parent) != nullptr; },
+                mSelection);
+    stats.selectionSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    stats.selected = mSelection.nodes.size();
+    stats.requested = mSelection.requests.size();
+
+    mRequests.clear();
+    for (const auto& request : mSelection.requests) {
+        NodePtr parent = node(request.parent);
+        TERRAIN_ASSERT(parent);  // a node waiting for its children is selected, hence resident
+        mRequests.push_back({std::move(parent), request.distance});
+    }
+    mServer.submit(mRequests);
+    return stats;
+}
+
+void TerrainStreamer::drain()
+{
+    mServer.drain();
+    std::size_t refused = 0;
+    collect(refused);
+}
+
+}  // namespace terrain

@@ -1,0 +1,63 @@
+// One frame of the runtime core, without GL (paper 3.2.15): take the nodes the server finished into the
+// cache, select with the camera, hand the selection's child requests to the server. The viewer draws
+// `selection().nodes` with the data from node(); tools and benchmarks replay camera paths through it.
+#pragma once
+
+#include "lod/LodSelector.h"
+#include "lod/NodeCache.h"
+#include "lod/NodeServer.h"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace terrain {
+
+struct StreamerOptions {
+    std::size_t cacheSize = 512;    ///< quad_cache_size, nodes
+    std::size_t queueLimit = 8;     ///< most load requests waiting at once
+    int workers = 1;                ///< loader threads; 0 = inline (loads happen in drain())
+};
+
+/// Per-frame figures.
+struct FrameStats {
+    std::size_t selected = 0;          ///< nodes drawn
+    std::size_t requested = 0;         ///< child groups the traversal wanted but were not resident
+    std::size_t inserted = 0;          ///< groups that became resident this frame
+    std::size_t refused = 0;           ///< finished groups the cache had no room (or no parent) for
+    double selectionSeconds = 0.0;     ///< time in selectNodes
+};
+
+class TerrainStreamer {
+public:
+    /// `tree` and `source` must outlive the streamer. Loads the root synchronously.
+    static Expected<std::unique_ptr<TerrainStreamer>> create(const LodTree& tree, NodeSource& source,
+                                                             const StreamerOptions& options);
+
+    /// One frame: collect finished loads, select for `camera` at tau pixels, request what is missing.
+    FrameStats update(const Camera& camera, double tauPixels);
+
+    /// Waits for every queued load, then takes the results into the cache (no selection).
+    void drain();
+
+    const LodSelection& selection() const { return mSelection; }
+    /// The resident data of a node selected this frame (or any resident node); null if not resident.
+    NodePtr node(const NodeId& id) const;
+    const NodeCache& cache() const { return mCache; }
+    NodeServerStats serverStats() const { return mServer.stats(); }
+    /// Called once per group that failed to load, with the error (file and node named).
+    void onLoadError(std::function<void(const std::string&)> report) { mReport = std::move(report); }
+
+private:
+    TerrainStreamer(const LodTree& tree, NodeSource& source, const StreamerOptions& options);
+    std::size_t collect(std::size_t& refused);
+
+    const LodTree& mTree;
+    NodeCache mCache;
+    NodeServer mServer;
+    LodSelection mSelection;
+    std::vector<LoadRequest> mRequests;
+    std::function<void(const std::string&)> mReport;
+};
+
+}  // namespace terrain
