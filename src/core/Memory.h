@@ -20,6 +20,9 @@ Status checkAllocation(std::uint64_t bytes, std::string_view what);
 /// Peak resident set size of this process so far, in bytes (getrusage).
 std::uint64_t peakResidentBytes();
 
+/// Resident set size of this process now, in bytes (/proc/self/statm); 0 if unknown.
+std::uint64_t currentResidentBytes();
+
 /// "1.5 GiB", "12.0 MiB", "300 B".
 std::string formatBytes(std::uint64_t bytes);
 

@@ -42,21 +42,35 @@ bool NodeCache::isResident(const NodeId& id) const
     return id.isRoot() ? static_cast<bool>(mRoot) : mGroups.count(id.parent().key()) != 0;
 }
 
+bool NodeCache::isEvictable(const Group& group) const
+{
+    if (group.lastUsed == mFrame) {
+        return false;  // drawn or traversed this frame
+    }
+    for (const auto& node : group.nodes) {
+        if (mGroups.count(node->id.key()) != 0) {
+            return false;  // evicting it would orphan its descendants
+        }
+    }
+    return true;
+}
+
+std::size_t NodeCache::groupsInsertable() const
+{
+    std::size_t free = (mCapacity - size()) / 4;
+    for (const auto& [key, group] : mGroups) {
+        free += isEvictable(group) ? 1 : 0;
+    }
+    return free;
+}
+
 bool NodeCache::evictOne()
 {
     for (auto it = mLru.rbegin(); it != mLru.rend(); ++it) {
         auto found = mGroups.find(*it);
         TERRAIN_ASSERT(found != mGroups.end());
-        const Group& group = found->second;
-        if (group.lastUsed == mFrame) {
-            continue;  // drawn or traversed this frame
-        }
-        bool hasResidentChildren = false;
-        for (const auto& node : group.nodes) {
-            hasResidentChildren = hasResidentChildren || mGroups.count(node->id.key()) != 0;
-        }
-        if (hasResidentChildren) {
-            continue;  // evicting it would orphan its descendants
+        if (!isEvictable(found->second)) {
+            continue;
         }
         mLru.erase(found->second.lru);
         mGroups.erase(found);

@@ -39,6 +39,9 @@ public:
     /// Makes the children of `parent` resident, evicting least recently used groups as needed.
     Insert insertChildren(const NodeId& parent, ChildNodes children);
 
+    /// Groups that insertChildren() could make room for now: free space plus groups it may evict.
+    std::size_t groupsInsertable() const;
+
     std::size_t size() const { return 1 + 4 * mGroups.size(); }
     std::size_t capacity() const { return mCapacity; }
     std::uint64_t hits() const { return mHits; }
@@ -52,6 +55,7 @@ private:
         std::list<std::uint64_t>::iterator lru;  ///< position in mLru (front = most recent)
     };
     bool evictOne();
+    bool isEvictable(const Group& group) const;
 
     std::size_t mCapacity;
     NodePtr mRoot;

@@ -2,6 +2,7 @@
 
 #include "core/Check.h"
 
+#include <algorithm>
 #include <chrono>
 
 namespace terrain {
@@ -68,11 +69,20 @@ FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels)
     stats.selected = mSelection.nodes.size();
     stats.requested = mSelection.requests.size();
 
+    // Ask only for what the cache can take now (nearest first): a group loaded without room would be
+    // refused and asked for again every frame, wasting the loader on a working set larger than the cache.
     mRequests.clear();
     for (const auto& request : mSelection.requests) {
         NodePtr parent = node(request.parent);
         TERRAIN_ASSERT(parent);  // a node waiting for its children is selected, hence resident
         mRequests.push_back({std::move(parent), request.distance});
+    }
+    const std::size_t room = mCache.groupsInsertable();
+    if (mRequests.size() > room) {
+        std::partial_sort(mRequests.begin(), mRequests.begin() + static_cast<std::ptrdiff_t>(room), mRequests.end(),
+                          [](const LoadRequest& a, const LoadRequest& b) { return a.distance < b.distance; });
+        stats.deferred = mRequests.size() - room;
+        mRequests.resize(room);
     }
     mServer.submit(mRequests);
     return stats;

@@ -23,6 +23,7 @@ struct StreamerOptions {
 struct FrameStats {
     std::size_t selected = 0;          ///< nodes drawn
     std::size_t requested = 0;         ///< child groups the traversal wanted but were not resident
+    std::size_t deferred = 0;          ///< of those, not asked for: the cache has no room this frame
     std::size_t inserted = 0;          ///< groups that became resident this frame
     std::size_t refused = 0;           ///< finished groups the cache had no room (or no parent) for
     double selectionSeconds = 0.0;     ///< time in selectNodes

@@ -147,37 +147,49 @@ inline void writeLe(std::span<std::uint8_t> bytes, std::size_t offset, std::uint
     }
 }
 
-/// A 16-bit gray PNG read straight through libpng, rows top (north) to bottom as stored; empty on failure.
-inline std::vector<std::vector<std::uint16_t>> readGray16PngRows(const std::filesystem::path& path)
+namespace detail {
+/// libpng's part of readGray16PngRows, kept apart so no local of the caller lives across setjmp.
+inline bool readGray16Png(std::FILE* file, std::vector<std::vector<std::uint16_t>>& rowsOut)
 {
-    std::vector<std::vector<std::uint16_t>> result;
-    std::FILE* file = std::fopen(path.c_str(), "rb");
-    if (!file) {
-        return result;
-    }
     png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
     png_infop info = png_create_info_struct(png);
     if (setjmp(png_jmpbuf(png))) {
         png_destroy_read_struct(&png, &info, nullptr);
-        std::fclose(file);
-        return {};
+        return false;
     }
     png_init_io(png, file);
     png_read_png(png, info, PNG_TRANSFORM_IDENTITY, nullptr);
     const png_uint_32 width = png_get_image_width(png, info);
     const png_uint_32 height = png_get_image_height(png, info);
-    if (png_get_bit_depth(png, info) == 16 && png_get_color_type(png, info) == PNG_COLOR_TYPE_GRAY) {
+    const bool gray16 = png_get_bit_depth(png, info) == 16 && png_get_color_type(png, info) == PNG_COLOR_TYPE_GRAY;
+    if (gray16) {
         png_bytepp rows = png_get_rows(png, info);
-        result.resize(height, std::vector<std::uint16_t>(width));
+        rowsOut.assign(height, std::vector<std::uint16_t>(width));
         for (png_uint_32 y = 0; y < height; ++y) {
             for (png_uint_32 x = 0; x < width; ++x) {
-                result[y][x] = static_cast<std::uint16_t>((rows[y][2 * x] << 8) | rows[y][2 * x + 1]);
+                rowsOut[y][x] = static_cast<std::uint16_t>((rows[y][2 * x] << 8) | rows[y][2 * x + 1]);
             }
         }
     }
     png_destroy_read_struct(&png, &info, nullptr);
+    return gray16;
+}
+}  // namespace detail
+
+/// A 16-bit gray PNG read straight through libpng, rows top (north) to bottom as stored; empty on failure.
+inline std::vector<std::vector<std::uint16_t>> readGray16PngRows(const std::filesystem::path& path)
+{
+    std::vector<std::vector<std::uint16_t>> rows;
+    std::FILE* file = std::fopen(path.c_str(), "rb");
+    if (!file) {
+        return rows;
+    }
+    const bool ok = detail::readGray16Png(file, rows);
     std::fclose(file);
-    return result;
+    if (!ok) {
+        rows.clear();
+    }
+    return rows;
 }
 
 // ---- Reference implementations from the format description ----

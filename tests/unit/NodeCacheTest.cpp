@@ -70,11 +70,13 @@ TEST(NodeCacheTest, EvictsTheLeastRecentlyUsedGroup)
     cache.beginFrame();
     cache.touchChildren(NodeId::root());
     // a's group was not used this frame: it goes to make room for b's.
+    EXPECT_EQ(cache.groupsInsertable(), 1u);
     EXPECT_EQ(cache.insertChildren(b, makeChildren(b)), NodeCache::Insert::Inserted);
     EXPECT_EQ(cache.children(a), nullptr);
     EXPECT_NE(cache.children(b), nullptr);
     EXPECT_EQ(cache.evictions(), 1u);
     // b's group arrived this frame and the root's group was used: no room for c's.
+    EXPECT_EQ(cache.groupsInsertable(), 0u);
     EXPECT_EQ(cache.insertChildren(c, makeChildren(c)), NodeCache::Insert::NoRoom);
     EXPECT_LE(cache.size(), cache.capacity());
 }

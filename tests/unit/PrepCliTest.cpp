@@ -37,7 +37,7 @@ double heightBitsPerSample(const MapFile& map)
     for (const DirectoryEntry& e : map.directory()) {
         bytes += e.heightBytes;
     }
-    return 8.0 * static_cast<double>(bytes) / (double{map.header().validWidth} * map.header().validHeight);
+    return 8.0 * static_cast<double>(bytes) / (static_cast<double>(map.header().validWidth) * map.header().validHeight);
 }
 
 /// PNG pixels (c, r) to ask for: the four corners, the last valid row and column, their neighbours and a
@@ -366,7 +366,7 @@ TEST(PrepCliTest, FailedWritesLeaveNoMapAndNoTemporary)
         EXPECT_FALSE(std::filesystem::is_regular_file(c.output)) << c.what;
         std::vector<std::string> expected = {"small.png", "taken.map"};
         if (!root) {
-            expected.insert(expected.begin() + 1, "readonly");
+            expected.insert(expected.begin(), "readonly");
         }
         EXPECT_EQ(dir.list(), expected) << c.what;
         EXPECT_TRUE(std::filesystem::is_empty(dir / "taken.map")) << c.what;

@@ -1,0 +1,154 @@
+// The runtime core end to end on a real map: selector + cache + server + static node source.
+#include "MapTestSupport.h"
+
+#include "lod/CameraPath.h"
+#include "lod/StaticNodeSource.h"
+#include "lod/TerrainStreamer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace terrain {
+namespace {
+
+class TerrainStreamerTest : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        BuildOptions options;
+        options.chunkSize = 17;
+        options.spacing = 10.0;
+        auto report = buildMap(test::hillyField(513, 513), options, mDir / "hills.map");
+        ASSERT_TRUE(report.ok()) << report.error().message;
+        auto map = MapFile::open(mDir / "hills.map", ReaderKind::Stream);
+        ASSERT_TRUE(map.ok()) << map.error().message;
+        mMap = std::move(map.value());
+    }
+
+    /// A low flight across the map and back, looking ahead and a little down.
+    CameraPath flight() const
+    {
+        auto path = CameraPath::parse("0 200 300 1450 45 -10\n"
+                                      "20 2500 2400 1500 80 -12\n"
+                                      "40 4800 3000 1500 -30 -10\n"
+                                      "60 1000 4700 1600 -150 -20\n",
+                                      "flight.path");
+        EXPECT_TRUE(path.ok()) << path.error().message;
+        return path.value();
+    }
+
+    test::ScratchDir mDir;
+    std::unique_ptr<MapFile> mMap;
+};
+
+TEST_F(TerrainStreamerTest, CacheNeverExceedsItsCapacityAndEverythingDrawnIsResident)
+{
+    MapLodTree tree(*mMap);
+    StaticNodeSource source(*mMap);
+    StreamerOptions options;
+    options.cacheSize = 45;
+    options.workers = 0;  // inline: deterministic
+    auto streamer = TerrainStreamer::create(tree, source, options);
+    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    const CameraPath path = flight();
+    Camera camera;
+    std::size_t peak = 0, evictionsSeen = 0;
+    for (int frame = 0; frame <= 600; ++frame) {
+        path.evaluate(frame * 0.1).applyTo(camera);
+        (*streamer)->update(camera, 2.0);
+        (*streamer)->drain();
+        peak = std::max(peak, (*streamer)->cache().size());
+        ASSERT_LE((*streamer)->cache().size(), options.cacheSize) << "frame " << frame;
+        for (const auto& selected : (*streamer)->selection().nodes) {
+            NodePtr node = (*streamer)->node(selected.id);
+            ASSERT_TRUE(node) << "frame " << frame << ": selected node " << selected.id.toString() << " not resident";
+            ASSERT_EQ(node->id, selected.id);
+        }
+        evictionsSeen = (*streamer)->cache().evictions();
+    }
+    EXPECT_GT(evictionsSeen, 0u) << "the flight should need more nodes than the cache holds";
+    EXPECT_GT(peak, options.cacheSize - 8);
+}
+
+TEST_F(TerrainStreamerTest, ConvergesToTheSelectionWithEverythingResident)
+{
+    MapLodTree tree(*mMap);
+    StaticNodeSource source(*mMap);
+    StreamerOptions options;
+    options.cacheSize = mMap->directory().size();
+    options.workers = 2;
+    auto streamer = TerrainStreamer::create(tree, source, options);
+    ASSERT_TRUE(streamer.ok());
+    Camera camera;
+    flight().evaluate(25.0).applyTo(camera);
+    for (int round = 0; round < 32; ++round) {
+        if ((*streamer)->update(camera, 2.0).requested == 0) {
+            break;
+        }
+        (*streamer)->drain();
+    }
+    LodSelection reference;
+    selectNodes(tree, camera, 2.0, {}, reference);  // every node resident
+    ASSERT_EQ((*streamer)->selection().nodes.size(), reference.nodes.size());
+    for (std::size_t i = 0; i < reference.nodes.size(); ++i) {
+        EXPECT_EQ((*streamer)->selection().nodes[i].id, reference.nodes[i].id);
+    }
+    // Loaded data equals what the map decodes along the path from the root.
+    for (const auto& selected : reference.nodes) {
+        auto direct = mMap->loadPath(selected.id);
+        ASSERT_TRUE(direct.ok());
+        EXPECT_EQ((*streamer)->node(selected.id)->heights, direct->heights) << selected.id.toString();
+    }
+}
+
+TEST_F(TerrainStreamerTest, ACorruptNodeIsReportedOnceAndItsParentKeepsBeingDrawn)
+{
+    // Corrupt one level-2 node's payload: its whole sibling group fails to load.
+    const DirectoryEntry* victim = mMap->find({2, 1, 1});
+    ASSERT_NE(victim, nullptr);
+    const auto offset = victim->offset + victim->heightBytes / 2;
+    mMap.reset();
+    {
+        std::fstream file(mDir / "hills.map", std::ios::in | std::ios::out | std::ios::binary);
+        file.seekg(static_cast<std::streamoff>(offset));
+        char byte = 0;
+        file.read(&byte, 1);
+        byte = static_cast<char>(byte ^ 0x5a);
+        file.seekp(static_cast<std::streamoff>(offset));
+        file.write(&byte, 1);
+    }
+    auto map = MapFile::open(mDir / "hills.map", ReaderKind::MemoryMapped);
+    ASSERT_TRUE(map.ok());
+    MapLodTree tree(**map);
+    StaticNodeSource source(**map);
+    StreamerOptions options;
+    options.cacheSize = (*map)->directory().size();
+    options.workers = 1;
+    auto streamer = TerrainStreamer::create(tree, source, options);
+    ASSERT_TRUE(streamer.ok());
+    std::vector<std::string> reports;
+    (*streamer)->onLoadError([&](const std::string& message) { reports.push_back(message); });
+    // Look straight down at the corrupt node's parent from close by.
+    Camera camera;
+    const double size = (*map)->header().nodeSizeAt(2);
+    camera.position = {1.5 * size, 1.5 * size, 1600};  // above the centre of node 2/1/1
+    camera.pitch = -std::numbers::pi / 2 + 0.01;
+    for (int frame = 0; frame < 10; ++frame) {
+        (*streamer)->update(camera, 1.0);
+        (*streamer)->drain();
+    }
+    ASSERT_EQ(reports.size(), 1u);
+    EXPECT_NE(reports.front().find("node 2/1/1"), std::string::npos) << reports.front();
+    bool parentDrawn = false;
+    for (const auto& selected : (*streamer)->selection().nodes) {
+        parentDrawn = parentDrawn || selected.id == NodeId{1, 0, 0};
+        EXPECT_NE(selected.id.level >= 2 ? selected.id.parent() : NodeId{}, (NodeId{1, 0, 0}))
+            << "a child of the failed group was drawn";
+    }
+    EXPECT_TRUE(parentDrawn);
+}
+
+}  // namespace
+}  // namespace terrain
