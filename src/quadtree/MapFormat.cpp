@@ -37,6 +37,7 @@ double MapHeader::spacingAt(int level) const
 std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& h)
 {
     std::vector<std::uint8_t> bytes;
+    bytes.reserve(kHeaderBytes);
     ByteWriter w(bytes);
     w.putBytes(kMapMagic.data(), kMapMagic.size());
     w.put(h.version);
