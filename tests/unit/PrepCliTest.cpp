@@ -6,7 +6,10 @@
 #include "heightfield/HeightFieldIo.h"
 #include "heightfield/Image.h"
 
+#include <csignal>
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace terrain {
@@ -60,9 +63,21 @@ struct RealMap {
 
 class PrepRealDataTest : public ::testing::Test {
 protected:
-    static void SetUpTestSuite()
+    static void SetUpTestSuite() { sDir = new test::ScratchDir; }
+    static void TearDownTestSuite()
     {
-        sDir = new test::ScratchDir;
+        delete sDir;
+        sDir = nullptr;
+        sBuilt.clear();
+    }
+
+    /// Runs prep for map `name` the first time a test asks for it (ctest runs each test in its own
+    /// process, so building every map up front would repeat the work per test).
+    static const std::pair<RealMap, RunResult>& built(const std::string& name)
+    {
+        if (auto it = sBuilt.find(name); it != sBuilt.end()) {
+            return it->second;
+        }
         const std::string trinidad = test::demoDataPath("trinidad_co_srtm3_crop_1025.png").string();
         const std::string jacksboro = test::testDataPath("jacksboro_fault_dem_403x344.png").string();
         const std::vector<RealMap> maps = {
@@ -72,24 +87,17 @@ protected:
             {"jacksboro-v2", jacksboro, {"-v", "2", "--offset", "100"}, 2.0, 100.0},
             {"jacksboro-e1", jacksboro, {"--max-error", "1"}, 1.0, 0.0, 1.0},
         };
-        for (const RealMap& m : maps) {
-            std::vector<std::string> args = {m.input, "-h", "90", "--threads", "2", "-o", (*sDir / (std::string(m.name) + ".map")).string()};
-            args.insert(args.end(), m.options.begin(), m.options.end());
-            sBuilt[m.name] = {m, test::runProgram(kPrep, args)};
-        }
-    }
-    static void TearDownTestSuite()
-    {
-        delete sDir;
-        sDir = nullptr;
-        sBuilt.clear();
+        const RealMap& m = *std::find_if(maps.begin(), maps.end(), [&](const RealMap& r) { return r.name == name; });
+        std::vector<std::string> args = {m.input, "-h", "90", "--threads", "2", "-o", (*sDir / (name + ".map")).string()};
+        args.insert(args.end(), m.options.begin(), m.options.end());
+        return sBuilt[name] = {m, test::runProgram(kPrep, args)};
     }
 
     /// Checks one built map against its PNG: prep and verify succeed, `tengine-tool height` prints the PNG
     /// value (scaled and offset) at the probe pixels, and every decoded leaf sample matches.
     void checkAgainstPng(const std::string& name, int width, int height)
     {
-        const auto& [spec, prep] = sBuilt.at(name);
+        const auto& [spec, prep] = built(name);
         ASSERT_EQ(prep.exitCode, 0) << prep.output;
         const auto path = *sDir / (name + ".map");
         EXPECT_TRUE(mentions(prep.output, path.string())) << prep.output;
@@ -146,7 +154,12 @@ protected:
         }
     }
 
-    static std::unique_ptr<MapFile> open(const std::string& name) { return test::openMap(*sDir / (name + ".map")); }
+    static std::unique_ptr<MapFile> open(const std::string& name)
+    {
+        const auto& prep = built(name).second;
+        EXPECT_EQ(prep.exitCode, 0) << prep.output;
+        return test::openMap(*sDir / (name + ".map"));
+    }
 
     static inline test::ScratchDir* sDir = nullptr;
     static inline std::map<std::string, std::pair<RealMap, RunResult>> sBuilt;
@@ -182,6 +195,7 @@ TEST_F(PrepRealDataTest, JacksboroMaxError1StaysWithinOneMetre)
 
 TEST_F(PrepRealDataTest, FractionalPositionsInterpolateAlongTheTemplateTriangles)
 {
+    ASSERT_TRUE(open("trinidad"));
     const auto png = test::readGray16PngRows(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
     ASSERT_EQ(png.size(), 1025u);
     auto at = [&](int i, int j) -> double { return png[static_cast<std::size_t>(1024 - j)][static_cast<std::size_t>(i)]; };
@@ -209,6 +223,7 @@ TEST_F(PrepRealDataTest, TrinidadBitsPerSampleStayUnderThePinnedThresholds)
 
 TEST_F(PrepRealDataTest, ToolInfoDescribesTheMap)
 {
+    ASSERT_TRUE(open("jacksboro"));
     auto result = test::runProgram(kTool, {"info", (*sDir / "jacksboro.map").string()});
     ASSERT_EQ(result.exitCode, 0) << result.output;
     EXPECT_TRUE(mentions(result.output, "403 x 344")) << result.output;
@@ -218,13 +233,13 @@ TEST_F(PrepRealDataTest, ToolInfoDescribesTheMap)
 
 TEST_F(PrepRealDataTest, ToolTextureWritesTheNodeTextureNorthUp)
 {
+    auto map = open("jacksboro");
+    ASSERT_TRUE(map);
     const auto png = *sDir / "node.png";
     auto result = test::runProgram(kTool, {"texture", (*sDir / "jacksboro.map").string(), "1/1/0", png.string()});
     ASSERT_EQ(result.exitCode, 0) << result.output;
     auto image = readPngImage(png, 3);
     ASSERT_TRUE(image.ok()) << image.error().message;
-    auto map = open("jacksboro");
-    ASSERT_TRUE(map);
     auto node = map->loadPath({1, 1, 0});
     ASSERT_TRUE(node.ok());
     const int t = static_cast<int>(map->header().textureSize);
@@ -374,6 +389,49 @@ TEST(PrepCliTest, FailedWritesLeaveNoMapAndNoTemporary)
     if (!root) {
         std::filesystem::permissions(dir / "readonly", std::filesystem::perms::owner_all);
         EXPECT_TRUE(std::filesystem::is_empty(dir / "readonly"));
+    }
+}
+
+TEST(PrepCliTest, InterruptedPrepLeavesNothingBehind)
+{
+    // prep is stopped while its output is open (seen in /proc/PID/fd), as by Ctrl-C, `kill` or the OOM
+    // killer: no map, complete or partial, and no temporary may appear in the output directory.
+    const std::string input = test::demoDataPath("trinidad_co_srtm3_crop_1025.png").string();
+    for (int signal : {SIGINT, SIGTERM, SIGKILL}) {
+        test::ScratchDir dir;
+        const std::string output = (dir / "interrupted.map").string();
+        const pid_t child = ::fork();
+        ASSERT_GE(child, 0);
+        if (child == 0) {
+            const int devNull = ::open("/dev/null", O_WRONLY);
+            ::dup2(devNull, STDOUT_FILENO);
+            ::dup2(devNull, STDERR_FILENO);
+            ::execl(kPrep.c_str(), "prep", input.c_str(), "-h", "90", "--threads", "1", "-o", output.c_str(),
+                    static_cast<char*>(nullptr));
+            ::_exit(127);
+        }
+        const std::string fdDir = "/proc/" + std::to_string(child) + "/fd";
+        bool writing = false, exited = false;
+        int status = 0;
+        for (int poll = 0; poll < 20000 && !writing && !exited; ++poll) {
+            std::error_code ec;
+            for (std::filesystem::directory_iterator it(fdDir, ec), end; !ec && it != end; it.increment(ec)) {
+                std::error_code linkError;
+                const auto target = std::filesystem::read_symlink(it->path(), linkError).string();
+                writing = writing || (!linkError && target.rfind(dir.path().string(), 0) == 0);
+            }
+            exited = !writing && ::waitpid(child, &status, WNOHANG) == child;
+            if (!writing && !exited) {
+                ::usleep(200);
+            }
+        }
+        if (!exited) {
+            ::kill(child, signal);
+            ASSERT_EQ(::waitpid(child, &status, 0), child);
+        }
+        ASSERT_TRUE(writing) << "prep (exit status " << status << ") was never seen writing its output";
+        EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal) << "signal " << signal << ", status " << status;
+        EXPECT_TRUE(dir.list().empty()) << "signal " << signal << " left " << dir.list().front();
     }
 }
 
