@@ -1,0 +1,758 @@
+// tengine's options (paper Appendix A) as one table: each option's key, documentation, valid values, how
+// to parse it and how to write it back. Errors, configs/tengine.cfg and --print-config all come from it.
+#include "apps/TengineOptions.h"
+
+#include "core/Check.h"
+#include "core/Parse.h"
+
+#include <algorithm>
+#include <charconv>
+#include <climits>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+namespace terrain {
+namespace {
+
+/// What a setter gets besides the value.
+struct SetContext {
+    const ConfigEntry& entry;
+    const std::filesystem::path& baseDirectory;  ///< for relative input paths; empty = as given
+    std::vector<std::string>& warnings;
+};
+
+struct OptionSpec {
+    std::string_view key;
+    std::string_view group;
+    std::string doc;       ///< what it does, for the config file
+    std::string expected;  ///< the valid values, for errors and the config file
+    /// Parses `value` into `options`; false = invalid (the caller reports `expected`).
+    std::function<bool(std::string_view value, const SetContext&, TengineOptions&)> set;
+    /// The value as a config file writes it; empty for the ignored Direct3D/Cg options.
+    std::function<std::string(const TengineOptions&)> get;
+};
+
+constexpr std::string_view kGroupMap = "Map and level of detail";
+constexpr std::string_view kGroupDetail = "Detail synthesis (paper 3.3, 3.4; accepted now, used once synthesis lands)";
+constexpr std::string_view kGroupCamera = "Camera";
+constexpr std::string_view kGroupDisplay = "Display";
+constexpr std::string_view kGroupVideo = "Demo and video mode";
+
+/// Shortest text that reads back to `value`; plain decimals ("200000", not "2e+05") for everyday magnitudes.
+std::string formatNumber(double value)
+{
+    char buffer[64];
+    double magnitude = std::fabs(value);
+    bool plain = magnitude == 0 || (magnitude >= 1e-4 && magnitude < 1e15);
+    auto [end, ec] = plain ? std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::fixed)
+                           : std::to_chars(buffer, buffer + sizeof buffer, value);
+    TERRAIN_ASSERT(ec == std::errc());
+    return std::string(buffer, end);
+}
+
+std::string formatNumber(float value)
+{
+    char buffer[64];
+    auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
+    TERRAIN_ASSERT(ec == std::errc());
+    return std::string(buffer, end);
+}
+
+std::string lowerCase(std::string_view text)
+{
+    std::string lower(text);
+    for (char& c : lower) {
+        if (c >= 'A' && c <= 'Z') {
+            c = static_cast<char>(c - 'A' + 'a');
+        }
+    }
+    return lower;
+}
+
+std::optional<bool> parseBool(std::string_view text)
+{
+    std::string lower = lowerCase(text);
+    if (lower == "true" || lower == "1" || lower == "yes" || lower == "on") {
+        return true;
+    }
+    if (lower == "false" || lower == "0" || lower == "no" || lower == "off") {
+        return false;
+    }
+    return std::nullopt;
+}
+
+/// A real interval; open ends exclude the bound, infinite bounds are left out of the text.
+struct Interval {
+    double min = -std::numeric_limits<double>::infinity();
+    double max = std::numeric_limits<double>::infinity();
+    bool minOpen = false;
+    bool maxOpen = false;
+
+    bool contains(double v) const { return (minOpen ? v > min : v >= min) && (maxOpen ? v < max : v <= max); }
+    std::string text() const
+    {
+        bool hasMin = std::isfinite(min), hasMax = std::isfinite(max);
+        if (hasMin && hasMax) {
+            return std::string("in ") + (minOpen ? "(" : "[") + formatNumber(min) + ", " + formatNumber(max) +
+                   (maxOpen ? ")" : "]");
+        }
+        if (hasMin) {
+            return (minOpen ? "> " : ">= ") + formatNumber(min);
+        }
+        if (hasMax) {
+            return (maxOpen ? "< " : "<= ") + formatNumber(max);
+        }
+        return "";
+    }
+};
+
+Interval atLeast(double min)
+{
+    return {min, std::numeric_limits<double>::infinity(), false, false};
+}
+Interval above(double min)
+{
+    return {min, std::numeric_limits<double>::infinity(), true, false};
+}
+Interval closedInterval(double min, double max)
+{
+    return {min, max, false, false};
+}
+Interval openInterval(double min, double max)
+{
+    return {min, max, true, true};
+}
+
+std::string withUnit(std::string text, std::string_view unit)
+{
+    return unit.empty() ? text : text + " (" + std::string(unit) + ")";
+}
+
+OptionSpec realOption(std::string_view key, std::string_view group, std::string doc, double TengineOptions::*member,
+                      Interval range, std::string_view unit)
+{
+    std::string expected = withUnit("a number" + (range.text().empty() ? "" : " " + range.text()), unit);
+    return {key,
+            group,
+            std::move(doc),
+            std::move(expected),
+            [member, range](std::string_view value, const SetContext&, TengineOptions& o) {
+                auto v = parseDouble(value);
+                if (!v.ok() || !range.contains(*v)) {
+                    return false;
+                }
+                o.*member = *v;
+                return true;
+            },
+            [member](const TengineOptions& o) { return formatNumber(o.*member); }};
+}
+
+std::optional<int> parseInt(std::string_view text, long long min, long long max)
+{
+    auto v = parseInteger(text);
+    if (!v.ok() || *v < min || *v > max) {
+        return std::nullopt;
+    }
+    return static_cast<int>(*v);
+}
+
+std::string integerRangeText(long long min, long long max)
+{
+    if (max == INT_MAX) {
+        return "an integer >= " + std::to_string(min);
+    }
+    return "an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
+}
+
+OptionSpec intOption(std::string_view key, std::string_view group, std::string doc, int TengineOptions::*member,
+                     long long min, long long max, std::string_view unit)
+{
+    return {key,
+            group,
+            std::move(doc),
+            withUnit(integerRangeText(min, max), unit),
+            [member, min, max](std::string_view value, const SetContext&, TengineOptions& o) {
+                auto v = parseInt(value, min, max);
+                if (!v) {
+                    return false;
+                }
+                o.*member = *v;
+                return true;
+            },
+            [member](const TengineOptions& o) { return std::to_string(o.*member); }};
+}
+
+OptionSpec boolOption(std::string_view key, std::string_view group, std::string doc, bool TengineOptions::*member)
+{
+    return {key,
+            group,
+            std::move(doc),
+            "true or false (also yes/no, on/off, 1/0)",
+            [member](std::string_view value, const SetContext&, TengineOptions& o) {
+                auto v = parseBool(value);
+                if (!v) {
+                    return false;
+                }
+                o.*member = *v;
+                return true;
+            },
+            [member](const TengineOptions& o) { return std::string(o.*member ? "true" : "false"); }};
+}
+
+/// How a relative path from a config file is taken.
+enum class PathKind {
+    Input,   ///< relative to the config file's directory
+    Output,  ///< relative to the working directory
+};
+
+OptionSpec pathOption(std::string_view key, std::string_view group, std::string doc,
+                      std::filesystem::path TengineOptions::*member, PathKind kind, std::string expected)
+{
+    return {key,
+            group,
+            std::move(doc),
+            std::move(expected),
+            [member, kind](std::string_view value, const SetContext& context, TengineOptions& o) {
+                std::filesystem::path path(value);
+                if (kind == PathKind::Input && !path.empty() && path.is_relative()) {
+                    path = context.baseDirectory / path;
+                }
+                o.*member = path;
+                return true;
+            },
+            [member](const TengineOptions& o) { return (o.*member).string(); }};
+}
+
+/// Splits "a, b, c" into exactly `n` numbers.
+std::optional<std::vector<double>> parseNumberList(std::string_view text, std::size_t n)
+{
+    std::vector<double> values;
+    while (true) {
+        std::size_t comma = text.find(',');
+        std::string_view part = text.substr(0, comma);
+        std::size_t first = part.find_first_not_of(" \t");
+        std::size_t last = part.find_last_not_of(" \t");
+        part = first == std::string_view::npos ? std::string_view() : part.substr(first, last - first + 1);
+        auto v = parseDouble(part);
+        if (!v.ok()) {
+            return std::nullopt;
+        }
+        values.push_back(*v);
+        if (comma == std::string_view::npos) {
+            break;
+        }
+        text.remove_prefix(comma + 1);
+    }
+    if (values.size() != n) {
+        return std::nullopt;
+    }
+    return values;
+}
+
+bool isPowerOfTwo(int n)
+{
+    return n > 0 && (n & (n - 1)) == 0;
+}
+
+std::vector<OptionSpec> makeOptionTable()
+{
+    using O = TengineOptions;
+    std::vector<OptionSpec> t;
+
+    // ---- Map and level of detail ----
+    t.push_back(pathOption("map_file", kGroupMap,
+                           "The terrain map (.map) made by prep. A map file given on the command line replaces it. "
+                           "Relative paths are taken from this config file's directory.",
+                           &O::mapFile, PathKind::Input, "a path (empty: none; then the command line must name one)"));
+    t.push_back(realOption("lod_error", kGroupMap,
+                           "tau of the level-of-detail selection (eq. 3.3): the largest screen-space error allowed. "
+                           "Smaller is sharper and slower.",
+                           &O::lodError, above(0), "pixels"));
+    t.push_back(realOption("lod_minimum_spacing", kGroupMap,
+                           "No node is refined below this sample spacing; limits how far detail synthesis goes.",
+                           &O::lodMinimumSpacing, atLeast(0), "metres"));
+    t.push_back({"dynamic_texture_size", kGroupMap,
+                 "Width and height of the texture that diffuse lighting is burnt into for each node.",
+                 "a power of two or a power of two plus one, in [16, 4096] (texels)",
+                 [](std::string_view value, const SetContext&, O& o) {
+                     auto v = parseInt(value, 16, 4096);
+                     if (!v || !(isPowerOfTwo(*v) || isPowerOfTwo(*v - 1))) {
+                         return false;
+                     }
+                     o.dynamicTextureSize = *v;
+                     return true;
+                 },
+                 [](const O& o) { return std::to_string(o.dynamicTextureSize); }});
+    t.push_back(intOption("vertex_cache_size", kGroupMap,
+                          "Size of the GPU's post-transform vertex cache that the zigzag index order is built for "
+                          "(3.2.10).",
+                          &O::vertexCacheSize, 4, 64, "vertices"));
+    t.push_back(intOption("quad_cache_size", kGroupMap,
+                          "How many nodes the node cache holds: more keeps more detail around, costs GPU memory. At "
+                          "least a node and its four children.",
+                          &O::quadCacheSize, 5, INT_MAX, "nodes"));
+    t.push_back({"reader", kGroupMap,
+                 "How the map file is read: 'stream' reads each node with a file read, 'memory_mapped' maps the "
+                 "whole file.",
+                 "stream or memory_mapped",
+                 [](std::string_view value, const SetContext&, O& o) {
+                     if (value == "stream") {
+                         o.reader = ReaderKind::Stream;
+                     } else if (value == "memory_mapped") {
+                         o.reader = ReaderKind::MemoryMapped;
+                     } else {
+                         return false;
+                     }
+                     return true;
+                 },
+                 [](const O& o) { return std::string(o.reader == ReaderKind::Stream ? "stream" : "memory_mapped"); }});
+    t.push_back(intOption("worker_threads", kGroupMap,
+                          "Threads that read and decode nodes. 0 loads on the render thread (stutters; for "
+                          "debugging).",
+                          &O::workerThreads, 0, 256, "threads"));
+    t.push_back(intOption("request_queue_size", kGroupMap,
+                          "How many node loads may wait at once; the nearest are asked for first and stale ones "
+                          "cancelled.",
+                          &O::requestQueueSize, 1, 4096, "node groups"));
+
+    // ---- Detail synthesis ----
+    t.push_back(boolOption("detail_create_new_nodes", kGroupDetail,
+                           "Create dynamic nodes below the map's finest level by subdivision.",
+                           &O::detailCreateNewNodes));
+    t.push_back(realOption("detail_subdivision_factor", kGroupDetail,
+                           "omega of the 4-point subdivision rule: 0 is linear interpolation, 1 Kobbelt's "
+                           "interpolatory subdivision.",
+                           &O::detailSubdivisionFactor, closedInterval(0, 2), ""));
+    t.push_back(boolOption("detail_add_material", kGroupDetail,
+                           "Add the material's fractal displacement to subdivided nodes.", &O::detailAddMaterial));
+    t.push_back(intOption("detail_material_type", kGroupDetail, "Which of the two built-in materials to use.",
+                          &O::detailMaterialType, 0, 1, ""));
+
+    // ---- Camera ----
+    t.push_back(realOption("camera_fov", kGroupCamera, "Vertical field of view.", &O::cameraFov, openInterval(1, 179),
+                           "degrees"));
+    t.push_back(realOption("camera_z_near", kGroupCamera, "Distance to the near clipping plane.", &O::cameraZNear,
+                           above(0), "metres"));
+    t.push_back(realOption("camera_z_far", kGroupCamera, "Distance to the far clipping plane.", &O::cameraZFar,
+                           above(0), "metres"));
+    t.back().expected = "a number > camera_z_near (metres)";  // the relation is checked by validate()
+    t.push_back(pathOption("camera_path", kGroupCamera,
+                           "Camera path file (lines 'time x y z yaw pitch') flown in demo and video mode. Relative "
+                           "paths are taken from this config file's directory.",
+                           &O::cameraPath, PathKind::Input, "a path (empty: none)"));
+    t.push_back({"camera_position", kGroupCamera,
+                 "Where the camera starts when no path is flown, world metres (x east, y north, z up). Empty: "
+                 "above the map's centre.",
+                 "empty or three numbers 'x, y, z' (metres)",
+                 [](std::string_view value, const SetContext&, O& o) {
+                     if (value.empty()) {
+                         o.cameraPosition.reset();
+                         return true;
+                     }
+                     auto v = parseNumberList(value, 3);
+                     if (!v) {
+                         return false;
+                     }
+                     o.cameraPosition = glm::dvec3((*v)[0], (*v)[1], (*v)[2]);
+                     return true;
+                 },
+                 [](const O& o) {
+                     if (!o.cameraPosition) {
+                         return std::string();
+                     }
+                     const glm::dvec3& p = *o.cameraPosition;
+                     return formatNumber(p.x) + ", " + formatNumber(p.y) + ", " + formatNumber(p.z);
+                 }});
+    t.push_back(realOption("camera_yaw", kGroupCamera,
+                           "Start heading when no path is flown: 0 looks north, positive turns east.", &O::cameraYaw,
+                           closedInterval(-360, 360), "degrees"));
+    t.push_back(realOption("camera_pitch", kGroupCamera, "Start pitch when no path is flown: positive looks up.",
+                           &O::cameraPitch, closedInterval(-90, 90), "degrees"));
+
+    // ---- Display ----
+    t.push_back(intOption("window_width", kGroupDisplay, "Window width.", &O::windowWidth, 16, 16384, "pixels"));
+    t.push_back(intOption("window_height", kGroupDisplay, "Window height.", &O::windowHeight, 16, 16384, "pixels"));
+    t.push_back(boolOption("draw_user_interface", kGroupDisplay,
+                           "Draw the on-screen statistics and help. Costs a little frame time.",
+                           &O::drawUserInterface));
+    t.push_back(boolOption("draw_sky", kGroupDisplay, "Draw the sky; off clears to clear_color.", &O::drawSky));
+    t.push_back(boolOption("wireframe", kGroupDisplay, "Draw the terrain's triangles as lines.", &O::wireframe));
+    t.push_back(realOption("sun_azimuth", kGroupDisplay, "Direction the sunlight comes from: 0 north, 90 east.",
+                           &O::sunAzimuth, closedInterval(0, 360), "degrees"));
+    t.push_back(realOption("sun_elevation", kGroupDisplay, "Height of the sun above the horizon.", &O::sunElevation,
+                           closedInterval(-90, 90), "degrees"));
+    t.push_back(realOption("haze_distance", kGroupDisplay,
+                           "Aerial perspective: at distance d the terrain keeps exp(-d / haze_distance) of its own "
+                           "colour. 0 turns haze off.",
+                           &O::hazeDistance, atLeast(0), "metres"));
+    t.push_back({"clear_color", kGroupDisplay, "Background colour where nothing is drawn (and the haze colour).",
+                 "three numbers 'r, g, b', each in [0, 1]",
+                 [](std::string_view value, const SetContext&, O& o) {
+                     auto v = parseNumberList(value, 3);
+                     if (!v || std::any_of(v->begin(), v->end(), [](double c) { return c < 0 || c > 1; })) {
+                         return false;
+                     }
+                     o.clearColor = glm::vec3(static_cast<float>((*v)[0]), static_cast<float>((*v)[1]),
+                                              static_cast<float>((*v)[2]));
+                     return true;
+                 },
+                 [](const O& o) {
+                     return formatNumber(o.clearColor.r) + ", " + formatNumber(o.clearColor.g) + ", " +
+                            formatNumber(o.clearColor.b);
+                 }});
+    t.push_back(pathOption("shader_path", kGroupDisplay,
+                           "Directory with the GLSL programs (terrain, sky, text). Relative paths in a config file are "
+                           "taken from that file's directory.",
+                           &O::shaderPath, PathKind::Input, "a directory path (empty: the shaders/ directory this build came with)"));
+    t.push_back(pathOption("log_file", kGroupDisplay,
+                           "Also write the log to this file. Relative paths are taken from the working directory.",
+                           &O::logFile, PathKind::Output, "a path (empty: log to stderr only)"));
+
+    // ---- Demo and video mode ----
+    t.push_back(boolOption("demo_mode", kGroupVideo,
+                           "Fly camera_path over and over (needs camera_path). Overrides video_mode.", &O::demoMode));
+    t.push_back(boolOption("video_mode", kGroupVideo,
+                           "Fly camera_path once at frames_per_second, saving every frame to image_path (needs "
+                           "camera_path).",
+                           &O::videoMode));
+    t.push_back(intOption("frames_per_second", kGroupVideo, "Frames per second of camera-path time in video mode.",
+                          &O::framesPerSecond, 1, 240, ""));
+    t.push_back(pathOption("image_path", kGroupVideo,
+                           "Directory for the video frames (created if missing). Relative paths are taken from the "
+                           "working directory.",
+                           &O::imagePath, PathKind::Output, "a directory path"));
+    t.push_back(intOption("video_frames", kGroupVideo, "Stop video mode after this many frames; 0 = the whole path.",
+                          &O::videoFrames, 0, INT_MAX, "frames"));
+    t.push_back(boolOption("video_ffmpeg", kGroupVideo,
+                           "After video mode, make an MP4 of the frames when ffmpeg is on the PATH.", &O::videoFfmpeg));
+    return t;
+}
+
+/// The paper's Direct3D/Cg options: accepted so its configs load, with warnings where they ask for
+/// something we do not do.
+std::vector<OptionSpec> makeIgnoredOptionTable()
+{
+    std::vector<OptionSpec> t;
+    t.push_back({"render",
+                 "",
+                 "3D API: 'gl' (the only one here) or 'dx' (Direct3D: warned about and ignored).",
+                 "gl or dx",
+                 [](std::string_view value, const SetContext& c, TengineOptions&) {
+                     if (value == "dx") {
+                         c.warnings.push_back(c.entry.location() +
+                                              ": render = dx is ignored: only OpenGL is supported");
+                         return true;
+                     }
+                     return value == "gl";
+                 },
+                 {}});
+    t.push_back({"memory",
+                 "",
+                 "GL memory scheme: 'gl_std' and 'gl_vbo' are accepted (vertex buffer objects are always used); "
+                 "'gl_var' (NVIDIA VAR) is warned about and ignored.",
+                 "gl_std, gl_vbo or gl_var",
+                 [](std::string_view value, const SetContext& c, TengineOptions&) {
+                     if (value == "gl_var") {
+                         c.warnings.push_back(c.entry.location() +
+                                              ": memory = gl_var is ignored: vertex buffer objects are used");
+                         return true;
+                     }
+                     return value == "gl_std" || value == "gl_vbo";
+                 },
+                 {}});
+    t.push_back({"cg_profile",
+                 "",
+                 "Cg profile (arb, nv20, nv30): any value is warned about and ignored.",
+                 "any value",
+                 [](std::string_view value, const SetContext& c, TengineOptions&) {
+                     c.warnings.push_back(c.entry.location() + ": cg_profile = " + std::string(value) +
+                                          " is ignored: Cg is not used");
+                     return true;
+                 },
+                 {}});
+    return t;
+}
+
+const std::vector<OptionSpec>& optionTable()
+{
+    static const std::vector<OptionSpec> table = makeOptionTable();
+    return table;
+}
+
+const std::vector<OptionSpec>& ignoredOptionTable()
+{
+    static const std::vector<OptionSpec> table = makeIgnoredOptionTable();
+    return table;
+}
+
+const OptionSpec* findOption(std::string_view key)
+{
+    for (const auto* table : {&optionTable(), &ignoredOptionTable()}) {
+        for (const OptionSpec& spec : *table) {
+            if (spec.key == key) {
+                return &spec;
+            }
+        }
+    }
+    return nullptr;
+}
+
+std::size_t editDistance(std::string_view a, std::string_view b)
+{
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) {
+        row[j] = j;
+    }
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        std::size_t diagonal = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            std::size_t substitution = diagonal + (a[i - 1] == b[j - 1] ? 0 : 1);
+            diagonal = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, substitution});
+        }
+    }
+    return row[b.size()];
+}
+
+/// The known key nearest to `key`, when it is near enough to be a typo: at most a third of the key's
+/// letters wrong, and never more than 3.
+std::optional<std::string_view> closestKey(std::string_view key)
+{
+    const std::size_t limit = std::clamp<std::size_t>(key.size() / 3, 1, 3);
+    std::optional<std::string_view> best;
+    std::size_t bestDistance = limit + 1;
+    for (const auto* table : {&optionTable(), &ignoredOptionTable()}) {
+        for (const OptionSpec& spec : *table) {
+            std::size_t d = editDistance(key, spec.key);
+            if (d < bestDistance) {
+                bestDistance = d;
+                best = spec.key;
+            }
+        }
+    }
+    return best;
+}
+
+Status applyEntry(const ConfigEntry& entry, const std::filesystem::path& baseDirectory, TengineOptions& options,
+                  std::vector<std::string>& warnings)
+{
+    const OptionSpec* spec = findOption(entry.key);
+    if (!spec) {
+        std::string warning = entry.location() + ": unknown option '" + entry.key + "' ignored";
+        if (auto suggestion = closestKey(entry.key)) {
+            warning += " (did you mean '" + std::string(*suggestion) + "'?)";
+        }
+        warnings.push_back(std::move(warning));
+        return {};
+    }
+    SetContext context{entry, baseDirectory, warnings};
+    if (!spec->set(entry.value, context, options)) {
+        return makeError(entry.location(), ": invalid value '", entry.value, "' for ", entry.key, ": expected ",
+                         spec->expected);
+    }
+    return {};
+}
+
+/// Wraps `text` into "# " comment lines of at most `width` characters.
+void writeComment(std::ostringstream& out, std::string_view text, std::size_t width = 100)
+{
+    std::string line = "#";
+    std::istringstream words{std::string(text)};
+    std::string word;
+    while (words >> word) {
+        if (line.size() > 1 && line.size() + 1 + word.size() > width) {
+            out << line << "\n";
+            line = "#";
+        }
+        line += " " + word;
+    }
+    out << line << "\n";
+}
+
+/// `key = value`, quoting values a plain line would change (comments, surrounding spaces).
+void writeSetting(std::ostringstream& out, std::string_view prefix, std::string_view key, const std::string& value)
+{
+    out << prefix << key << " =";
+    if (value.empty()) {
+        out << "\n";
+        return;
+    }
+    bool quote =
+        value.find('#') != std::string::npos || value.front() == ' ' || value.back() == ' ' || value.front() == '"';
+    out << " " << (quote ? "\"" : "") << value << (quote ? "\"" : "") << "\n";
+}
+
+Status validate(const TengineOptions& o, std::vector<std::string>& warnings)
+{
+    if (!(o.cameraZFar > o.cameraZNear)) {
+        return makeError("camera_z_far (", formatNumber(o.cameraZFar), ") must be greater than camera_z_near (",
+                         formatNumber(o.cameraZNear), ")");
+    }
+    if (o.demoMode && o.cameraPath.empty()) {
+        return makeError("demo_mode needs a camera_path");
+    }
+    if (o.videoMode && o.cameraPath.empty()) {
+        return makeError("video_mode needs a camera_path");
+    }
+    if (o.demoMode && o.videoMode) {
+        warnings.push_back("video_mode is ignored: demo_mode overrides it");
+    }
+    return {};
+}
+
+}  // namespace
+
+Status applyConfig(const ConfigFile& config, TengineOptions& options, std::vector<std::string>& warnings)
+{
+    for (const ConfigEntry& entry : config.entries()) {
+        TERRAIN_TRY(applyEntry(entry, config.directory(), options, warnings));
+    }
+    return {};
+}
+
+Status applySetting(std::string_view keyEqualsValue, TengineOptions& options, std::vector<std::string>& warnings)
+{
+    auto entry = ConfigFile::parseEntry(keyEqualsValue, "--set", 0);
+    TERRAIN_TRY(entry);
+    return applyEntry(*entry, {}, options, warnings);
+}
+
+Status validateTengineOptions(const TengineOptions& options, std::vector<std::string>& warnings)
+{
+    return validate(options, warnings);
+}
+
+Expected<ParsedCommandLine> parseTengineCommandLine(const std::vector<std::string>& arguments)
+{
+    ParsedCommandLine result;
+    std::optional<std::filesystem::path> mapArgument;
+    for (std::size_t i = 0; i < arguments.size(); ++i) {
+        const std::string& arg = arguments[i];
+        if (arg == "--help" || arg == "-h") {
+            result.help = true;
+            return result;
+        }
+        if (arg == "--print-config") {
+            result.printConfig = true;
+        } else if (arg == "--set" || arg.starts_with("--set=")) {
+            std::string setting;
+            if (arg == "--set") {
+                if (i + 1 >= arguments.size()) {
+                    return makeError("--set needs a value: --set key=value");
+                }
+                setting = arguments[++i];
+            } else {
+                setting = arg.substr(6);
+            }
+            TERRAIN_TRY(applySetting(setting, result.options, result.warnings));
+        } else if (arg.size() > 1 && arg.front() == '-') {
+            return makeError("unknown argument '", arg, "' (see --help)");
+        } else if (arg.ends_with(".cfg")) {
+            auto config = ConfigFile::load(arg);
+            TERRAIN_TRY(config);
+            TERRAIN_TRY(applyConfig(*config, result.options, result.warnings));
+            result.configFiles.emplace_back(arg);
+        } else {
+            mapArgument = arg;
+        }
+    }
+    if (mapArgument) {
+        result.options.mapFile = *mapArgument;
+    }
+    TERRAIN_TRY(validate(result.options, result.warnings));
+    return result;
+}
+
+Expected<ParsedCommandLine> parseTengineCommandLine(int argc, char** argv)
+{
+    std::vector<std::string> arguments;
+    for (int i = 1; i < argc; ++i) {
+        arguments.emplace_back(argv[i]);
+    }
+    return parseTengineCommandLine(arguments);
+}
+
+std::string tengineUsage()
+{
+    return R"(usage: tengine [FILE.cfg | FILE.map | --set key=value]... [--print-config] [--help]
+
+Renders a terrain map made by prep (paper 4.4.2).
+
+  FILE.cfg          a configuration file ('option = value' lines; see configs/tengine.cfg for every
+                    option with its default). Files are read in order; later ones override earlier ones.
+  FILE.map          the terrain map; overrides map_file. If several are given, the last one is used.
+  --set key=value   set one option, in command-line order with the .cfg files (a later one wins)
+  --print-config    print the resulting options as a config file and exit
+  --help            this text
+)";
+}
+
+const std::vector<std::string_view>& tengineOptionKeys()
+{
+    static const std::vector<std::string_view> keys = [] {
+        std::vector<std::string_view> k;
+        for (const OptionSpec& spec : optionTable()) {
+            k.push_back(spec.key);
+        }
+        return k;
+    }();
+    return keys;
+}
+
+const std::vector<std::string_view>& ignoredTengineOptionKeys()
+{
+    static const std::vector<std::string_view> keys = [] {
+        std::vector<std::string_view> k;
+        for (const OptionSpec& spec : ignoredOptionTable()) {
+            k.push_back(spec.key);
+        }
+        return k;
+    }();
+    return keys;
+}
+
+std::string formatTengineOption(const TengineOptions& options, std::string_view key)
+{
+    const OptionSpec* spec = findOption(key);
+    TERRAIN_EXPECTS(spec && spec->get, "formatTengineOption: key must be one of tengineOptionKeys()");
+    return spec->get(options);
+}
+
+std::string tengineConfigText(const TengineOptions& options)
+{
+    std::ostringstream out;
+    out << "# tengine configuration (paper 4.3, Appendix A). Syntax: 'option = value'; '#' starts a comment;\n"
+           "# quote a value (\"...\") to keep spaces or '#'. Files given later on the command line, and\n"
+           "# --set key=value, override earlier ones. Every option is listed with its default value.\n"
+           "#\n"
+           "# This file is checked against the code by a unit test (TengineOptionsTest); regenerate it with\n"
+           "#     tengine --print-config > configs/tengine.cfg\n";
+    std::string_view group;
+    for (const OptionSpec& spec : optionTable()) {
+        if (spec.group != group) {
+            group = spec.group;
+            out << "\n# ==== " << group << " ====\n";
+        }
+        out << "\n";
+        writeComment(out, spec.doc);
+        writeComment(out, "Valid: " + spec.expected + ".");
+        writeSetting(out, "", spec.key, spec.get(options));
+    }
+    out << "\n# ==== Direct3D / Cg options of the paper's viewer (accepted for compatibility) ====\n";
+    const std::pair<std::string_view, std::string> examples[] = {
+        {"render", "gl"}, {"memory", "gl_vbo"}, {"cg_profile", "arb"}};
+    for (const auto& [key, example] : examples) {
+        const OptionSpec* spec = findOption(key);
+        TERRAIN_ASSERT(spec);
+        out << "\n";
+        writeComment(out, spec->doc);
+        writeSetting(out, "# ", key, example);
+    }
+    return out.str();
+}
+
+}  // namespace terrain

@@ -1,0 +1,129 @@
+// The tengine viewer's options (paper Appendix A, 4.3) and its command line (paper 4.4.2).
+//
+// Every Appendix A option that applies to OpenGL is honoured; the Direct3D/Cg ones (`render`, `memory`,
+// `cg_profile`) are accepted with a warning where they ask for something we do not do. Options of our own
+// are documented in configs/tengine.cfg, which lists every key with its default (a unit test keeps that
+// file and this struct's defaults equal; defaultTengineConfigText() renders it).
+//
+// Path options: `map_file` and `camera_path` are inputs and, when relative inside a config file, are
+// resolved against that file's directory (a demo config can sit next to its map and path). `log_file` and
+// `image_path` are outputs and stay relative to the working directory. Paths from `--set` or the command
+// line are used as given.
+#pragma once
+
+#include "core/ConfigFile.h"
+#include "core/Expected.h"
+#include "quadtree/MapFile.h"
+
+#include <glm/vec3.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace terrain {
+
+/// Everything a config file can set. Defaults are the documented defaults; ranges are in the comments
+/// and in configs/tengine.cfg.
+struct TengineOptions {
+    // ---- Map and level of detail ----
+    std::filesystem::path mapFile;                 ///< map_file; the command line's map argument wins
+    double lodError = 2.0;                         ///< lod_error: tau, pixels, > 0 (eq. 3.3)
+    double lodMinimumSpacing = 0.01;               ///< lod_minimum_spacing: metres, >= 0; no finer detail
+    int dynamicTextureSize = 128;                  ///< dynamic_texture_size: texels, 2^k or 2^k+1 in [16, 4096]
+    int vertexCacheSize = 16;                      ///< vertex_cache_size: entries, [4, 64] (3.2.10)
+    int quadCacheSize = 1024;                      ///< quad_cache_size: nodes, >= 5
+    ReaderKind reader = ReaderKind::MemoryMapped;  ///< reader: stream | memory_mapped
+    int workerThreads = 1;                         ///< worker_threads: >= 0; 0 loads on the render thread
+    int requestQueueSize = 8;                      ///< request_queue_size: node groups waiting, >= 1
+
+    // ---- Detail synthesis (3.3, 3.4) ----
+    bool detailCreateNewNodes = true;      ///< detail_create_new_nodes
+    double detailSubdivisionFactor = 1.0;  ///< detail_subdivision_factor: omega in [0, 2]
+    bool detailAddMaterial = true;         ///< detail_add_material
+    int detailMaterialType = 0;            ///< detail_material_type: 0 or 1
+
+    // ---- Camera ----
+    double cameraFov = 60.0;                   ///< camera_fov: vertical, degrees, in (1, 179)
+    double cameraZNear = 1.0;                  ///< camera_z_near: metres, > 0
+    double cameraZFar = 200000.0;              ///< camera_z_far: metres, > camera_z_near
+    std::filesystem::path cameraPath;          ///< camera_path: empty = none
+    std::optional<glm::dvec3> cameraPosition;  ///< camera_position: metres; unset = above the map's centre
+    double cameraYaw = 0.0;                    ///< camera_yaw: degrees, 0 = north, positive turns east
+    double cameraPitch = -20.0;                ///< camera_pitch: degrees in [-90, 90], positive up
+
+    // ---- Display ----
+    int windowWidth = 1280;                   ///< window_width: pixels, [16, 16384]
+    int windowHeight = 720;                   ///< window_height: pixels, [16, 16384]
+    bool drawUserInterface = true;            ///< draw_user_interface
+    bool drawSky = true;                      ///< draw_sky
+    bool wireframe = false;                   ///< wireframe
+    double sunAzimuth = 135.0;                ///< sun_azimuth: degrees in [0, 360], clockwise from north
+    double sunElevation = 35.0;               ///< sun_elevation: degrees in [-90, 90] above the horizon
+    double hazeDistance = 60000.0;            ///< haze_distance: metres, >= 0; 0 = no haze
+    glm::vec3 clearColor{0.55f, 0.7f, 0.9f};  ///< clear_color: r, g, b in [0, 1]
+    std::filesystem::path shaderPath;         ///< shader_path: empty = the shaders/ directory of this build
+    std::filesystem::path logFile;            ///< log_file: empty = stderr only
+
+    // ---- Demo and video mode ----
+    bool demoMode = false;                       ///< demo_mode: fly camera_path forever; overrides video_mode
+    bool videoMode = false;                      ///< video_mode: fly camera_path once, saving frames
+    int framesPerSecond = 30;                    ///< frames_per_second: video frames per path second, [1, 240]
+    std::filesystem::path imagePath = "frames";  ///< image_path: directory for video frames
+    int videoFrames = 0;                         ///< video_frames: >= 0; stop after this many, 0 = whole path
+    bool videoFfmpeg = true;                     ///< video_ffmpeg: make an MP4 when ffmpeg is on PATH
+
+    bool operator==(const TengineOptions&) const = default;
+};
+
+/// Applies every entry of `config` in file order (a later entry wins). Unknown keys and ignored
+/// Direct3D/Cg settings append a warning ("file:line: ...") to `warnings`; an invalid value returns an
+/// Error "file:line: invalid value 'v' for key: expected ..." and stops (`options` keeps what was applied
+/// before it). Checks each value alone; relations between options are validateTengineOptions()'s.
+Status applyConfig(const ConfigFile& config, TengineOptions& options, std::vector<std::string>& warnings);
+
+/// Applies one `key=value` (from `--set`), with the rules of applyConfig(); messages name "--set".
+Status applySetting(std::string_view keyEqualsValue, TengineOptions& options, std::vector<std::string>& warnings);
+
+/// Checks the rules between options once all are applied: camera_z_far > camera_z_near; demo_mode and
+/// video_mode need a camera_path. Warns when demo_mode and video_mode are both on (demo wins).
+Status validateTengineOptions(const TengineOptions& options, std::vector<std::string>& warnings);
+
+/// The result of the command line.
+struct ParsedCommandLine {
+    TengineOptions options;
+    std::vector<std::string> warnings;               ///< for the app to print or log
+    std::vector<std::filesystem::path> configFiles;  ///< the .cfg files read, in order
+    bool help = false;                               ///< --help: print tengineUsage() and exit
+    bool printConfig = false;                        ///< --print-config: print the resulting options as a config
+};
+
+/// Parses tengine's arguments (without the program name), paper 4.4.2: each argument ending in `.cfg` is
+/// read and applied, and each `--set key=value` applied, in command-line order, so later ones override
+/// earlier ones. Any other argument is the map file; the last one wins and overrides every `map_file`
+/// setting. Then validateTengineOptions(). `--help` stops parsing. Errors: unknown `-` options, a missing
+/// `--set` value, unreadable configs, syntax errors and invalid values.
+Expected<ParsedCommandLine> parseTengineCommandLine(const std::vector<std::string>& arguments);
+/// The same for main()'s arguments (argv[0] is skipped).
+Expected<ParsedCommandLine> parseTengineCommandLine(int argc, char** argv);
+
+/// The --help text.
+std::string tengineUsage();
+
+/// Every key TengineOptions holds, in documentation order (the Direct3D/Cg keys are not among them).
+const std::vector<std::string_view>& tengineOptionKeys();
+/// Keys accepted only for compatibility with the paper's Direct3D/Cg viewer: render, memory, cg_profile.
+const std::vector<std::string_view>& ignoredTengineOptionKeys();
+
+/// The value of `key` in `options` as a config file writes it (reads back to the same value). `key` must
+/// be one of tengineOptionKeys() (checked precondition).
+std::string formatTengineOption(const TengineOptions& options, std::string_view key);
+
+/// `options` as a documented config file: every key grouped, each with what it does and its valid values,
+/// and the Direct3D/Cg options as commented-out examples. With default options this is
+/// configs/tengine.cfg.
+std::string tengineConfigText(const TengineOptions& options = TengineOptions{});
+
+}  // namespace terrain

@@ -1,0 +1,98 @@
+// Thin RAII wrappers over OpenGL object names (STYLE.md, "GL code"): move-only, one type per kind of
+// object, so a texture cannot be passed where a buffer is expected. Requires a current GL context for
+// construction and destruction.
+#pragma once
+
+#include <epoxy/gl.h>
+
+#include <utility>
+
+namespace terrain::gl {
+
+/// Owns one GL object name; `Traits` says how to create and delete it.
+template <class Traits>
+class Object {
+public:
+    Object() = default;
+    static Object create()
+    {
+        Object o;
+        o.mName = Traits::create();
+        return o;
+    }
+    Object(Object&& other) noexcept : mName(std::exchange(other.mName, 0)) {}
+    Object& operator=(Object&& other) noexcept
+    {
+        if (this != &other) {
+            reset();
+            mName = std::exchange(other.mName, 0);
+        }
+        return *this;
+    }
+    Object(const Object&) = delete;
+    Object& operator=(const Object&) = delete;
+    ~Object() { reset(); }
+
+    GLuint name() const { return mName; }
+    explicit operator bool() const { return mName != 0; }
+    void reset()
+    {
+        if (mName != 0) {
+            Traits::destroy(mName);
+            mName = 0;
+        }
+    }
+
+private:
+    GLuint mName = 0;
+};
+
+struct BufferTraits {
+    static GLuint create()
+    {
+        GLuint n = 0;
+        glGenBuffers(1, &n);
+        return n;
+    }
+    static void destroy(GLuint n) { glDeleteBuffers(1, &n); }
+};
+struct VertexArrayTraits {
+    static GLuint create()
+    {
+        GLuint n = 0;
+        glGenVertexArrays(1, &n);
+        return n;
+    }
+    static void destroy(GLuint n) { glDeleteVertexArrays(1, &n); }
+};
+struct TextureTraits {
+    static GLuint create()
+    {
+        GLuint n = 0;
+        glGenTextures(1, &n);
+        return n;
+    }
+    static void destroy(GLuint n) { glDeleteTextures(1, &n); }
+};
+struct ShaderTraits;  // shaders are created with a type: see Shader below
+struct ProgramTraits {
+    static GLuint create() { return glCreateProgram(); }
+    static void destroy(GLuint n) { glDeleteProgram(n); }
+};
+struct QueryTraits {
+    static GLuint create()
+    {
+        GLuint n = 0;
+        glGenQueries(1, &n);
+        return n;
+    }
+    static void destroy(GLuint n) { glDeleteQueries(1, &n); }
+};
+
+using Buffer = Object<BufferTraits>;
+using VertexArray = Object<VertexArrayTraits>;
+using Texture = Object<TextureTraits>;
+using Program = Object<ProgramTraits>;
+using Query = Object<QueryTraits>;
+
+}  // namespace terrain::gl

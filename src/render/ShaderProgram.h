@@ -1,0 +1,35 @@
+// GLSL programs from the files in shaders/ (STYLE.md: shaders are real files; variants by prepending
+// #defines; a compile or link failure returns the info log as an error).
+#pragma once
+
+#include "core/Expected.h"
+#include "render/GlObjects.h"
+
+#include <filesystem>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace terrain {
+
+class ShaderProgram {
+public:
+    /// Compiles `<directory>/<name>.vert` and `.frag` with `defines` ("NAME" or "NAME VALUE") inserted after
+    /// the #version line, and links them. Errors name the file and carry the driver's log.
+    static Expected<ShaderProgram> load(const std::filesystem::path& directory, const std::string& name,
+                                        const std::vector<std::string>& defines = {});
+    /// Same from source text; `name` is used in messages.
+    static Expected<ShaderProgram> fromSource(const std::string& name, const std::string& vertex,
+                                              const std::string& fragment, const std::vector<std::string>& defines = {});
+
+    void use() const { glUseProgram(mProgram.name()); }
+    /// Location of a uniform, cached; -1 when the program has none of that name (optimised away).
+    GLint uniform(const char* name) const;
+    GLuint name() const { return mProgram.name(); }
+
+private:
+    gl::Program mProgram;
+    mutable std::unordered_map<std::string, GLint> mUniforms;
+};
+
+}  // namespace terrain

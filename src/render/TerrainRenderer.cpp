@@ -1,0 +1,210 @@
+// Drawing the selected chunks: template mesh (3.2.9, eq. 3.7), geomorphing (3.2.8, eq. 3.4-3.6), skirts
+// (3.2.6), zigzag index buffer (3.2.10), front to back (3.2.11).
+#include "render/TerrainRenderer.h"
+
+#include "render/TemplateMesh.h"
+#include "render/ZigzagIndexBuffer.h"
+
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/mat4x4.hpp>
+
+#include <cmath>
+
+namespace terrain {
+
+Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::filesystem::path& shaderDirectory,
+                                                                   const MapHeader& header, int vertexCacheSize)
+{
+    std::unique_ptr<TerrainRenderer> r(new TerrainRenderer(header));
+    auto terrain = ShaderProgram::load(shaderDirectory, "terrain");
+    TERRAIN_TRY(terrain);
+    r->mTerrain = std::move(terrain.value());
+    auto sky = ShaderProgram::load(shaderDirectory, "sky");
+    TERRAIN_TRY(sky);
+    r->mSky = std::move(sky.value());
+
+    const int n = static_cast<int>(header.chunkSize);
+    const TemplateMesh mesh = buildTemplateMesh(n);
+    const std::vector<std::uint32_t> indices = buildZigzagIndices(n, vertexCacheSize, /*withSkirts=*/true);
+    r->mTrianglesPerNode = indices.size() / 3;
+    r->mIndexCount = static_cast<GLsizei>(indices.size());
+    const bool narrow = indexTypeFor(mesh.vertices.size()) == IndexType::kUint16;
+    r->mIndexType = narrow ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
+
+    r->mTemplateVao = gl::VertexArray::create();
+    r->mTemplateVertices = gl::Buffer::create();
+    r->mTemplateIndices = gl::Buffer::create();
+    glBindVertexArray(r->mTemplateVao.name());
+    glBindBuffer(GL_ARRAY_BUFFER, r->mTemplateVertices.name());
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(mesh.vertices.size() * sizeof(TemplateVertex)),
+                 mesh.vertices.data(), GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribIPointer(0, 2, GL_UNSIGNED_SHORT, sizeof(TemplateVertex),
+                           reinterpret_cast<const void*>(offsetof(TemplateVertex, i)));
+    glEnableVertexAttribArray(1);
+    glVertexAttribIPointer(1, 1, GL_UNSIGNED_BYTE, sizeof(TemplateVertex),
+                           reinterpret_cast<const void*>(offsetof(TemplateVertex, skirt)));
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, r->mTemplateIndices.name());
+    if (narrow) {
+        const std::vector<std::uint16_t> shortIndices = narrowIndices(indices);
+        glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(shortIndices.size() * sizeof(std::uint16_t)),
+                     shortIndices.data(), GL_STATIC_DRAW);
+    } else {
+        glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
+                     indices.data(), GL_STATIC_DRAW);
+    }
+    glBindVertexArray(0);
+    r->mEmptyVao = gl::VertexArray::create();
+    return r;
+}
+
+TerrainRenderer::GpuNode& TerrainRenderer::upload(const NodePtr& node, RenderStats& stats)
+{
+    auto [it, inserted] = mGpuNodes.try_emplace(node->id.key());
+    GpuNode& gpu = it->second;
+    if (!inserted && gpu.data == node) {
+        gpu.lastFrame = mFrame;
+        return gpu;
+    }
+    // New, or the cache holds a different copy of this node now (evicted and loaded again).
+    gpu.data = node;
+    gpu.lastFrame = mFrame;
+    const int w = mHeader.windowSize();
+    const int t = static_cast<int>(mHeader.textureSize);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gpu.heights = gl::Texture::create();
+    glBindTexture(GL_TEXTURE_2D, gpu.heights.name());
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_R16UI, w, w, 0, GL_RED_INTEGER, GL_UNSIGNED_SHORT, node->heights.data());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    gpu.colour = gl::Texture::create();
+    glBindTexture(GL_TEXTURE_2D, gpu.colour.name());
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, t, t, 0, GL_RGB, GL_UNSIGNED_BYTE, node->texture.data());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    ++stats.uploads;
+    return gpu;
+}
+
+void TerrainRenderer::releaseEvicted(const TerrainStreamer& streamer)
+{
+    for (auto it = mGpuNodes.begin(); it != mGpuNodes.end();) {
+        const GpuNode& gpu = it->second;
+        if (gpu.lastFrame != mFrame && streamer.node(gpu.data->id) != gpu.data) {
+            it = mGpuNodes.erase(it);  // no longer in the cache: free its textures
+        } else {
+            ++it;
+        }
+    }
+}
+
+void TerrainRenderer::drawSky(const Camera& camera, const SceneStyle& style)
+{
+    const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
+    const glm::mat4 inverse = glm::inverse(viewProjection);
+    mSky.use();
+    glUniformMatrix4fv(mSky.uniform("uInverseViewProjection"), 1, GL_FALSE, glm::value_ptr(inverse));
+    glUniform3fv(mSky.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
+    glUniform3fv(mSky.uniform("uZenithColour"), 1, glm::value_ptr(style.zenithColour));
+    const glm::vec3 sun = glm::normalize(style.sunDirection);
+    glUniform3fv(mSky.uniform("uSunDirection"), 1, glm::value_ptr(sun));
+    glUniform3fv(mSky.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
+    glDepthMask(GL_FALSE);
+    glDisable(GL_DEPTH_TEST);
+    glBindVertexArray(mEmptyVao.name());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthMask(GL_TRUE);
+}
+
+RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera& camera, const SceneStyle& style)
+{
+    ++mFrame;
+    RenderStats stats;
+    glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
+    glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
+    glClearDepth(1.0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    if (style.drawSky) {
+        drawSky(camera, style);
+    }
+
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+    glFrontFace(GL_CCW);
+    glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
+
+    mTerrain.use();
+    const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
+    glUniformMatrix4fv(mTerrain.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
+    glUniform1i(mTerrain.uniform("uHeights"), 0);
+    glUniform1i(mTerrain.uniform("uColour"), 1);
+    glUniform1i(mTerrain.uniform("uParentColour"), 2);
+    glUniform1f(mTerrain.uniform("uHeightBase"), static_cast<float>(mHeader.heightOffset - camera.position.z));
+    glUniform1f(mTerrain.uniform("uHeightStep"), static_cast<float>(mHeader.heightStep));
+    glUniform1f(mTerrain.uniform("uTexels"), static_cast<float>(mHeader.textureSize));
+    const glm::vec3 sun = glm::normalize(style.sunDirection);
+    glUniform3fv(mTerrain.uniform("uSunDirection"), 1, glm::value_ptr(sun));
+    glUniform3fv(mTerrain.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
+    glUniform3fv(mTerrain.uniform("uAmbient"), 1, glm::value_ptr(style.ambient));
+    glUniform3fv(mTerrain.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
+    glUniform1f(mTerrain.uniform("uHazeDistance"), style.hazeDistance);
+    glUniform1i(mTerrain.uniform("uWireframe"), style.wireframe ? 1 : 0);
+    // The input's samples, camera-relative (prep's padding is left out).
+    const double s = mHeader.sampleSpacing;
+    const glm::dvec4 valid{mHeader.originX + mHeader.validX0 * s - camera.position.x,
+                           mHeader.originY + mHeader.validY0 * s - camera.position.y,
+                           mHeader.originX + (mHeader.validX0 + mHeader.validWidth - 1.0) * s - camera.position.x,
+                           mHeader.originY + (mHeader.validY0 + mHeader.validHeight - 1.0) * s - camera.position.y};
+    const double slack = 1e-3 * s;  // keep fragments exactly on the last sample
+    glUniform4f(mTerrain.uniform("uValidRect"), static_cast<float>(valid.x - slack), static_cast<float>(valid.y - slack),
+                static_cast<float>(valid.z + slack), static_cast<float>(valid.w + slack));
+
+    glBindVertexArray(mTemplateVao.name());
+    const GLint originLocation = mTerrain.uniform("uOrigin");
+    const GLint spacingLocation = mTerrain.uniform("uSpacing");
+    const GLint morphLocation = mTerrain.uniform("uMorph");
+    const GLint skirtLocation = mTerrain.uniform("uSkirtDepth");
+    const GLint parentOffsetLocation = mTerrain.uniform("uParentOffset");
+    for (const SelectedNode& selected : streamer.selection().nodes) {
+        NodePtr node = streamer.node(selected.id);
+        if (!node) {
+            continue;  // cannot happen: selected nodes are resident
+        }
+        GpuNode& gpu = upload(node, stats);
+        // The parent's texture for textural morphing (eq. 3.6); the root morphs to itself.
+        NodePtr parent = selected.id.isRoot() ? node : streamer.node(selected.id.parent());
+        GpuNode& parentGpu = parent ? upload(parent, stats) : gpu;
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D, gpu.heights.name());
+        glActiveTexture(GL_TEXTURE1);
+        glBindTexture(GL_TEXTURE_2D, gpu.colour.name());
+        glActiveTexture(GL_TEXTURE2);
+        glBindTexture(GL_TEXTURE_2D, parentGpu.colour.name());
+
+        glUniform2f(originLocation, static_cast<float>(selected.cameraRelativeOrigin.x),
+                    static_cast<float>(selected.cameraRelativeOrigin.y));
+        glUniform1f(spacingLocation, static_cast<float>(selected.size / (mHeader.chunkSize - 1)));
+        glUniform1f(morphLocation, selected.id.isRoot() ? 1.0f : selected.morph);
+        // Skirts hang the parent's delta_c deep: a leaf's own delta_c is zero, yet it can meet a coarser
+        // neighbour whose edge lies up to that far away (3.2.6).
+        const float skirt = parent ? std::max(parent->deltaC, node->deltaC) : node->deltaC;
+        glUniform1f(skirtLocation, skirt + static_cast<float>(mHeader.heightStep));
+        glUniform2f(parentOffsetLocation, (selected.id.x & 1) ? 0.5f : 0.0f, (selected.id.y & 1) ? 0.5f : 0.0f);
+        glDrawElements(GL_TRIANGLES, mIndexCount, mIndexType, nullptr);
+
+        ++stats.nodes;
+        (node->isStatic ? stats.staticNodes : stats.dynamicNodes) += 1;
+        stats.triangles += mTrianglesPerNode;
+    }
+    glBindVertexArray(0);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    releaseEvicted(streamer);
+    stats.gpuNodes = mGpuNodes.size();
+    return stats;
+}
+
+}  // namespace terrain

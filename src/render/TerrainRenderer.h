@@ -1,0 +1,80 @@
+// The chunk renderer (paper 3.2.6-3.2.11, 4.2.3): one template mesh for every node, each node drawn
+// with its own heights and texture, geomorphed and skirted in the vertex program, front to back in the
+// selector's order. GPU copies of node data live as long as the node stays in the cache.
+#pragma once
+
+#include "core/Camera.h"
+#include "core/Expected.h"
+#include "lod/TerrainStreamer.h"
+#include "quadtree/MapFormat.h"
+#include "render/GlObjects.h"
+#include "render/ShaderProgram.h"
+
+#include <glm/vec3.hpp>
+
+#include <filesystem>
+#include <memory>
+#include <unordered_map>
+
+namespace terrain {
+
+/// How the scene looks (config options draw_sky, sun_*, haze_distance, clear_color, wireframe).
+struct SceneStyle {
+    glm::vec3 sunDirection{0.5f, -0.5f, 0.7f};  ///< towards the sun; normalised by the renderer
+    glm::vec3 sunColour{1.0f, 0.95f, 0.85f};
+    glm::vec3 ambient{0.35f, 0.4f, 0.5f};
+    glm::vec3 hazeColour{0.68f, 0.76f, 0.86f};
+    glm::vec3 zenithColour{0.25f, 0.45f, 0.8f};
+    glm::vec3 clearColour{0.68f, 0.76f, 0.86f};
+    float hazeDistance = 60000.0f;  ///< metres
+    bool drawSky = true;
+    bool wireframe = false;
+};
+
+struct RenderStats {
+    std::size_t nodes = 0;
+    std::size_t staticNodes = 0;
+    std::size_t dynamicNodes = 0;
+    std::uint64_t triangles = 0;
+    std::size_t uploads = 0;       ///< nodes copied to the GPU this frame
+    std::size_t gpuNodes = 0;      ///< nodes with GPU copies after the frame
+};
+
+class TerrainRenderer {
+public:
+    /// Loads the shaders from `shaderDirectory` and builds the template mesh for `header`'s chunk size with
+    /// the zigzag order for `vertexCacheSize`. Needs a current GL context.
+    static Expected<std::unique_ptr<TerrainRenderer>> create(const std::filesystem::path& shaderDirectory,
+                                                             const MapHeader& header, int vertexCacheSize);
+
+    /// Clears, draws the sky and every node of `streamer`'s current selection. `camera` must be the one the
+    /// selection was made with.
+    RenderStats draw(const TerrainStreamer& streamer, const Camera& camera, const SceneStyle& style);
+
+private:
+    struct GpuNode {
+        NodePtr data;  ///< keeps the CPU copy alive while the GPU copy is in use; identity for eviction
+        gl::Texture heights;
+        gl::Texture colour;
+        std::uint64_t lastFrame = 0;
+    };
+    TerrainRenderer(const MapHeader& header) : mHeader(header) {}
+    GpuNode& upload(const NodePtr& node, RenderStats& stats);
+    void releaseEvicted(const TerrainStreamer& streamer);
+    void drawSky(const Camera& camera, const SceneStyle& style);
+
+    MapHeader mHeader;
+    ShaderProgram mTerrain;
+    ShaderProgram mSky;
+    gl::VertexArray mTemplateVao;
+    gl::Buffer mTemplateVertices;
+    gl::Buffer mTemplateIndices;
+    GLsizei mIndexCount = 0;
+    GLenum mIndexType = GL_UNSIGNED_INT;
+    std::uint64_t mTrianglesPerNode = 0;
+    gl::VertexArray mEmptyVao;  ///< the sky's full-screen triangle needs no attributes
+    std::unordered_map<std::uint64_t, GpuNode> mGpuNodes;
+    std::uint64_t mFrame = 0;
+};
+
+}  // namespace terrain
