@@ -1,0 +1,233 @@
+// The viewer end to end under Xvfb + Mesa llvmpipe: frames are checked, not just exit codes.
+#include "TestSupport.h"
+
+#include "core/Camera.h"
+#include "heightfield/HeightFieldIo.h"
+#include "heightfield/Image.h"
+#include "lod/CameraPath.h"
+#include "quadtree/MapFile.h"
+#include "quadtree/QuadtreeBuilder.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+
+namespace terrain {
+namespace {
+
+constexpr std::uint8_t kHole[3] = {255, 0, 255};  // a clear colour the scene never produces
+
+/// The bundled terrain as a map, built once for all tests.
+class TengineGLTest : public ::testing::Test {
+protected:
+    static void SetUpTestSuite()
+    {
+        sDir = new test::ScratchDir();
+        auto field = readHeightField(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
+        ASSERT_TRUE(field.ok()) << field.error().message;
+        BuildOptions options;
+        options.spacing = 90.0;
+        options.threads = 2;
+        auto built = buildMap(std::move(field.value()), options, *sDir / "trinidad.map");
+        ASSERT_TRUE(built.ok()) << built.error().message;
+        // A short low flight up a valley and over a ridge, then a steep look down (demos/trinidad.path's
+        // opening and middle, sped up).
+        std::ofstream path(*sDir / "flight.path");
+        path << "0 15000 12000 2496 47.7 -8\n"
+                "2 36000 33000 2700 41.6 -10\n"
+                "4 46500 45500 4400 39.8 -15\n"
+                "6 58000 60000 3900 29.1 -30\n"
+                "8 60000 70000 7000 -50 -60\n";
+    }
+    static void TearDownTestSuite()
+    {
+        delete sDir;
+        sDir = nullptr;
+    }
+
+    static std::filesystem::path map() { return *sDir / "trinidad.map"; }
+    static std::filesystem::path flight() { return *sDir / "flight.path"; }
+
+    /// Runs tengine in video mode with `settings` and returns its result; frames go to `frames`.
+    static test::RunResult video(const std::filesystem::path& frames, std::vector<std::string> settings)
+    {
+        std::vector<std::string> args = {map().string(),
+                                         "--set", "camera_path=" + flight().string(),
+                                         "--set", "video_mode=true",
+                                         "--set", "video_ffmpeg=false",
+                                         "--set", "image_path=" + frames.string(),
+                                         "--set", "window_width=320",
+                                         "--set", "window_height=180"};
+        for (auto& s : settings) {
+            args.push_back("--set");
+            args.push_back(s);
+        }
+        return test::runProgram(TERRAIN_TENGINE_EXE, args);
+    }
+
+    static Image frame(const std::filesystem::path& frames, int index)
+    {
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%05d.png", index);
+        auto image = readPngImage(frames / name, 3);
+        EXPECT_TRUE(image.ok()) << (image.ok() ? "" : image.error().message);
+        return image.ok() ? image.value() : Image{};
+    }
+
+    static test::ScratchDir* sDir;
+};
+
+test::ScratchDir* TengineGLTest::sDir = nullptr;
+
+bool isHole(const std::uint8_t* p) { return p[0] == kHole[0] && p[1] == kHole[1] && p[2] == kHole[2]; }
+
+TEST_F(TengineGLTest, TerrainIsThereAndTheSkyAboveIt)
+{
+    test::ScratchDir frames;
+    auto run = video(frames.path(), {"video_frames=1"});
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    Image image = frame(frames.path(), 0);
+    ASSERT_EQ(image.width, 320);
+    // The camera looks slightly down over the valley: the bottom half is ground (green-brown, darker than
+    // the sky and less blue), the top rows are sky (blue dominates).
+    int ground = 0, sky = 0;
+    for (int x = 0; x < image.width; ++x) {
+        const std::uint8_t* bottom = image.pixel(x, image.height - 1);
+        ground += (bottom[1] >= bottom[2]) ? 1 : 0;
+        const std::uint8_t* top = image.pixel(x, 0);
+        sky += (top[2] > top[0] && top[2] > top[1]) ? 1 : 0;
+    }
+    EXPECT_GT(ground, image.width * 9 / 10);
+    EXPECT_GT(sky, image.width * 9 / 10);
+}
+
+/// Whether the view ray through pixel (px, py) must hit the terrain: it goes down and reaches the lowest
+/// terrain height inside the input's area and before the far plane. The terrain lies at or above that
+/// height everywhere there, so such a ray crosses the surface first.
+bool mustHitTerrain(const Camera& camera, const MapHeader& header, double zMin, int px, int py)
+{
+    const double ndcX = (px + 0.5) / camera.viewportWidth * 2 - 1;
+    const double ndcY = 1 - (py + 0.5) / camera.viewportHeight * 2;
+    const double tanHalf = std::tan(camera.verticalFov / 2);
+    const glm::dvec3 direction = glm::normalize(camera.forward() + camera.right() * (ndcX * tanHalf * camera.aspect()) +
+                                                camera.up() * (ndcY * tanHalf));
+    if (direction.z >= -1e-6) {
+        return false;
+    }
+    const double t = (zMin - camera.position.z) / direction.z;
+    const glm::dvec3 hit = camera.position + t * direction;
+    // Depth along the view axis must be inside the far plane, with a margin for the rasteriser's edges.
+    const double depth = t * glm::dot(direction, camera.forward());
+    const double s = header.sampleSpacing;
+    const double margin = 2 * s;
+    return depth < camera.farPlane * 0.98 && hit.x > header.originX + margin &&
+           hit.y > header.originY + margin && hit.x < header.originX + (header.validWidth - 1) * s - margin &&
+           hit.y < header.originY + (header.validHeight - 1) * s - margin;
+}
+
+TEST_F(TengineGLTest, NoHolesAlongTheFlight)
+{
+    test::ScratchDir frames;
+    auto run = video(frames.path(), {"frames_per_second=4", "draw_sky=false", "draw_user_interface=false",
+                                     "clear_color=1,0,1", "haze_distance=0", "camera_z_far=150000"});
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    auto mapFile = MapFile::open(map(), ReaderKind::Stream);
+    ASSERT_TRUE(mapFile.ok());
+    const MapHeader& header = (*mapFile)->header();
+    const double zMin = header.heightOf((*mapFile)->directory().front().minCode);
+    auto path = CameraPath::load(flight());
+    ASSERT_TRUE(path.ok());
+    int framesChecked = 0, pixelsChecked = 0;
+    for (int f = 0;; ++f) {
+        if (!std::filesystem::exists(frames.path() / ("frame_" + std::string(5 - std::to_string(f).size(), '0') + std::to_string(f) + ".png"))) {
+            break;
+        }
+        Image image = frame(frames.path(), f);
+        Camera camera;
+        camera.viewportWidth = image.width;
+        camera.viewportHeight = image.height;
+        camera.verticalFov = 60.0 * std::numbers::pi / 180;
+        camera.farPlane = 150000;
+        path->evaluate(f / 4.0).applyTo(camera);
+        int holes = 0, firstX = -1, firstY = -1;
+        for (int y = 0; y < image.height; ++y) {
+            for (int x = 0; x < image.width; ++x) {
+                if (!mustHitTerrain(camera, header, zMin, x, y)) {
+                    continue;
+                }
+                ++pixelsChecked;
+                if (isHole(image.pixel(x, y))) {
+                    if (holes++ == 0) {
+                        firstX = x;
+                        firstY = y;
+                    }
+                }
+            }
+        }
+        EXPECT_EQ(holes, 0) << "frame " << f << ": " << holes << " pixels show the clear colour below the horizon, first at ("
+                            << firstX << ", " << firstY << ")";
+        ++framesChecked;
+    }
+    EXPECT_EQ(framesChecked, 33);
+    EXPECT_GT(pixelsChecked, framesChecked * 320 * 180 / 4) << "the flight should look at the ground";
+}
+
+TEST_F(TengineGLTest, SameRunGivesIdenticalFrames)
+{
+    test::ScratchDir a, b;
+    std::vector<std::string> settings = {"frames_per_second=2", "worker_threads=2"};
+    ASSERT_EQ(video(a.path(), settings).exitCode, 0);
+    ASSERT_EQ(video(b.path(), settings).exitCode, 0);
+    for (int f = 0; f <= 16; ++f) {
+        Image first = frame(a.path(), f), second = frame(b.path(), f);
+        ASSERT_EQ(first.pixels.size(), second.pixels.size());
+        EXPECT_TRUE(first.pixels == second.pixels) << "frame " << f << " differs";
+    }
+    // The statistics CSV has a header and one row per frame.
+    std::ifstream csv(a.path() / "frames.csv");
+    std::string line;
+    int rows = 0;
+    std::getline(csv, line);
+    EXPECT_EQ(line.rfind("frame,time_s,milliseconds,triangles,", 0), 0u) << line;
+    while (std::getline(csv, line)) {
+        ++rows;
+    }
+    EXPECT_EQ(rows, 17);
+}
+
+TEST_F(TengineGLTest, MissingMapIsAClearError)
+{
+    auto run = test::runProgram(TERRAIN_TENGINE_EXE, {"/nonexistent/terrain.map"});
+    EXPECT_NE(run.exitCode, 0);
+    EXPECT_NE(run.output.find("/nonexistent/terrain.map"), std::string::npos) << run.output;
+}
+
+TEST_F(TengineGLTest, BrokenShaderIsAClearError)
+{
+    test::ScratchDir shaders;
+    for (const auto& entry : std::filesystem::directory_iterator(TERRAIN_SHADER_DIR)) {
+        std::filesystem::copy(entry.path(), shaders / entry.path().filename().string());
+    }
+    std::ofstream(shaders / "terrain.vert", std::ios::app) << "\nthis is not GLSL;\n";
+    test::ScratchDir frames;
+    auto run = video(frames.path(), {"video_frames=1", "shader_path=" + shaders.path().string()});
+    EXPECT_NE(run.exitCode, 0);
+    EXPECT_NE(run.output.find("terrain.vert"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("does not compile"), std::string::npos) << run.output;
+    EXPECT_TRUE(frames.list().empty()) << "no frames from a run that failed";
+}
+
+TEST_F(TengineGLTest, BadConfigIsAnErrorNamingFileAndLine)
+{
+    test::ScratchDir dir;
+    std::ofstream(dir / "bad.cfg") << "# a viewer config\nlod_error = 2\ncamera_fov = 500\n";
+    auto run = test::runProgram(TERRAIN_TENGINE_EXE, {(dir / "bad.cfg").string(), map().string()});
+    EXPECT_EQ(run.exitCode, 2);
+    EXPECT_NE(run.output.find("bad.cfg:3"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("camera_fov"), std::string::npos) << run.output;
+}
+
+}  // namespace
+}  // namespace terrain
