@@ -1,8 +1,7 @@
 #version 330 core
 // Sky gradient: haze colour at and below the horizon, deepening blue towards the zenith, a soft sun.
-in vec2 vNdc;
+in vec3 vDirection;
 
-uniform mat4 uInverseViewProjection;  // clip -> camera-relative world (rotation and projection only)
 uniform vec3 uHazeColour;
 uniform vec3 uZenithColour;
 uniform vec3 uSunDirection;
@@ -12,9 +11,7 @@ out vec4 fragColour;
 
 void main()
 {
-    vec4 far = uInverseViewProjection * vec4(vNdc, 1.0, 1.0);
-    vec4 near = uInverseViewProjection * vec4(vNdc, -1.0, 1.0);
-    vec3 direction = normalize(far.xyz / far.w - near.xyz / near.w);
+    vec3 direction = normalize(vDirection);
     float elevation = max(direction.z, 0.0);
     vec3 colour = mix(uHazeColour, uZenithColour, pow(elevation, 0.6));
     float sun = max(dot(direction, uSunDirection), 0.0);

@@ -2,6 +2,7 @@
 // (3.2.6), zigzag index buffer (3.2.10), front to back (3.2.11).
 #include "render/TerrainRenderer.h"
 
+#include "render/NodeVertexData.h"
 #include "render/TemplateMesh.h"
 #include "render/ZigzagIndexBuffer.h"
 
@@ -16,7 +17,9 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
                                                                    const MapHeader& header, int vertexCacheSize)
 {
     std::unique_ptr<TerrainRenderer> r(new TerrainRenderer(header));
-    auto terrain = ShaderProgram::load(shaderDirectory, "terrain");
+    const bool padded = header.validWidth < header.gridSize() || header.validHeight < header.gridSize();
+    auto terrain = ShaderProgram::load(shaderDirectory, "terrain", padded ? std::vector<std::string>{"CLIP_TO_VALID"}
+                                                                          : std::vector<std::string>{});
     TERRAIN_TRY(terrain);
     r->mTerrain = std::move(terrain.value());
     auto sky = ShaderProgram::load(shaderDirectory, "sky");
@@ -24,7 +27,8 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     r->mSky = std::move(sky.value());
 
     const int n = static_cast<int>(header.chunkSize);
-    const TemplateMesh mesh = buildTemplateMesh(n);
+    r->mMesh = buildTemplateMesh(n);
+    const TemplateMesh& mesh = r->mMesh;
     const std::vector<std::uint32_t> indices = buildZigzagIndices(n, vertexCacheSize, /*withSkirts=*/true);
     r->mTrianglesPerNode = indices.size() / 3;
     r->mIndexCount = static_cast<GLsizei>(indices.size());
@@ -44,6 +48,8 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     glEnableVertexAttribArray(1);
     glVertexAttribIPointer(1, 1, GL_UNSIGNED_BYTE, sizeof(TemplateVertex),
                            reinterpret_cast<const void*>(offsetof(TemplateVertex, skirt)));
+    glEnableVertexAttribArray(2);  // the node's data: pointed at each node's buffer when it is drawn
+    glEnableVertexAttribArray(3);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, r->mTemplateIndices.name());
     if (narrow) {
         const std::vector<std::uint16_t> shortIndices = narrowIndices(indices);
@@ -69,14 +75,14 @@ TerrainRenderer::GpuNode& TerrainRenderer::upload(const NodePtr& node, RenderSta
     // New, or the cache holds a different copy of this node now (evicted and loaded again).
     gpu.data = node;
     gpu.lastFrame = mFrame;
-    const int w = mHeader.windowSize();
     const int t = static_cast<int>(mHeader.textureSize);
+    const double spacing = mHeader.nodeSizeAt(node->id.level) / (mHeader.chunkSize - 1);
+    const std::vector<NodeVertex> vertices = buildNodeVertices(mMesh, node->heights, mHeader.heightStep, spacing);
+    gpu.vertices = gl::Buffer::create();
+    glBindBuffer(GL_ARRAY_BUFFER, gpu.vertices.name());
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(NodeVertex)), vertices.data(),
+                 GL_STATIC_DRAW);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    gpu.heights = gl::Texture::create();
-    glBindTexture(GL_TEXTURE_2D, gpu.heights.name());
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_R16UI, w, w, 0, GL_RED_INTEGER, GL_UNSIGNED_SHORT, node->heights.data());
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gpu.colour = gl::Texture::create();
     glBindTexture(GL_TEXTURE_2D, gpu.colour.name());
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, t, t, 0, GL_RGB, GL_UNSIGNED_BYTE, node->texture.data());
@@ -140,11 +146,10 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
     mTerrain.use();
     const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
     glUniformMatrix4fv(mTerrain.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
-    glUniform1i(mTerrain.uniform("uHeights"), 0);
-    glUniform1i(mTerrain.uniform("uColour"), 1);
-    glUniform1i(mTerrain.uniform("uParentColour"), 2);
+    glUniform1i(mTerrain.uniform("uColour"), 0);
+    glUniform1i(mTerrain.uniform("uParentColour"), 1);
     glUniform1f(mTerrain.uniform("uHeightBase"), static_cast<float>(mHeader.heightOffset - camera.position.z));
-    glUniform1f(mTerrain.uniform("uHeightStep"), static_cast<float>(mHeader.heightStep));
+    glUniform1f(mTerrain.uniform("uInverseCells"), 1.0f / static_cast<float>(mHeader.chunkSize - 1));
     glUniform1f(mTerrain.uniform("uTexels"), static_cast<float>(mHeader.textureSize));
     const glm::vec3 sun = glm::normalize(style.sunDirection);
     glUniform3fv(mTerrain.uniform("uSunDirection"), 1, glm::value_ptr(sun));
@@ -179,11 +184,14 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
         NodePtr parent = selected.id.isRoot() ? node : streamer.node(selected.id.parent());
         GpuNode& parentGpu = parent ? upload(parent, stats) : gpu;
         glActiveTexture(GL_TEXTURE0);
-        glBindTexture(GL_TEXTURE_2D, gpu.heights.name());
-        glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, gpu.colour.name());
-        glActiveTexture(GL_TEXTURE2);
+        glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, parentGpu.colour.name());
+        glBindBuffer(GL_ARRAY_BUFFER, gpu.vertices.name());
+        glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(NodeVertex),
+                              reinterpret_cast<const void*>(offsetof(NodeVertex, own)));
+        glVertexAttribPointer(3, 4, GL_SHORT, GL_TRUE, sizeof(NodeVertex),
+                              reinterpret_cast<const void*>(offsetof(NodeVertex, ownNormal)));
 
         glUniform2f(originLocation, static_cast<float>(selected.cameraRelativeOrigin.x),
                     static_cast<float>(selected.cameraRelativeOrigin.y));

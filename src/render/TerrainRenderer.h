@@ -9,6 +9,7 @@
 #include "quadtree/MapFormat.h"
 #include "render/GlObjects.h"
 #include "render/ShaderProgram.h"
+#include "render/TemplateMesh.h"
 
 #include <glm/vec3.hpp>
 
@@ -54,7 +55,7 @@ public:
 private:
     struct GpuNode {
         NodePtr data;  ///< keeps the CPU copy alive while the GPU copy is in use; identity for eviction
-        gl::Texture heights;
+        gl::Buffer vertices;  ///< NodeVertex per template vertex (render/NodeVertexData.h)
         gl::Texture colour;
         std::uint64_t lastFrame = 0;
     };
@@ -64,6 +65,7 @@ private:
     void drawSky(const Camera& camera, const SceneStyle& style);
 
     MapHeader mHeader;
+    TemplateMesh mMesh;
     ShaderProgram mTerrain;
     ShaderProgram mSky;
     gl::VertexArray mTemplateVao;

@@ -1,0 +1,66 @@
+// Geomorph targets (eq. 3.4) and morphing normals of one node, for the template mesh.
+#include "render/NodeVertexData.h"
+
+#include "core/Check.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace terrain {
+
+namespace {
+
+constexpr int kBorder = 2;  // samples of border in a node window (quadtree/MapFormat.h)
+
+std::int16_t toSnorm16(double v) { return static_cast<std::int16_t>(std::lround(std::clamp(v, -1.0, 1.0) * 32767.0)); }
+
+}  // namespace
+
+std::vector<NodeVertex> buildNodeVertices(const TemplateMesh& mesh, std::span<const std::uint16_t> window,
+                                          double heightStep, double spacing)
+{
+    const int n = mesh.chunkSize;
+    const int w = n + 2 * kBorder;
+    TERRAIN_EXPECTS(window.size() == static_cast<std::size_t>(w) * w, "window must be (N + 4)^2 codes");
+    auto code = [&](int i, int j) -> double {
+        return window[static_cast<std::size_t>(j + kBorder) * w + i + kBorder];
+    };
+    // Slopes in codes per sample, turned into unit normals (x, y) with the height step and spacing.
+    const double scale = heightStep / spacing;
+    auto normal = [&](double gx, double gy, std::int16_t* out) {
+        const double x = -gx * scale, y = -gy * scale;
+        const double length = std::sqrt(x * x + y * y + 1.0);
+        out[0] = toSnorm16(x / length);
+        out[1] = toSnorm16(y / length);
+    };
+    auto parentGradient = [&](int i, int j, double& gx, double& gy) {
+        gx = (code(i + 2, j) - code(i - 2, j)) * 0.25;
+        gy = (code(i, j + 2) - code(i, j - 2)) * 0.25;
+    };
+    std::vector<NodeVertex> vertices(mesh.vertices.size());
+    for (std::size_t k = 0; k < mesh.vertices.size(); ++k) {
+        const int i = mesh.vertices[k].i, j = mesh.vertices[k].j;
+        NodeVertex& v = vertices[k];
+        const double own = code(i, j);
+        // The two parent samples the vertex lies between (along x, y or the SW-NE diagonal).
+        const int dx = i & 1, dy = j & 1;
+        double parent = own, pgx = 0, pgy = 0;
+        if (dx || dy) {
+            parent = 0.5 * (code(i - dx, j - dy) + code(i + dx, j + dy));
+            double ax, ay, bx, by;
+            parentGradient(i - dx, j - dy, ax, ay);
+            parentGradient(i + dx, j + dy, bx, by);
+            pgx = 0.5 * (ax + bx);
+            pgy = 0.5 * (ay + by);
+        } else {
+            parentGradient(i, j, pgx, pgy);
+        }
+        v.own = static_cast<float>(own * heightStep);
+        v.parent = static_cast<float>(parent * heightStep);
+        normal((code(i + 1, j) - code(i - 1, j)) * 0.5, (code(i, j + 1) - code(i, j - 1)) * 0.5, v.ownNormal);
+        normal(pgx, pgy, v.parentNormal);
+    }
+    return vertices;
+}
+
+}  // namespace terrain

@@ -1,0 +1,238 @@
+// Triangle throughput of the chunk renderer against a brute-force single mesh with the same triangle
+// count, on the same OpenGL context and camera path (issue 4): per camera, the brute-force mesh is the
+// engine's own triangles of that frame merged into one static mesh (positions and normals, one draw
+// call, a plain lit shader), so the ratio is what the engine's per-node machinery (template mesh,
+// per-node buffers and textures, morphing, one call per node) costs. Needs a display: run under Xvfb,
+//
+//   xvfb-run -a -s "-screen 0 1280x720x24" build/tests/RenderBench
+//
+// and read `ratio` (engine Mtriangles/s over brute force Mtriangles/s; target >= 0.8).
+#include "heightfield/HeightFieldIo.h"
+#include "lod/CameraPath.h"
+#include "lod/StaticNodeSource.h"
+#include "lod/TerrainStreamer.h"
+#include "quadtree/QuadtreeBuilder.h"
+#include "render/GlWindow.h"
+#include "render/NodeVertexData.h"
+#include "render/TemplateMesh.h"
+#include "render/ZigzagIndexBuffer.h"
+#include "render/ShaderProgram.h"
+#include "render/TerrainRenderer.h"
+
+#include <benchmark/benchmark.h>
+#include <glm/gtc/type_ptr.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+namespace {
+
+using namespace terrain;
+
+constexpr int kFrames = 48;      ///< camera positions along the demo path
+constexpr int kRepeats = 2;      ///< each frame drawn this often per measurement
+
+/// Everything both measurements share: the context, the map, the cameras.
+struct Scene {
+    std::unique_ptr<GlWindow> window;
+    std::unique_ptr<MapFile> map;
+    std::vector<Camera> cameras;
+    double spacing = 90.0;
+    double engineTrianglesPerFrame = 0;
+    double engineMtrisPerSecond = 0;
+    double bruteMtrisPerSecond = 0;
+};
+
+Scene& scene()
+{
+    static Scene s = [] {
+        Scene made;
+        WindowOptions options;
+        options.visible = false;
+        auto window = GlWindow::create(options);
+        if (!window.ok()) {
+            std::fprintf(stderr, "%s\n", window.error().message.c_str());
+            std::exit(1);
+        }
+        made.window = std::move(window.value());
+        auto field = readHeightField(std::filesystem::path(TERRAIN_DEMO_DATA_DIR) / "trinidad_co_srtm3_crop_1025.png");
+        const auto mapPath = std::filesystem::temp_directory_path() / "render-bench.map";
+        BuildOptions build;
+        build.spacing = made.spacing;
+        build.threads = 2;
+        if (!buildMap(std::move(field.value()), build, mapPath).ok()) {
+            std::exit(1);
+        }
+        made.map = std::move(MapFile::open(mapPath, ReaderKind::MemoryMapped).value());
+        auto path = CameraPath::load(std::filesystem::path(TERRAIN_DEMO_DIR) / "trinidad.path").value();
+        for (int f = 0; f < kFrames; ++f) {
+            Camera camera;
+            camera.nearPlane = 1.0;
+            camera.farPlane = 200000.0;
+            path.evaluate(path.startTime() + path.duration() * f / (kFrames - 1)).applyTo(camera);
+            made.cameras.push_back(camera);
+        }
+        return made;
+    }();
+    return s;
+}
+
+void BM_ChunkRenderer(benchmark::State& state)
+{
+    Scene& s = scene();
+    auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, s.map->header(), 16).value();
+    MapLodTree tree(*s.map);
+    StaticNodeSource source(*s.map);
+    StreamerOptions options;
+    options.cacheSize = s.map->directory().size();
+    options.workers = 2;
+    auto streamer = TerrainStreamer::create(tree, source, options).value();
+    SceneStyle style;
+    style.drawSky = false;  // triangles only: the brute-force side draws no sky either
+    double seconds = 0, triangles = 0;
+    for (auto _ : state) {
+        for (const Camera& camera : s.cameras) {
+            // Load everything the view wants first: the measurement is drawing only.
+            for (int round = 0; round < 32 && streamer->update(camera, 2.0).requested > 0; ++round) {
+                streamer->drain();
+            }
+            for (int r = 0; r < kRepeats; ++r) {
+                auto start = std::chrono::steady_clock::now();
+                RenderStats stats = renderer->draw(*streamer, camera, style);
+                glFinish();
+                seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+                triangles += static_cast<double>(stats.triangles);
+            }
+        }
+    }
+    s.engineTrianglesPerFrame = triangles / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
+    s.engineMtrisPerSecond = triangles / seconds / 1e6;
+    state.counters["triangles_per_frame"] = s.engineTrianglesPerFrame;
+    state.counters["Mtriangles_per_s"] = s.engineMtrisPerSecond;
+    state.counters["ms_per_frame"] = 1e3 * seconds / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
+}
+BENCHMARK(BM_ChunkRenderer)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
+constexpr const char* kBruteVertex = R"(#version 330 core
+layout(location = 0) in vec3 aPosition;
+layout(location = 1) in vec3 aNormal;
+uniform mat4 uViewProjection;
+out vec3 vNormal;
+out vec3 vRelative;
+void main()
+{
+    vRelative = aPosition;  // camera-relative already
+    vNormal = aNormal;
+    gl_Position = uViewProjection * vec4(vRelative, 1.0);
+}
+)";
+constexpr const char* kBruteFragment = R"(#version 330 core
+in vec3 vNormal;
+in vec3 vRelative;
+uniform vec3 uSun;
+out vec4 fragColour;
+void main()
+{
+    vec3 albedo = vec3(0.4, 0.45, 0.3);
+    vec3 colour = albedo * (0.35 + max(dot(normalize(vNormal), uSun), 0.0));
+    float haze = 1.0 - exp(-length(vRelative) / 60000.0);
+    fragColour = vec4(mix(colour, vec3(0.68, 0.76, 0.86), haze), 1.0);
+}
+)";
+
+void BM_BruteForceMesh(benchmark::State& state)
+{
+    Scene& s = scene();
+    // Per camera, the very triangles the engine drew (selected nodes, morphed, with skirts) merged into
+    // one static mesh with positions and normals, drawn with one call and a plain lit shader: the raw
+    // throughput of those triangles on this context. Building and uploading it is not timed.
+    MapLodTree tree(*s.map);
+    StaticNodeSource source(*s.map);
+    StreamerOptions options;
+    options.cacheSize = s.map->directory().size();
+    options.workers = 2;
+    auto streamer = TerrainStreamer::create(tree, source, options).value();
+    const MapHeader& header = s.map->header();
+    const TemplateMesh mesh = buildTemplateMesh(static_cast<int>(header.chunkSize));
+    const std::vector<std::uint32_t> templateIndices = buildZigzagIndices(static_cast<int>(header.chunkSize), 16, true);
+    auto program = ShaderProgram::fromSource("brute", kBruteVertex, kBruteFragment).value();
+    auto vao = gl::VertexArray::create();
+    auto vbo = gl::Buffer::create();
+    auto ibo = gl::Buffer::create();
+    glBindVertexArray(vao.name());
+    glBindBuffer(GL_ARRAY_BUFFER, vbo.name());
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<const void*>(3 * sizeof(float)));
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo.name());
+    double seconds = 0, triangles = 0;
+    for (auto _ : state) {
+        for (const Camera& camera : s.cameras) {
+            for (int round = 0; round < 32 && streamer->update(camera, 2.0).requested > 0; ++round) {
+                streamer->drain();
+            }
+            std::vector<float> vertices;
+            std::vector<std::uint32_t> indices;
+            for (const SelectedNode& selected : streamer->selection().nodes) {
+                NodePtr node = streamer->node(selected.id);
+                const double spacing = selected.size / (header.chunkSize - 1);
+                const auto data = buildNodeVertices(mesh, node->heights, header.heightStep, spacing);
+                NodePtr parent = selected.id.isRoot() ? node : streamer->node(selected.id.parent());
+                const double skirt = std::max(parent->deltaC, node->deltaC) + header.heightStep;
+                const float morph = selected.id.isRoot() ? 1.0f : selected.morph;
+                const auto base = static_cast<std::uint32_t>(vertices.size() / 6);
+                for (std::size_t k = 0; k < mesh.vertices.size(); ++k) {
+                    const TemplateVertex& t = mesh.vertices[k];
+                    const NodeVertex& v = data[k];
+                    const double z = header.heightOffset - camera.position.z + v.parent + morph * (v.own - v.parent) -
+                                     t.skirt * skirt;
+                    const float nx = (v.parentNormal[0] + morph * (v.ownNormal[0] - v.parentNormal[0])) / 32767.0f;
+                    const float ny = (v.parentNormal[1] + morph * (v.ownNormal[1] - v.parentNormal[1])) / 32767.0f;
+                    vertices.insert(vertices.end(),
+                                    {static_cast<float>(selected.cameraRelativeOrigin.x + t.i * spacing),
+                                     static_cast<float>(selected.cameraRelativeOrigin.y + t.j * spacing),
+                                     static_cast<float>(z), nx, ny, std::sqrt(std::max(0.0f, 1 - nx * nx - ny * ny))});
+                }
+                for (std::uint32_t index : templateIndices) {
+                    indices.push_back(base + index);
+                }
+            }
+            glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(float)), vertices.data(),
+                         GL_STATIC_DRAW);
+            glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * 4), indices.data(),
+                         GL_STATIC_DRAW);
+            glFinish();
+            for (int r = 0; r < kRepeats; ++r) {
+                auto start = std::chrono::steady_clock::now();
+                glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
+                glClearColor(0.68f, 0.76f, 0.86f, 1.0f);
+                glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+                glEnable(GL_DEPTH_TEST);
+                glEnable(GL_CULL_FACE);
+                program.use();
+                const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
+                glUniformMatrix4fv(program.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
+                glUniform3f(program.uniform("uSun"), 0.5f, -0.5f, 0.7f);
+                glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(indices.size()), GL_UNSIGNED_INT, nullptr);
+                glFinish();
+                seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+                triangles += static_cast<double>(indices.size() / 3);
+            }
+        }
+    }
+    s.bruteMtrisPerSecond = triangles / seconds / 1e6;
+    state.counters["triangles_per_frame"] = triangles / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
+    state.counters["Mtriangles_per_s"] = s.bruteMtrisPerSecond;
+    state.counters["ms_per_frame"] = 1e3 * seconds / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
+    if (s.engineMtrisPerSecond > 0) {
+        state.counters["ratio"] = s.engineMtrisPerSecond / s.bruteMtrisPerSecond;
+    }
+}
+BENCHMARK(BM_BruteForceMesh)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
