@@ -177,7 +177,8 @@ int run(const ParsedCommandLine& parsed)
         return 1;
     }
 
-    MapLodTree tree(**map);
+    MapLodTree mapTree(**map);
+    MinimumSpacingTree tree(mapTree, static_cast<int>(header.chunkSize), o.lodMinimumSpacing);
     StaticNodeSource source(**map);
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);

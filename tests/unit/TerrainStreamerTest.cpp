@@ -152,3 +152,32 @@ TEST_F(TerrainStreamerTest, ACorruptNodeIsReportedOnceAndItsParentKeepsBeingDraw
 
 }  // namespace
 }  // namespace terrain
+
+namespace terrain {
+namespace {
+
+TEST_F(TerrainStreamerTest, MinimumSpacingStopsRefinement)
+{
+    // 10 m samples at the finest level: a 20 m minimum keeps every node at 20 m or coarser.
+    MapLodTree mapTree(*mMap);
+    MinimumSpacingTree tree(mapTree, static_cast<int>(mMap->header().chunkSize), 20.0);
+    Camera camera;
+    camera.position = {2560, 2560, 1100};
+    camera.pitch = -1.2;
+    LodSelection limited, full;
+    selectNodes(tree, camera, 0.5, {}, limited);
+    selectNodes(mapTree, camera, 0.5, {}, full);
+    int deepestLimited = 0, deepestFull = 0;
+    for (const auto& node : limited.nodes) {
+        deepestLimited = std::max(deepestLimited, node.id.level);
+        EXPECT_GE(mMap->header().spacingAt(node.id.level), 20.0) << node.id.toString();
+    }
+    for (const auto& node : full.nodes) {
+        deepestFull = std::max(deepestFull, node.id.level);
+    }
+    EXPECT_EQ(deepestFull, static_cast<int>(mMap->header().levels) - 1) << "without the limit the view reaches the leaves";
+    EXPECT_EQ(deepestLimited, deepestFull - 1);
+}
+
+}  // namespace
+}  // namespace terrain
