@@ -64,6 +64,7 @@ SceneStyle styleFrom(const TengineOptions& o)
     style.clearColour = o.clearColor;
     style.drawSky = o.drawSky;
     style.wireframe = o.wireframe;
+    style.geomorph = o.geomorph;
     return style;
 }
 
@@ -276,7 +277,13 @@ int run(const ParsedCommandLine& parsed)
         const auto frameStart = std::chrono::steady_clock::now();
         FrameStats frameStats = (*streamer)->update(camera, o.lodError);
         if (video) {
-            (*streamer)->drain();  // every frame's loads finish before the next: identical runs, identical frames
+            // A recording shows every frame complete: load what it wants, select again, until it wants
+            // nothing more (or the cache is full). Independent of thread timing: identical runs give
+            // identical frames.
+            for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred; ++round) {
+                (*streamer)->drain();
+                frameStats = (*streamer)->update(camera, o.lodError);
+            }
         }
         RenderStats renderStats = (*renderer)->draw(**streamer, camera, style);
         const auto server = (*streamer)->serverStats();
@@ -325,7 +332,6 @@ int run(const ParsedCommandLine& parsed)
         missesBefore = cache.misses();
         requestedBefore = server.requested;
         completedBefore = server.completed;
-        (void)frameStats;
         (*window)->swapBuffers();
     }
 

@@ -380,6 +380,10 @@ std::vector<OptionSpec> makeOptionTable()
                            &O::drawUserInterface));
     t.push_back(boolOption("draw_sky", kGroupDisplay, "Draw the sky; off clears to clear_color.", &O::drawSky));
     t.push_back(boolOption("wireframe", kGroupDisplay, "Draw the terrain's triangles as lines.", &O::wireframe));
+    t.push_back(boolOption("geomorph", kGroupDisplay,
+                           "Morph geometry, normals and textures between detail levels (eq. 3.4-3.6). Off shows "
+                           "the popping morphing prevents, for comparison.",
+                           &O::geomorph));
     t.push_back(realOption("sun_azimuth", kGroupDisplay, "Direction the sunlight comes from: 0 north, 90 east.",
                            &O::sunAzimuth, closedInterval(0, 360), "degrees"));
     t.push_back(realOption("sun_elevation", kGroupDisplay, "Height of the sun above the horizon.", &O::sunElevation,

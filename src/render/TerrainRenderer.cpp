@@ -196,7 +196,7 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
         glUniform2f(originLocation, static_cast<float>(selected.cameraRelativeOrigin.x),
                     static_cast<float>(selected.cameraRelativeOrigin.y));
         glUniform1f(spacingLocation, static_cast<float>(selected.size / (mHeader.chunkSize - 1)));
-        glUniform1f(morphLocation, selected.id.isRoot() ? 1.0f : selected.morph);
+        glUniform1f(morphLocation, selected.id.isRoot() || !style.geomorph ? 1.0f : selected.morph);
         // Skirts hang the parent's delta_c deep: a leaf's own delta_c is zero, yet it can meet a coarser
         // neighbour whose edge lies up to that far away (3.2.6).
         const float skirt = parent ? std::max(parent->deltaC, node->deltaC) : node->deltaC;

@@ -30,6 +30,7 @@ struct SceneStyle {
     float hazeDistance = 60000.0f;  ///< metres
     bool drawSky = true;
     bool wireframe = false;
+    bool geomorph = true;  ///< false: every node at its own detail, morph factor 1 (shows popping)
 };
 
 struct RenderStats {

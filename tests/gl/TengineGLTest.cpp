@@ -5,6 +5,7 @@
 #include "heightfield/HeightFieldIo.h"
 #include "heightfield/Image.h"
 #include "lod/CameraPath.h"
+#include "lod/LodSelector.h"
 #include "quadtree/MapFile.h"
 #include "quadtree/QuadtreeBuilder.h"
 
@@ -227,6 +228,75 @@ TEST_F(TengineGLTest, BadConfigIsAnErrorNamingFileAndLine)
     EXPECT_EQ(run.exitCode, 2);
     EXPECT_NE(run.output.find("bad.cfg:3"), std::string::npos) << run.output;
     EXPECT_NE(run.output.find("camera_fov"), std::string::npos) << run.output;
+}
+
+}  // namespace
+}  // namespace terrain
+
+namespace terrain {
+namespace {
+
+/// Mean absolute difference of two images, per channel value.
+double meanDifference(const Image& a, const Image& b)
+{
+    double sum = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+        sum += std::abs(int(a.pixels[i]) - int(b.pixels[i]));
+    }
+    return sum / static_cast<double>(a.pixels.size());
+}
+
+TEST_F(TengineGLTest, GeomorphingHidesTheSwitchBetweenDetailLevels)
+{
+    // Find two camera positions 2 m apart between which the selection changes (a node splits), on a
+    // descent towards the ridge, with every node resident (as video mode draws them).
+    auto mapFile = MapFile::open(map(), ReaderKind::Stream);
+    ASSERT_TRUE(mapFile.ok());
+    MapLodTree tree(**mapFile);
+    Camera camera;
+    camera.viewportWidth = 320;
+    camera.viewportHeight = 180;
+    camera.yaw = 40 * std::numbers::pi / 180;
+    camera.pitch = -25 * std::numbers::pi / 180;
+    LodSelection previous, current;
+    glm::dvec3 before{}, after{};
+    bool found = false;
+    for (int step = 0; step < 20000 && !found; ++step) {
+        camera.position = {38000 + step * 1.4, 35500 + step * 1.4, 9000 - step * 2.0};
+        selectNodes(tree, camera, 2.0, {}, current);
+        if (step > 0 && current.nodes.size() > previous.nodes.size() + 2) {
+            before = {38000 + (step - 1) * 1.4, 35500 + (step - 1) * 1.4, 9000 - (step - 1) * 2.0};
+            after = camera.position;
+            found = true;
+        }
+        std::swap(previous, current);
+    }
+    ASSERT_TRUE(found);
+    test::ScratchDir dir;
+    {
+        std::ofstream path(dir / "split.path");
+        path << "0 " << before.x << ' ' << before.y << ' ' << before.z << " 40 -25\n"
+             << "1 " << after.x << ' ' << after.y << ' ' << after.z << " 40 -25\n";
+    }
+    auto render = [&](const std::filesystem::path& frames, bool geomorph) {
+        auto run = test::runProgram(
+            TERRAIN_TENGINE_EXE,
+            {map().string(), "--set", "camera_path=" + (dir / "split.path").string(), "--set", "video_mode=true",
+             "--set", "video_ffmpeg=false", "--set", "image_path=" + frames.string(), "--set", "window_width=320",
+             "--set", "window_height=180", "--set", "frames_per_second=1", "--set", "draw_user_interface=false",
+             "--set", std::string("geomorph=") + (geomorph ? "true" : "false")});
+        EXPECT_EQ(run.exitCode, 0) << run.output;
+        return meanDifference(frame(frames, 0), frame(frames, 1));
+    };
+    test::ScratchDir morphed, popped;
+    const double smooth = render(morphed.path(), true);
+    const double pop = render(popped.path(), false);
+    // Without morphing the split shows as a visible jump; with it the two frames differ only by the 2 m
+    // the camera moved.
+    EXPECT_GT(pop, 4 * smooth) << "morphed " << smooth << ", popping " << pop;
+    EXPECT_LT(smooth, 0.5);
+    RecordProperty("mean_difference_morphed", std::to_string(smooth));
+    RecordProperty("mean_difference_popping", std::to_string(pop));
 }
 
 }  // namespace
