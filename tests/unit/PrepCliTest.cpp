@@ -403,6 +403,10 @@ TEST(PrepCliTest, InterruptedPrepLeavesNothingBehind)
         const pid_t child = ::fork();
         ASSERT_GE(child, 0);
         if (child == 0) {
+            // Default dispositions: a shell that started this test in the background ignores SIGINT, and
+            // ignored signals are inherited across exec.
+            ::signal(SIGINT, SIG_DFL);
+            ::signal(SIGTERM, SIG_DFL);
             const int devNull = ::open("/dev/null", O_WRONLY);
             ::dup2(devNull, STDOUT_FILENO);
             ::dup2(devNull, STDERR_FILENO);
