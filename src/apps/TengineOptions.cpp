@@ -41,26 +41,6 @@ constexpr std::string_view kGroupCamera = "Camera";
 constexpr std::string_view kGroupDisplay = "Display";
 constexpr std::string_view kGroupVideo = "Demo and video mode";
 
-/// Shortest text that reads back to `value`; plain decimals ("200000", not "2e+05") for everyday magnitudes.
-std::string formatNumber(double value)
-{
-    char buffer[64];
-    double magnitude = std::fabs(value);
-    bool plain = magnitude == 0 || (magnitude >= 1e-4 && magnitude < 1e15);
-    auto [end, ec] = plain ? std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::fixed)
-                           : std::to_chars(buffer, buffer + sizeof buffer, value);
-    TERRAIN_ASSERT(ec == std::errc());
-    return std::string(buffer, end);
-}
-
-std::string formatNumber(float value)
-{
-    char buffer[64];
-    auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
-    TERRAIN_ASSERT(ec == std::errc());
-    return std::string(buffer, end);
-}
-
 std::string lowerCase(std::string_view text)
 {
     std::string lower(text);

@@ -1,4 +1,5 @@
-// Strict parsing of numbers from text (command lines, config files): the whole text must be the number.
+// Strict parsing of numbers from text (command lines, config files): the whole text must be the number;
+// and the inverse, numbers as the shortest text that reads back exactly.
 #pragma once
 
 #include "core/Expected.h"
@@ -30,6 +31,26 @@ inline Expected<long long> parseInteger(std::string_view text)
         return makeError("'", text, "' is not an integer");
     }
     return value;
+}
+
+/// The shortest text that parses back to exactly `value`; plain decimals ("200000", not "2e+05") for
+/// everyday magnitudes (1e-4 <= |value| < 1e15), scientific notation otherwise.
+inline std::string formatNumber(double value)
+{
+    char buffer[64];
+    const double magnitude = std::fabs(value);
+    const bool plain = magnitude == 0 || (magnitude >= 1e-4 && magnitude < 1e15);
+    auto [end, ec] = plain ? std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::fixed)
+                           : std::to_chars(buffer, buffer + sizeof buffer, value);
+    return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
+}
+
+/// The same for a float: the shortest text that parses back to exactly this float.
+inline std::string formatNumber(float value)
+{
+    char buffer[64];
+    auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
+    return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
 }
 
 }  // namespace terrain

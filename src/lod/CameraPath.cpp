@@ -55,14 +55,6 @@ glm::dvec3 centripetalCatmullRom(const glm::dvec3& p0, const glm::dvec3& p1, con
     return mix(b1, b2, t1, t2, t);
 }
 
-std::string formatNumber(double v)
-{
-    char buffer[64];
-    auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, v);
-    TERRAIN_ASSERT(ec == std::errc());
-    return std::string(buffer, end);
-}
-
 }  // namespace
 
 CameraPath::CameraPath(std::vector<CameraKeyframe> keys) : mKeys(std::move(keys))
