@@ -1,0 +1,16 @@
+// Procedural detail textures for materials (paper 3.4.5: "higher resolution textures would be
+// appreciated"): a tileable gray image of a fractal, multiplied over a dynamic node's colour. The shipped
+// materials/*_detail.png are made by this (MaterialTest checks they still match it).
+#pragma once
+
+#include "heightfield/Image.h"
+#include "synthesis/Fractal.h"
+
+namespace terrain {
+
+/// A size x size gray image of the tileable fractal of `params` (the one FractalCache::Fractal tabulates,
+/// kCachedFractalTileWavelengths base wavelengths per image): pixel = round(127.5 + 127.5 * value /
+/// amplitude), so it tiles without a seam. Preconditions: size > 0, params valid with amplitude > 0.
+Image makeDetailTexture(const FractalParams& params, int size);
+
+}  // namespace terrain
