@@ -287,36 +287,38 @@ double Fractal::operator()(double x, double y) const
 }
 
 template <class Basis>
-void Fractal::grid(double x0, double y0, double spacing, int width, int height, std::span<float> out,
+void Fractal::grid(const SampleGrid& g, std::span<float> out, std::span<const std::uint8_t> mask,
                    const Basis& basis) const
 {
-    for (int j = 0; j < height; ++j) {
-        double y = y0 + j * spacing;
-        float* row = out.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width);
-        for (int i = 0; i < width; ++i) {
-            row[i] = static_cast<float>(basis(x0 + i * spacing, y));
+    for (int j = 0; j < g.height; ++j) {
+        const double y = g.y(j);
+        const std::size_t row = static_cast<std::size_t>(j) * static_cast<std::size_t>(g.width);
+        for (int i = 0; i < g.width; ++i) {
+            if (mask.empty() || mask[row + i] != 0) {
+                out[row + i] = static_cast<float>(basis(g.x(i), y));
+            }
         }
     }
 }
 
-void Fractal::evaluateGrid(double x0, double y0, double spacing, int width, int height, std::span<float> out) const
+void Fractal::evaluateGrid(const SampleGrid& g, std::span<float> out, std::span<const std::uint8_t> mask) const
 {
-    TERRAIN_EXPECTS(width >= 0 && height >= 0, "grid size must not be negative");
-    TERRAIN_EXPECTS(spacing > 0.0, "grid spacing must be positive");
-    TERRAIN_EXPECTS(out.size() >= static_cast<std::size_t>(width) * static_cast<std::size_t>(height),
-                    "out must hold width * height samples");
+    TERRAIN_EXPECTS(g.width >= 0 && g.height >= 0, "grid size must not be negative");
+    TERRAIN_EXPECTS(g.spacing > 0.0, "grid spacing must be positive");
+    TERRAIN_EXPECTS(out.size() >= g.count(), "out must hold width * height samples");
+    TERRAIN_EXPECTS(mask.empty() || mask.size() >= g.count(), "the mask must hold width * height entries");
     if (mFractalTable) {
         const BasisTable& table = *mFractalTable;
         double a = mParams.amplitude;
         double t = mTileSize;
-        grid(x0, y0, spacing, width, height, out, [&](double x, double y) { return a * table(x / t, y / t); });
+        grid(g, out, mask, [&](double x, double y) { return a * table(x / t, y / t); });
     } else if (mTable) {
         const BasisTable& table = *mTable;
-        grid(x0, y0, spacing, width, height, out, [&](double x, double y) {
+        grid(g, out, mask, [&](double x, double y) {
             return sum(mOctaves, x, y, [&table](std::size_t, double u, double v) { return table(u, v); });
         });
     } else {
-        grid(x0, y0, spacing, width, height, out, [&](double x, double y) {
+        grid(g, out, mask, [&](double x, double y) {
             return sum(mOctaves, x, y, [this](std::size_t, double u, double v) { return mNoise(u, v); });
         });
     }

@@ -59,6 +59,25 @@ inline constexpr int kCachedFractalMaxTable = 2048;
 inline constexpr double kCachedFractalMaxErrorFbm = 0.005;
 inline constexpr double kCachedFractalMaxErrorRidged = 0.03;
 
+/// The sample positions of a node window (or any regular grid): sample (i, j), i < width, j < height, lies
+/// at world x = originX + double(gx0 + i) * spacing, y = originY + double(gy0 + j) * spacing metres. The
+/// same expression for the same global sample index in every node makes neighbouring nodes agree bit for
+/// bit; and since a child's spacing is its parent's halved (exact) and its indices doubled, a parent
+/// sample and the child sample on top of it get the same position too.
+struct SampleGrid {
+    double originX = 0.0;
+    double originY = 0.0;
+    std::int64_t gx0 = 0;
+    std::int64_t gy0 = 0;
+    double spacing = 1.0;  ///< > 0
+    int width = 0;         ///< >= 0
+    int height = 0;        ///< >= 0
+
+    double x(int i) const { return originX + static_cast<double>(gx0 + i) * spacing; }
+    double y(int j) const { return originY + static_cast<double>(gy0 + j) * spacing; }
+    std::size_t count() const { return static_cast<std::size_t>(width) * static_cast<std::size_t>(height); }
+};
+
 struct FractalParams {
     FractalType type = FractalType::Fbm;
     int octaves = 8;            ///< number of basis samples summed, [1, 24]
@@ -124,10 +143,10 @@ public:
     /// Displacement in metres at world (x, y) metres; in [-amplitude, amplitude].
     double operator()(double x, double y) const;
 
-    /// Fills out[j * width + i] = float((*this)(x0 + i * spacing, y0 + j * spacing)) for i < width,
-    /// j < height: bit-identical to the point form. Preconditions: width, height >= 0, spacing > 0,
-    /// out.size() >= width * height.
-    void evaluateGrid(double x0, double y0, double spacing, int width, int height, std::span<float> out) const;
+    /// Fills out[j * width + i] = float((*this)(grid.x(i), grid.y(j))): bit-identical to the point form.
+    /// With a non-empty `mask` (grid.count() entries) only samples with mask[k] != 0 are written; the rest
+    /// of `out` is left as it was. Preconditions: grid valid (SampleGrid), out.size() >= grid.count().
+    void evaluateGrid(const SampleGrid& grid, std::span<float> out, std::span<const std::uint8_t> mask = {}) const;
 
     /// The function a cache approximates, evaluated exactly (metres): the fractal over the periodic noise
     /// for a cached basis, the tileable fractal for a cached fractal, else (*this)(x, y). The reference
@@ -147,7 +166,7 @@ private:
     double sum(const std::vector<Octave>& octaves, double x, double y, const Basis& basis) const;
     double tileSum(double u, double v) const;
     template <class Basis>
-    void grid(double x0, double y0, double spacing, int width, int height, std::span<float> out,
+    void grid(const SampleGrid& grid, std::span<float> out, std::span<const std::uint8_t> mask,
               const Basis& basis) const;
     void buildCachedFractal();
 

@@ -341,40 +341,48 @@ float MaterialSet::displacement(double x, double y, double slopeDegrees, double 
     return static_cast<float>(sum);
 }
 
-void MaterialSet::displacementGrid(double x0, double y0, double spacing, int width, int height,
-                                   std::span<const float> slopeDegrees, std::span<const float> heights,
-                                   std::span<float> out) const
+void MaterialSet::displacementGrid(const SampleGrid& grid, std::span<const float> slopeDegrees,
+                                   std::span<const float> heights, std::span<float> out,
+                                   std::span<const std::uint8_t> mask) const
 {
-    TERRAIN_EXPECTS(width >= 0 && height >= 0 && spacing > 0.0, "grid size >= 0 and spacing > 0");
-    std::size_t count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    TERRAIN_EXPECTS(grid.width >= 0 && grid.height >= 0 && grid.spacing > 0.0, "grid size >= 0 and spacing > 0");
+    const std::size_t count = grid.count();
     TERRAIN_EXPECTS(slopeDegrees.size() >= count && heights.size() >= count && out.size() >= count,
                     "slope, height and out must hold width * height samples");
-    std::size_t n = mMaterials.size();
+    TERRAIN_EXPECTS(mask.empty() || mask.size() >= count, "the mask must hold width * height entries");
+    const std::size_t n = mMaterials.size();
     std::vector<double> w(count * n);
-    std::vector<char> used(n, 0);
+    std::vector<std::uint8_t> used(n * count, 0);  // per material: the samples it must be evaluated at
+    std::vector<char> any(n, 0);
     for (std::size_t k = 0; k < count; ++k) {
+        if (!mask.empty() && mask[k] == 0) {
+            continue;
+        }
         weights(slopeDegrees[k], heights[k], std::span<double>(w.data() + k * n, n));
         for (std::size_t m = 0; m < n; ++m) {
             if (w[k * n + m] != 0.0) {
-                used[m] = 1;
+                used[m * count + k] = 1;
+                any[m] = 1;
             }
         }
     }
     std::vector<double> sum(count, 0.0);
     std::vector<float> values(count);
     for (std::size_t m = 0; m < n; ++m) {
-        if (!used[m] || !mMaterials[m].displacement) {
+        if (!any[m] || !mMaterials[m].displacement) {
             continue;
         }
-        mMaterials[m].displacement->evaluateGrid(x0, y0, spacing, width, height, values);
+        mMaterials[m].displacement->evaluateGrid(grid, values, std::span<const std::uint8_t>(used.data() + m * count, count));
         for (std::size_t k = 0; k < count; ++k) {
-            if (w[k * n + m] != 0.0) {
+            if (used[m * count + k] != 0) {
                 sum[k] += w[k * n + m] * static_cast<double>(values[k]);
             }
         }
     }
     for (std::size_t k = 0; k < count; ++k) {
-        out[k] = static_cast<float>(sum[k]);
+        if (mask.empty() || mask[k] != 0) {
+            out[k] = static_cast<float>(sum[k]);
+        }
     }
 }
 

@@ -81,12 +81,12 @@ public:
     /// blend, like the displacement, depends only on the position.
     float displacement(double x, double y, double slopeDegrees, double height) const;
 
-    /// The grid form: out[j * width + i] = displacement(x0 + i * spacing, y0 + j * spacing, slope[k], height[k])
-    /// with k = j * width + i, bit-identical to the point form; a material whose weight is zero over the whole
-    /// window is not evaluated. Preconditions: as Fractal::evaluateGrid; slope and height hold width * height.
-    void displacementGrid(double x0, double y0, double spacing, int width, int height,
-                          std::span<const float> slopeDegrees, std::span<const float> heights,
-                          std::span<float> out) const;
+    /// The grid form: out[k] = displacement(grid.x(i), grid.y(j), slope[k], height[k]) with
+    /// k = j * width + i, bit-identical to the point form; a material whose weight is zero over the whole
+    /// window is not evaluated. With a non-empty `mask` only samples with mask[k] != 0 are computed and
+    /// written. Preconditions: as Fractal::evaluateGrid; slope and height hold grid.count() values.
+    void displacementGrid(const SampleGrid& grid, std::span<const float> slopeDegrees, std::span<const float> heights,
+                          std::span<float> out, std::span<const std::uint8_t> mask = {}) const;
 
 private:
     std::vector<Material> mMaterials;

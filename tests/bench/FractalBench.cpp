@@ -27,7 +27,7 @@ void displacementWindow(benchmark::State& state, FractalType type, FractalCache 
     double x0 = 500'000.0;
     const double spacing = 0.25;  // a node 16 m across: a few levels below a 1 m static leaf
     for (auto _ : state) {
-        fractal.evaluateGrid(x0, 499'872.0, spacing, kWindow, kWindow, out);
+        fractal.evaluateGrid(SampleGrid{x0, 499'872.0, 0, 0, spacing, kWindow, kWindow}, out);
         benchmark::DoNotOptimize(out.data());
         x0 += 16.0;  // a new node each time, as in a flight
     }

@@ -79,7 +79,7 @@ Fractal make(const Case& c) { return c.bitmap ? Fractal(c.params, testBitmap()) 
 std::vector<float> window(const Fractal& f, double x0, double y0, double spacing, int n)
 {
     std::vector<float> out(static_cast<std::size_t>(n) * n);
-    f.evaluateGrid(x0, y0, spacing, n, n, out);
+    f.evaluateGrid(SampleGrid{x0, y0, 0, 0, spacing, n, n}, out);
     return out;
 }
 
@@ -128,8 +128,8 @@ TEST(Fractal, EmptyGridWritesNothing)
 {
     Fractal f(fbm());
     std::vector<float> out(4, 7.0f);
-    f.evaluateGrid(0.0, 0.0, 1.0, 0, 2, out);
-    f.evaluateGrid(0.0, 0.0, 1.0, 2, 0, out);
+    f.evaluateGrid(SampleGrid{0.0, 0.0, 0, 0, 1.0, 0, 2}, out);
+    f.evaluateGrid(SampleGrid{0.0, 0.0, 0, 0, 1.0, 2, 0}, out);
     EXPECT_EQ(out, std::vector<float>(4, 7.0f));
 }
 

@@ -318,7 +318,7 @@ TEST(Material, GridBitIdenticalToPointAndSkipsUnusedMaterials)
         height[k] = static_cast<float>(900.0 + 200.0 * (k / n) / n);  // and into snow
     }
     std::vector<float> grid(n * n);
-    set.displacementGrid(500'000.0, 250'000.0, 0.125, n, n, slope, height, grid);
+    set.displacementGrid(SampleGrid{500'000.0, 250'000.0, 0, 0, 0.125, n, n}, slope, height, grid);
     int mismatches = 0;
     for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) {
