@@ -5,6 +5,8 @@
 in vec3 vRelative;
 in vec3 vNormal;
 in vec2 vNodeUv;
+in vec2 vLocal;
+in vec4 vMaterials;
 
 uniform sampler2D uColour;        // the node's texture, corner texels centred on the corners (3.2.7)
 uniform sampler2D uParentColour;  // the parent's texture
@@ -20,6 +22,46 @@ uniform float uHazeDistance;      // metres at which haze reaches 63 %
 uniform vec4 uValidRect;          // camera-relative x0, y0, x1, y1 of the input's samples (padding excluded)
 #endif
 uniform int uWireframe;
+#ifdef DETAIL
+// Materials' detail textures (3.4.5), so the ground up close is not a blur: gray layers of one texture
+// array, mean 0.5, multiplied over the node's colour, weighted by the vertex's material weights.
+const int kMaxLayers = 8;
+const float kDetailContrast = 0.6;
+uniform sampler2DArray uDetail;
+uniform int uLayerCount;
+uniform vec4 uLayerMaterialMask[kMaxLayers];  // which material a layer belongs to, as a one-hot vec4
+uniform float uLayerScale[kMaxLayers];   // 1 / metres per repeat
+uniform vec2 uLayerOrigin[kMaxLayers];   // the node's corner in repeats, fractional part (per node)
+uniform vec4 uMaterialTintColumns[3];    // r, g, b of the 4 materials' tints, brightness-preserving and applied at
+                                         // kTintStrength (TerrainRenderer.cpp): the map's colours stay the base
+
+uniform int uDetailActive;               // 0: the whole node is too far for any layer (per node)
+
+vec3 detailFactor()
+{
+    if (uDetailActive == 0) {
+        return vec3(1.0);
+    }
+    // Per material: the product of its layers. Straight-line code over uniform-indexed data (no branch
+    // per fragment, no indexing by a varying): llvmpipe runs it several times faster than a branchy loop.
+    vec4 layers = vec4(1.0);
+    float distance = length(vRelative);
+    for (int k = 0; k < uLayerCount; ++k) {
+        // Gray 0.5 is neutral; kDetailContrast scales the rest, so the tile modulates the node's colour
+        // rather than replacing it. Faded out between 10 and 40 repeats away: farther, the repetition of
+        // the tile would show as a regular pattern, and the node's own texture carries what matters there.
+        float scale = uLayerScale[k];
+        float g = 2.0 * texture(uDetail, vec3(uLayerOrigin[k] + vLocal * scale, float(k))).r - 1.0;
+        float amount = kDetailContrast * (1.0 - smoothstep(10.0, 40.0, distance * scale));
+        layers *= vec4(1.0) + uLayerMaterialMask[k] * (amount * g);
+    }
+    float total = dot(vMaterials, vec4(1.0));
+    vec4 weighted = vMaterials * layers;
+    vec3 sum = vec3(dot(weighted, uMaterialTintColumns[0]), dot(weighted, uMaterialTintColumns[1]),
+                    dot(weighted, uMaterialTintColumns[2]));
+    return total > 0.0 ? sum / total : vec3(1.0);
+}
+#endif
 
 out vec4 fragColour;
 
@@ -42,6 +84,9 @@ void main()
     vec3 own = texture(uColour, texelCentre(vNodeUv)).rgb;
     vec3 parent = texture(uParentColour, texelCentre(uParentOffset + 0.5 * vNodeUv)).rgb;
     vec3 albedo = mix(parent, own, uMorph);
+#ifdef DETAIL
+    albedo *= detailFactor();
+#endif
     vec3 n = normalize(vNormal);
     vec3 light = uAmbient * (0.6 + 0.4 * n.z) + uSunColour * max(dot(n, uSunDirection), 0.0);
     vec3 colour = albedo * light;

@@ -8,6 +8,7 @@ layout(location = 0) in ivec2 aGrid;       // template vertex (i, j): i east, j 
 layout(location = 1) in int aSkirt;        // 1: skirt vertex hanging below the edge vertex (3.2.6)
 layout(location = 2) in vec2 aHeights;     // metres above the map's offset: own, parent's surface
 layout(location = 3) in vec4 aNormals;     // x, y of the own and the parent's unit normals
+layout(location = 4) in vec4 aMaterials;   // blend weights of up to 4 materials' detail textures (3.4.5)
 
 uniform mat4 uViewProjection;  // camera-relative world -> clip (rotation and projection only)
 uniform vec2 uOrigin;          // the node's south-west corner minus the camera position, metres
@@ -20,6 +21,8 @@ uniform float uSkirtDepth;     // metres
 out vec3 vRelative;   // camera-relative position, metres
 out vec3 vNormal;
 out vec2 vNodeUv;     // position in the node's square, 0 .. 1
+out vec2 vLocal;      // metres from the node's south-west corner
+out vec4 vMaterials;
 
 void main()
 {
@@ -28,5 +31,7 @@ void main()
     float z = uHeightBase + mix(aHeights.y, aHeights.x, uMorph) - float(aSkirt) * uSkirtDepth;
     vRelative = vec3(uOrigin + vec2(aGrid) * uSpacing, z);
     vNodeUv = vec2(aGrid) * uInverseCells;
+    vLocal = vec2(aGrid) * uSpacing;
+    vMaterials = aMaterials;
     gl_Position = uViewProjection * vec4(vRelative, 1.0);
 }

@@ -3,11 +3,16 @@
 #include "core/Parse.h"
 #include "core/ParallelFor.h"
 #include "heightfield/HeightFieldIo.h"
+#include "lod/TerrainNodeSource.h"
+#include "synthesis/LeafErrorEstimator.h"
 #include "quadtree/QuadtreeBuilder.h"
+#include "synthesis/DetailSynthesizer.h"
 
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -36,7 +41,15 @@ Builds a terrain map (.map) from a height field: PNG (8/16-bit gray), VTP .bt, T
   --raw-signed         raw samples are signed 16-bit (default unsigned)
   --raw-big-endian     raw samples are big-endian (default little-endian)
   --nodata V           treat the file value V as no-data (filled from neighbours)
+  --material FILE.mat  material the viewer's detail synthesis adds below the static leaves; repeat for a
+                       set, the first is the ground (default: none, subdivision only)
+  --detail-scheme S    subdivision of the synthesized detail: kobbelt, bilinear or catmull-clark
+                       (default kobbelt)
+  --detail-factor W    Kobbelt's omega in [0, 2]: 0 linear, 1 Kobbelt (default 1)
   --help               this text
+
+The map stores the estimated error of the detail synthesized below its static leaves (paper 3.4.1), so
+the viewer refines past them: give the materials, scheme and factor the viewer uses (detail_* options).
 )";
 
 struct Arguments {
@@ -44,6 +57,10 @@ struct Arguments {
     std::optional<std::filesystem::path> output;
     BuildOptions build;
     HeightFieldReadOptions read;
+    DetailSettings detail;
+    bool detailFactorGiven = false;
+    std::vector<std::string> warnings;  ///< about options that have no effect
+    std::vector<std::filesystem::path> materials;
 };
 
 Expected<Arguments> parseArguments(int argc, char** argv)
@@ -81,6 +98,25 @@ Expected<Arguments> parseArguments(int argc, char** argv)
             auto path = value();
             TERRAIN_TRY(path);
             (arg == "-t" ? args.build.texture : arg == "-w" ? args.build.weights : args.output) = *path;
+        } else if (arg == "--material" || arg == "--detail-scheme") {
+            auto text = value();
+            TERRAIN_TRY(text);
+            if (arg == "--material") {
+                args.materials.push_back(*text);
+            } else if (!makeSubdivider(*text, 3, args.detail.omega).ok()) {
+                return makeError("--detail-scheme: unknown scheme '", *text,
+                                 "' (expected kobbelt, bilinear or catmull-clark)");
+            } else {
+                args.detail.scheme = *text;
+            }
+        } else if (arg == "--detail-factor") {
+            auto v = number();
+            TERRAIN_TRY(v);
+            if (!(*v >= 0.0 && *v <= 2.0)) {
+                return makeError("--detail-factor: omega must be in [0, 2], got ", *v);
+            }
+            args.detail.omega = *v;
+            args.detailFactorGiven = true;
         } else if (arg == "-h" || arg == "-v" || arg == "--offset" || arg == "--max-error" || arg == "--nodata") {
             auto v = number();
             TERRAIN_TRY(v);
@@ -134,7 +170,28 @@ Expected<Arguments> parseArguments(int argc, char** argv)
                          " (see prep --help)");
     }
     args.input = positional.front();
+    if (args.detailFactorGiven && args.detail.scheme != "kobbelt") {
+        args.warnings.push_back("--detail-factor has no effect with --detail-scheme " + args.detail.scheme +
+                                " (Kobbelt's scheme only)");
+    }
     return args;
+}
+
+/// The synthesizer the viewer will use below the static leaves, with the materials loaded (errors name the
+/// file and line; warnings go to `warnings`). Null when the chunk size is not 2^k + 1 (buildMap reports it).
+Expected<std::unique_ptr<const DetailSynthesizer>> makeSynthesizer(const Arguments& args,
+                                                                   std::vector<std::string>& warnings)
+{
+    DetailSettings settings = args.detail;
+    if (!args.materials.empty()) {
+        auto set = MaterialSet::load(args.materials, warnings);
+        TERRAIN_TRY(set);
+        settings.materials = std::make_shared<const MaterialSet>(std::move(set).value());
+    }
+    if (!isValidChunkSize(args.build.chunkSize)) {
+        return std::unique_ptr<const DetailSynthesizer>();
+    }
+    return DetailSynthesizer::create(args.build.chunkSize, std::move(settings));
 }
 
 class ProgressBar {
@@ -182,6 +239,18 @@ int main(int argc, char** argv)
         std::fprintf(stderr, "prep: %s\n", args.error().message.c_str());
         return 2;
     }
+    std::vector<std::string> warnings = args->warnings;
+    auto synthesizer = makeSynthesizer(*args, warnings);
+    for (const auto& warning : warnings) {
+        std::fprintf(stderr, "prep: warning: %s\n", warning.c_str());
+    }
+    if (!synthesizer.ok()) {
+        std::fprintf(stderr, "prep: %s\n", synthesizer.error().message.c_str());
+        return 1;
+    }
+    if (*synthesizer) {
+        args->build.leafDetailError = leafDetailErrorFunction(**synthesizer);
+    }
     auto field = readHeightField(args->input, args->read);
     if (!field.ok()) {
         std::fprintf(stderr, "prep: %s\n", field.error().message.c_str());
@@ -224,6 +293,23 @@ int main(int argc, char** argv)
                 8.0 * static_cast<double>(report->heightBytes) / static_cast<double>(report->storedSamples));
     std::printf("            textures %s (%.2f bits per input sample)\n", formatBytes(report->textureBytes).c_str(),
                 8.0 * static_cast<double>(report->textureBytes) / inputSamples);
+    std::string materials = "no materials (subdivision only)";
+    if (!args->materials.empty() && *synthesizer) {
+        materials = "materials";
+        for (const Material& m : (*synthesizer)->settings().materials->materials()) {
+            materials += " " + m.name;
+        }
+    }
+    std::string scheme = args->detail.scheme;
+    if (scheme == "kobbelt") {
+        scheme += " omega " + formatNumber(args->detail.omega);
+    }
+    std::printf("  detail    leaf error max %.3f m, mean %.3f m over %llu leaves (3.4.1; per leaf %d descents of %d "
+                "synthesized levels)\n",
+                static_cast<double>(report->maxLeafDetailError), report->meanLeafDetailError,
+                static_cast<unsigned long long>(report->leaves), kLeafErrorDescents, kLeafErrorDepth);
+    std::printf("            %s, %s; %.2f s estimating (summed over threads)\n", materials.c_str(), scheme.c_str(),
+                report->leafDetailSeconds);
     std::printf("  time      %.2f s, %.1f million input samples per second (%d threads)\n", report->seconds,
                 inputSamples / report->seconds / 1e6, args->build.threads);
     return 0;

@@ -2,12 +2,13 @@
 // three ways to drive the camera: the user (mouse and keys), demo_mode (camera_path in real time, looping)
 // and video_mode (camera_path once at a fixed time step, every frame saved as a PNG, plus a CSV of
 // per-frame statistics and, when ffmpeg is installed, an MP4).
+#include "DetailSetup.h"
 #include "TengineOptions.h"
 
 #include "core/AtomicFile.h"
 #include "core/Memory.h"
 #include "lod/CameraPath.h"
-#include "lod/StaticNodeSource.h"
+#include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "render/FrameCapture.h"
 #include "render/GlWindow.h"
@@ -15,6 +16,7 @@
 #include "render/TextOverlay.h"
 
 #include <GLFW/glfw3.h>
+#include <glm/geometric.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -143,6 +145,23 @@ int run(const ParsedCommandLine& parsed)
     }
     const MapHeader& header = (*map)->header();
 
+    // Detail synthesis (3.4): the synthesizer dynamic nodes are made with, null when it is off.
+    std::vector<std::string> materialWarnings;
+    auto synthesizer = makeDetailSynthesizer(o, static_cast<int>(header.chunkSize), TERRAIN_MATERIALS_DIR, materialWarnings);
+    for (const auto& warning : materialWarnings) {
+        log("warning: " + warning);
+    }
+    if (!synthesizer.ok()) {
+        log(synthesizer.error().message);
+        return 1;
+    }
+    if (*synthesizer && !header.hasDetailErrors()) {
+        log("warning: " + (*map)->name() +
+            " has no estimates of the detail error below its leaves (made by an older prep): no dynamic nodes; "
+            "run prep again to get them");
+    }
+    const MaterialSet* materials = *synthesizer ? (*synthesizer)->settings().materials.get() : nullptr;
+
     const bool demo = o.demoMode;
     const bool video = o.videoMode && !demo;
     std::optional<CameraPath> path;
@@ -167,7 +186,7 @@ int run(const ParsedCommandLine& parsed)
     }
     log((*window)->description());
     const std::filesystem::path shaders = o.shaderPath.empty() ? std::filesystem::path(TERRAIN_SHADER_DIR) : o.shaderPath;
-    auto renderer = TerrainRenderer::create(shaders, header, o.vertexCacheSize);
+    auto renderer = TerrainRenderer::create(shaders, header, o.vertexCacheSize, materials);
     if (!renderer.ok()) {
         log(renderer.error().message);
         return 1;
@@ -178,14 +197,13 @@ int run(const ParsedCommandLine& parsed)
         return 1;
     }
 
-    MapLodTree mapTree(**map);
-    MinimumSpacingTree tree(mapTree, static_cast<int>(header.chunkSize), o.lodMinimumSpacing);
-    StaticNodeSource source(**map);
+    TerrainNodeSource source(**map, {synthesizer->get(), o.lodMinimumSpacing});
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
     streamerOptions.workers = o.workerThreads;
-    auto streamer = TerrainStreamer::create(tree, source, streamerOptions);
+    streamerOptions.velocityLimit = o.detailVelocityLimit;
+    auto streamer = TerrainStreamer::create(source, extentOf(header), streamerOptions);
     if (!streamer.ok()) {
         log(streamer.error().message);
         return 1;
@@ -235,6 +253,7 @@ int run(const ParsedCommandLine& parsed)
     double fps = 0.0;
     std::uint64_t hitsBefore = 0, missesBefore = 0, requestedBefore = 0, completedBefore = 0;
     std::size_t frame = 0;
+    glm::dvec3 previousPosition = camera.position;
     std::string recordPath = o.cameraPath.empty() ? "recorded.path" : o.cameraPath.string() + ".recorded";
     for (;; ++frame) {
         const auto now = std::chrono::steady_clock::now();
@@ -274,15 +293,20 @@ int run(const ParsedCommandLine& parsed)
             }
         }
 
+        // The camera's speed for the velocity limit (3.4.4): over the fixed time step in video mode, so a
+        // recording does not depend on how fast it was made.
+        const double step = video ? 1.0 / o.framesPerSecond : dt;
+        const double speed = frame == 0 || step <= 0.0 ? 0.0 : glm::length(camera.position - previousPosition) / step;
+        previousPosition = camera.position;
         const auto frameStart = std::chrono::steady_clock::now();
-        FrameStats frameStats = (*streamer)->update(camera, o.lodError);
+        FrameStats frameStats = (*streamer)->update(camera, o.lodError, speed);
         if (video) {
             // A recording shows every frame complete: load what it wants, select again, until it wants
             // nothing more (or the cache is full). Independent of thread timing: identical runs give
             // identical frames.
-            for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred; ++round) {
+            for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred + frameStats.tooFast; ++round) {
                 (*streamer)->drain();
-                frameStats = (*streamer)->update(camera, o.lodError);
+                frameStats = (*streamer)->update(camera, o.lodError, speed);
             }
         }
         RenderStats renderStats = (*renderer)->draw(**streamer, camera, style);

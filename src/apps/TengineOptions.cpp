@@ -308,8 +308,63 @@ std::vector<OptionSpec> makeOptionTable()
                            &O::detailSubdivisionFactor, closedInterval(0, 2), ""));
     t.push_back(boolOption("detail_add_material", kGroupDetail,
                            "Add the material's fractal displacement to subdivided nodes.", &O::detailAddMaterial));
-    t.push_back(intOption("detail_material_type", kGroupDetail, "Which of the two built-in materials to use.",
+    t.push_back(intOption("detail_material_type", kGroupDetail,
+                          "Which built-in material covers the terrain when detail_materials is empty: 0 soft "
+                          "grass/soil (grass.mat), 1 ridged rock (rock.mat).",
                           &O::detailMaterialType, 0, 1, ""));
+    t.push_back({"detail_subdivision_scheme", kGroupDetail,
+                 "How dynamic nodes subdivide their parent: kobbelt (interpolatory 4-point rule), bilinear or "
+                 "catmull-clark (both through OpenSubdiv; catmull-clark is approximating, so parents and "
+                 "children do not nest exactly).",
+                 "kobbelt, bilinear or catmull-clark",
+                 [](std::string_view value, const SetContext&, O& o) {
+                     if (value != "kobbelt" && value != "bilinear" && value != "catmull-clark") {
+                         return false;
+                     }
+                     o.detailSubdivisionScheme = std::string(value);
+                     return true;
+                 },
+                 [](const O& o) { return o.detailSubdivisionScheme; }});
+    t.push_back({"detail_materials", kGroupDetail,
+                 "Several materials placed over the terrain by their slope and height rules and blended "
+                 "(materials/README.md): .mat files separated by commas, the first is the ground. Relative "
+                 "paths are taken from this config file's directory. Empty: detail_material_type alone.",
+                 "empty or .mat paths separated by commas (at most 4)",
+                 [](std::string_view value, const SetContext& context, O& o) {
+                     std::vector<std::filesystem::path> files;
+                     while (!value.empty()) {
+                         const std::size_t comma = value.find(',');
+                         std::string_view part = value.substr(0, comma);
+                         const std::size_t first = part.find_first_not_of(" \t");
+                         const std::size_t last = part.find_last_not_of(" \t");
+                         if (first == std::string_view::npos) {
+                             return false;
+                         }
+                         std::filesystem::path path(part.substr(first, last - first + 1));
+                         files.push_back(path.is_relative() ? context.baseDirectory / path : path);
+                         value = comma == std::string_view::npos ? std::string_view() : value.substr(comma + 1);
+                     }
+                     if (files.size() > 4) {
+                         return false;
+                     }
+                     o.detailMaterials = std::move(files);
+                     return true;
+                 },
+                 [](const O& o) {
+                     std::string text;
+                     for (const auto& file : o.detailMaterials) {
+                         text += (text.empty() ? "" : ", ") + file.string();
+                     }
+                     return text;
+                 }});
+    t.push_back(pathOption("material_path", kGroupDetail,
+                           "Directory of the built-in materials grass.mat and rock.mat. Empty: the materials/ "
+                           "directory of this build.",
+                           &O::materialPath, PathKind::Input, "a directory (empty: built in)"));
+    t.push_back(realOption("detail_velocity_limit", kGroupDetail,
+                           "No new dynamic nodes while the camera moves faster than this many of their sample "
+                           "spacings per second (3.4.4): fine detail is not perceptible at speed. 0: no limit.",
+                           &O::detailVelocityLimit, atLeast(0), "samples per second"));
 
     // ---- Camera ----
     t.push_back(realOption("camera_fov", kGroupCamera, "Vertical field of view.", &O::cameraFov, openInterval(1, 179),

@@ -3,7 +3,8 @@
 #include "core/Parse.h"
 #include "lod/CameraPath.h"
 #include "lod/HeightQuery.h"
-#include "lod/StaticNodeSource.h"
+#include "apps/DetailSetup.h"
+#include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "quadtree/MapFile.h"
 #include "heightfield/Image.h"
@@ -13,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <thread>
 #include <cstdio>
 #include <cstring>
@@ -28,7 +30,11 @@ constexpr const char* kUsage = R"(usage: tengine-tool COMMAND FILE.map [argument
 
   info FILE.map           header, levels, nodes and errors per level, storage
   verify FILE.map         check structure, every checksum, bounds and errors; exit 1 on any problem
-  height FILE.map X Y     static terrain height (metres) at world position X, Y (metres); exit 1 outside
+  height FILE.map X Y [--depth D [--material M.mat]... [--no-material]]
+                          terrain height (metres) at world position X, Y (metres); exit 1 outside.
+                          Without --depth: the finest static level. With it: the rendered surface at
+                          quadtree level D, synthesized below the static leaves exactly as tengine draws
+                          it with its default detail options (or these materials, blended in order)
   texture FILE.map LEVEL/X/Y OUT.png
                           write a static node's texture as a PNG (north up)
   select FILE.map --camera X,Y,Z,YAW,PITCH [--tau 2] [--size 1280x720] [--fov 60]
@@ -68,6 +74,7 @@ int info(const MapFile& map)
     struct LevelStats {
         std::uint64_t nodes = 0, heightBytes = 0, textureBytes = 0;
         float minDeltaC = 1e30f, maxDeltaC = 0.0f;
+        float maxDetailDeltaC = 0.0f;
     };
     std::vector<LevelStats> levels(h.levels);
     std::uint64_t heightBytes = 0, textureBytes = 0;
@@ -78,14 +85,20 @@ int info(const MapFile& map)
         l.textureBytes += e.textureBytes;
         l.minDeltaC = std::min(l.minDeltaC, e.deltaC);
         l.maxDeltaC = std::max(l.maxDeltaC, e.deltaC);
+        l.maxDetailDeltaC = std::max(l.maxDetailDeltaC, e.detailDeltaC);
         heightBytes += e.heightBytes;
         textureBytes += e.textureBytes;
     }
-    std::printf("\nlevel  nodes  spacing(m)  delta_c min..max (m)   height bytes  texture bytes\n");
+    // detail_delta_c (version 2): the nested error with the detail synthesized below the leaves (3.4.1).
+    std::printf("\nlevel  nodes  spacing(m)  delta_c min..max (m)   detail max (m)  height bytes  texture bytes\n");
     for (std::size_t i = 0; i < levels.size(); ++i) {
         const auto& l = levels[i];
-        std::printf("%5zu %6llu %11.3f  %9.3f .. %-9.3f %13llu %14llu\n", i, static_cast<unsigned long long>(l.nodes),
-                    h.spacingAt(static_cast<int>(i)), l.nodes ? l.minDeltaC : 0.0f, l.maxDeltaC,
+        char detail[32] = "     -";
+        if (h.hasDetailErrors()) {
+            std::snprintf(detail, sizeof detail, "%14.3f", l.maxDetailDeltaC);
+        }
+        std::printf("%5zu %6llu %11.3f  %9.3f .. %-9.3f %14s %13llu %14llu\n", i, static_cast<unsigned long long>(l.nodes),
+                    h.spacingAt(static_cast<int>(i)), l.nodes ? l.minDeltaC : 0.0f, l.maxDeltaC, detail,
                     static_cast<unsigned long long>(l.heightBytes), static_cast<unsigned long long>(l.textureBytes));
     }
     const double inputSamples = static_cast<double>(h.validWidth) * h.validHeight;
@@ -253,11 +266,10 @@ std::uint64_t trianglesPerNode(const MapHeader& h)
 
 int select(const MapFile& map, const ViewOptions& view)
 {
-    MapLodTree tree(map);
-    StaticNodeSource source(map);
+    TerrainNodeSource source(map, {});
     StreamerOptions options = view.streamer;
     options.cacheSize = std::max<std::size_t>(options.cacheSize, map.directory().size());
-    auto streamer = TerrainStreamer::create(tree, source, options);
+    auto streamer = TerrainStreamer::create(source, extentOf(map.header()), options);
     if (!streamer.ok()) {
         return fail(streamer.error().message);
     }
@@ -292,9 +304,8 @@ int stream(const MapFile& map, const ViewOptions& view)
     if (!path.ok()) {
         return fail(path.error().message);
     }
-    MapLodTree tree(map);
-    StaticNodeSource source(map);
-    auto streamer = TerrainStreamer::create(tree, source, view.streamer);
+    TerrainNodeSource source(map, {});
+    auto streamer = TerrainStreamer::create(source, extentOf(map.header()), view.streamer);
     if (!streamer.ok()) {
         return fail(streamer.error().message);
     }
@@ -398,7 +409,7 @@ int main(int argc, char** argv)
         }
         return texture(**map, args[2], args[3]);
     }
-    if (args.size() != 4) {
+    if (args.size() < 4) {
         return fail("height needs X and Y (metres)");
     }
     auto x = parseDouble(args[2]);
@@ -406,10 +417,53 @@ int main(int argc, char** argv)
     if (!x.ok() || !y.ok()) {
         return fail("height: " + (x.ok() ? y : x).error().message);
     }
-    auto sample = staticHeightAt(**map, *x, *y);
+    std::optional<int> depth;
+    TengineOptions detail;  // tengine's defaults: what the viewer draws
+    for (std::size_t i = 4; i < args.size(); ++i) {
+        const std::string& arg = args[i];
+        if (arg == "--depth" && i + 1 < args.size()) {
+            auto d = parseInteger(args[++i]);
+            if (!d.ok() || *d < 0 || *d > NodeId::kMaxLevel) {
+                return fail("height: --depth must be an integer in [0, " + std::to_string(NodeId::kMaxLevel) + "]");
+            }
+            depth = static_cast<int>(*d);
+        } else if (arg == "--material" && i + 1 < args.size()) {
+            detail.detailMaterials.emplace_back(args[++i]);
+        } else if (arg == "--no-material") {
+            detail.detailAddMaterial = false;
+        } else {
+            return fail("height: unknown or incomplete option '" + arg + "'");
+        }
+    }
+    if (!depth) {
+        if (args.size() > 4) {
+            return fail("height: --material and --no-material need --depth");
+        }
+        auto sample = staticHeightAt(**map, *x, *y);
+        if (!sample.ok()) {
+            return fail(sample.error().message);
+        }
+        std::printf("%.6f\n", sample->height);
+        return 0;
+    }
+    std::vector<std::string> warnings;
+    auto synthesizer =
+        makeDetailSynthesizer(detail, static_cast<int>((*map)->header().chunkSize), TERRAIN_MATERIALS_DIR, warnings);
+    for (const auto& warning : warnings) {
+        std::fprintf(stderr, "tengine-tool: warning: %s\n", warning.c_str());
+    }
+    if (!synthesizer.ok()) {
+        return fail(synthesizer.error().message);
+    }
+    TerrainNodeSource source(**map, {synthesizer->get(), detail.lodMinimumSpacing});
+    auto sample = surfaceHeightAt(**map, source, *x, *y, *depth);
     if (!sample.ok()) {
         return fail(sample.error().message);
     }
     std::printf("%.6f\n", sample->height);
+    if (sample->node.level < *depth) {
+        std::fprintf(stderr, "tengine-tool: note: the surface stops at level %d (%s); lod_minimum_spacing is %g m\n",
+                     sample->node.level, sample->node.toString().c_str(), detail.lodMinimumSpacing);
+    }
     return 0;
 }

@@ -72,4 +72,43 @@ Expected<HeightSample> staticHeightAt(const MapFile& map, double x, double y)
     return HeightSample{h.heightOffset + h.heightStep * c, id};
 }
 
+Expected<HeightSample> surfaceHeightAt(const MapFile& map, TerrainNodeSource& source, double x, double y, int depth)
+{
+    TERRAIN_EXPECTS(depth >= 0 && depth <= NodeId::kMaxLevel, "depth must be in [0, NodeId::kMaxLevel]");
+    const MapHeader& h = map.header();
+    const double gx = (x - h.originX) / h.sampleSpacing;
+    const double gy = (y - h.originY) / h.sampleSpacing;
+    const double eps = 1e-9;
+    if (!(gx >= h.validX0 - eps && gx <= h.validX0 + h.validWidth - 1 + eps && gy >= h.validY0 - eps &&
+          gy <= h.validY0 + h.validHeight - 1 + eps)) {
+        return makeError(map.name(), ": position (", x, ", ", y, ") is outside the terrain");
+    }
+    auto root = source.loadRoot();
+    TERRAIN_TRY(root);
+    NodePtr node = std::move(root).value();
+    // Position in units of root nodes (0..1 over the root's square).
+    const double rootSize = h.nodeSizeAt(0);
+    const double ux = (x - h.originX) / rootSize, uy = (y - h.originY) / rootSize;
+    while (node->id.level < depth && node->hasChildren) {
+        const double cells = std::ldexp(1.0, node->id.level + 1);
+        const int qx = std::clamp(static_cast<int>(std::floor(ux * cells)) - 2 * static_cast<int>(node->id.x), 0, 1);
+        const int qy = std::clamp(static_cast<int>(std::floor(uy * cells)) - 2 * static_cast<int>(node->id.y), 0, 1);
+        auto children = source.loadChildren(*node);
+        TERRAIN_TRY(children);
+        node = (*children)[static_cast<std::size_t>(qx | (qy << 1))];
+    }
+    const double n1 = h.chunkSize - 1.0;
+    const double cells = std::ldexp(1.0, node->id.level);
+    const double lx = std::clamp((ux * cells - node->id.x) * n1, 0.0, n1);
+    const double ly = std::clamp((uy * cells - node->id.y) * n1, 0.0, n1);
+    const int ix = std::min(static_cast<int>(lx), static_cast<int>(n1) - 1);
+    const int iy = std::min(static_cast<int>(ly), static_cast<int>(n1) - 1);
+    const int w = node->heights.size;
+    auto at = [&](int i, int j) -> double {
+        return node->heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
+    };
+    const double z = interpolateQuad(at(ix, iy), at(ix + 1, iy), at(ix, iy + 1), at(ix + 1, iy + 1), lx - ix, ly - iy);
+    return HeightSample{h.heightOffset + z, node->id};
+}
+
 }  // namespace terrain

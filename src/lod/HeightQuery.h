@@ -2,6 +2,7 @@
 #pragma once
 
 #include "core/Expected.h"
+#include "lod/TerrainNodeSource.h"
 #include "quadtree/MapFile.h"
 
 namespace terrain {
@@ -16,5 +17,12 @@ struct HeightSample {
 /// triangulation (TemplateTriangulation.h) as it is rendered. Fails outside the input's valid region
 /// (padding excluded) and when a node on the way cannot be read.
 Expected<HeightSample> staticHeightAt(const MapFile& map, double x, double y);
+
+/// Height of the rendered surface (static + synthesized: base + displacement) at world (x, y) metres, at
+/// quadtree level `depth` (or the deepest level above it that `source` can make), interpolated along the
+/// template triangulation: exactly what the viewer draws when that level is selected with morph factor 1.
+/// Nodes come from `source` (its detail policy decides what is synthesized), so the query and the viewer
+/// share one code path. Fails outside the input's valid region and when a node cannot be read.
+Expected<HeightSample> surfaceHeightAt(const MapFile& map, TerrainNodeSource& source, double x, double y, int depth);
 
 }  // namespace terrain

@@ -21,6 +21,8 @@ Aabb QuadtreeExtent::box(const NodeId& id, double zMin, double zMax) const
     return {{x0, y0, zMin}, {x0 + size, y0 + size, zMax}};
 }
 
+QuadtreeExtent extentOf(const MapHeader& h) { return {h.originX, h.originY, h.nodeSizeAt(0)}; }
+
 MapLodTree::MapLodTree(const MapFile& map) : mMap(map) {}
 
 QuadtreeExtent MapLodTree::extent() const

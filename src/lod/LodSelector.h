@@ -14,6 +14,7 @@
 namespace terrain {
 
 class MapFile;
+struct MapHeader;
 
 /// What the selection needs to know about a node without its heights.
 struct NodeInfo {
@@ -34,6 +35,9 @@ struct QuadtreeExtent {
     /// The node's bounding box: its square in x, y and [zMin, zMax] in z.
     Aabb box(const NodeId& id, double zMin, double zMax) const;
 };
+
+/// The extent of a map's quadtree: its root's square.
+QuadtreeExtent extentOf(const MapHeader& header);
 
 /// The tree being selected from: the static map now, static plus dynamic nodes later.
 class LodTree {

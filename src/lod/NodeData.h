@@ -1,9 +1,10 @@
 // Resident quadtree nodes as the runtime holds them (paper 3.2.14-3.2.15, 3.4.1): immutable once built,
-// shared between the cache (render thread) and the workers that decode children from them.
+// shared between the cache (render thread) and the workers that decode or synthesize children from them.
 #pragma once
 
 #include "core/Expected.h"
 #include "quadtree/NodeId.h"
+#include "synthesis/DualHeightMap.h"
 
 #include <array>
 #include <cstdint>
@@ -14,25 +15,31 @@ namespace terrain {
 
 struct NodeData {
     NodeId id;
-    bool isStatic = true;     ///< read from the map (false: synthesized, issue 5)
-    bool hasChildren = false; ///< children can be loaded or synthesized
-    float deltaC = 0.0f;      ///< nested error, metres (eq. 3.1)
-    double zMin = 0.0;        ///< nested bounding box, metres (3.2.12)
+    bool isStatic = true;           ///< read from the map; false: synthesized (a dynamic node, 3.4)
+    bool hasChildren = false;       ///< children can be loaded or synthesized (and are wanted: see the source)
+    bool hasStaticChildren = false; ///< the children are in the map (else they would be dynamic)
+    float deltaC = 0.0f;            ///< nested error, metres (eq. 3.1; 3.4.1 for dynamic nodes)
+    double zMin = 0.0;              ///< nested bounding box, absolute metres (3.2.12)
     double zMax = 0.0;
-    std::vector<std::uint16_t> heights;  ///< window of codes, (N + 4)^2, rows south to north
+    double spacing = 0.0;           ///< metres between the node's samples
+    std::vector<std::uint16_t> codes;    ///< static nodes: the window of height codes the map's children
+                                         ///< are predicted from; empty for dynamic nodes
+    DualHeightMap heights;               ///< base + displacement, (N + 4)^2, metres above the map's offset
+    std::vector<std::uint8_t> materialWeights;  ///< N x N x 4 material weights (DetailSynthesizer), or empty
     std::vector<std::uint8_t> texture;   ///< T x T RGB, rows south to north
 };
 
 using NodePtr = std::shared_ptr<const NodeData>;
 using ChildNodes = std::array<NodePtr, 4>;
 
-/// Where nodes come from: the map (static) and, later, synthesis (dynamic).
+/// Where nodes come from: the map (static) and synthesis (dynamic).
 class NodeSource {
 public:
     virtual ~NodeSource() = default;
     virtual Expected<NodePtr> loadRoot() = 0;
     /// The four children of `parent` in NodeId::child() order. Called on worker threads, concurrently:
-    /// implementations must be thread-safe. Errors name the file and node.
+    /// implementations must be thread-safe, and the result must not depend on the thread or the order of
+    /// calls. Errors name the file and node.
     virtual Expected<ChildNodes> loadChildren(const NodeData& parent) = 0;
 };
 

@@ -7,14 +7,25 @@
 
 namespace terrain {
 
-TerrainStreamer::TerrainStreamer(const LodTree& tree, NodeSource& source, const StreamerOptions& options)
-    : mTree(tree), mCache(options.cacheSize), mServer(source, {options.workers, options.queueLimit})
+TerrainStreamer::TerrainStreamer(NodeSource& source, const QuadtreeExtent& extent, const StreamerOptions& options)
+    : mOptions(options), mTree(*this, extent), mCache(options.cacheSize),
+      mServer(source, {options.workers, options.queueLimit})
 {
 }
 
-Expected<std::unique_ptr<TerrainStreamer>> TerrainStreamer::create(const LodTree& tree, NodeSource& source,
+NodeInfo TerrainStreamer::ResidentTree::info(const NodeId& id) const
+{
+    NodePtr node = mStreamer.node(id);
+    TERRAIN_EXPECTS(node != nullptr, "the selection asked about a node that is not resident");
+    return {node->hasChildren, node->deltaC, node->zMin, node->zMax};
+}
+
+Expected<std::unique_ptr<TerrainStreamer>> TerrainStreamer::create(NodeSource& source, const QuadtreeExtent& extent,
                                                                    const StreamerOptions& options)
 {
+    if (!(options.velocityLimit >= 0.0)) {
+        return makeError("detail_velocity_limit ", options.velocityLimit, " must be >= 0");
+    }
     if (options.cacheSize < 5) {
         return makeError("quad_cache_size ", options.cacheSize, " must be at least 5 (the root and four children)");
     }
@@ -23,7 +34,7 @@ Expected<std::unique_ptr<TerrainStreamer>> TerrainStreamer::create(const LodTree
     }
     auto root = source.loadRoot();
     TERRAIN_TRY(root);
-    std::unique_ptr<TerrainStreamer> streamer(new TerrainStreamer(tree, source, options));
+    std::unique_ptr<TerrainStreamer> streamer(new TerrainStreamer(source, extent, options));
     streamer->mCache.setRoot(std::move(root.value()));
     return streamer;
 }
@@ -56,8 +67,9 @@ std::size_t TerrainStreamer::collect(std::size_t& refused)
     return inserted;
 }
 
-FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels)
+FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels, double cameraSpeed)
 {
+    TERRAIN_EXPECTS(cameraSpeed >= 0.0, "the camera speed must be >= 0");
     FrameStats stats;
     mCache.beginFrame();
     stats.inserted = collect(stats.refused);
@@ -75,6 +87,12 @@ FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels)
     for (const auto& request : mSelection.requests) {
         NodePtr parent = node(request.parent);
         TERRAIN_ASSERT(parent);  // a node waiting for its children is selected, hence resident
+        // 3.4.4: dynamic detail finer than the camera can see while moving this fast is not made at all.
+        if (!parent->hasStaticChildren && mOptions.velocityLimit > 0.0 &&
+            cameraSpeed > mOptions.velocityLimit * parent->spacing * 0.5) {
+            ++stats.tooFast;
+            continue;
+        }
         mRequests.push_back({std::move(parent), request.distance});
     }
     const std::size_t room = mCache.groupsInsertable();

@@ -17,6 +17,9 @@ struct StreamerOptions {
     std::size_t cacheSize = 512;    ///< quad_cache_size, nodes
     std::size_t queueLimit = 8;     ///< most load requests waiting at once
     int workers = 1;                ///< loader threads; 0 = inline (loads happen in drain())
+    /// detail_velocity_limit (3.4.4): no new dynamic nodes while the camera moves faster than this many of
+    /// their sample spacings per second; 0 = no limit. Static nodes are always loaded.
+    double velocityLimit = 0.0;
 };
 
 /// Per-frame figures.
@@ -24,6 +27,7 @@ struct FrameStats {
     std::size_t selected = 0;          ///< nodes drawn
     std::size_t requested = 0;         ///< child groups the traversal wanted but were not resident
     std::size_t deferred = 0;          ///< of those, not asked for: the cache has no room this frame
+    std::size_t tooFast = 0;           ///< of those, not asked for: dynamic, and the camera is too fast (3.4.4)
     std::size_t inserted = 0;          ///< groups that became resident this frame
     std::size_t refused = 0;           ///< finished groups the cache had no room (or no parent) for
     double selectionSeconds = 0.0;     ///< time in selectNodes
@@ -31,12 +35,15 @@ struct FrameStats {
 
 class TerrainStreamer {
 public:
-    /// `tree` and `source` must outlive the streamer. Loads the root synchronously.
-    static Expected<std::unique_ptr<TerrainStreamer>> create(const LodTree& tree, NodeSource& source,
+    /// `source` must outlive the streamer; `extent` places its root. Loads the root synchronously. The
+    /// selection runs on the resident nodes' own information (NodeData: errors, boxes, whether children can
+    /// be made), which covers static and dynamic nodes alike.
+    static Expected<std::unique_ptr<TerrainStreamer>> create(NodeSource& source, const QuadtreeExtent& extent,
                                                              const StreamerOptions& options);
 
     /// One frame: collect finished loads, select for `camera` at tau pixels, request what is missing.
-    FrameStats update(const Camera& camera, double tauPixels);
+    /// `cameraSpeed` (metres per second, >= 0) feeds the velocity limit.
+    FrameStats update(const Camera& camera, double tauPixels, double cameraSpeed = 0.0);
 
     /// Waits for every queued load, then takes the results into the cache (no selection).
     void drain();
@@ -49,11 +56,30 @@ public:
     /// Called once per group that failed to load, with the error (file and node named).
     void onLoadError(std::function<void(const std::string&)> report) { mReport = std::move(report); }
 
+    /// The tree the selection sees: resident nodes' NodeData.
+    const LodTree& tree() const { return mTree; }
+
 private:
-    TerrainStreamer(const LodTree& tree, NodeSource& source, const StreamerOptions& options);
+    /// LodTree over the resident nodes (a node's info is asked for only once it is resident).
+    class ResidentTree final : public LodTree {
+    public:
+        ResidentTree(const TerrainStreamer& streamer, const QuadtreeExtent& extent)
+            : mStreamer(streamer), mExtent(extent)
+        {
+        }
+        QuadtreeExtent extent() const override { return mExtent; }
+        NodeInfo info(const NodeId& id) const override;
+
+    private:
+        const TerrainStreamer& mStreamer;
+        QuadtreeExtent mExtent;
+    };
+
+    TerrainStreamer(NodeSource& source, const QuadtreeExtent& extent, const StreamerOptions& options);
     std::size_t collect(std::size_t& refused);
 
-    const LodTree& mTree;
+    StreamerOptions mOptions;
+    ResidentTree mTree;
     NodeCache mCache;
     NodeServer mServer;
     LodSelection mSelection;

@@ -86,9 +86,9 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
     r.skip(kMapMagic.size());
     MapHeader h;
     h.version = r.get<std::uint32_t>();
-    if (h.version != kMapVersion) {
-        return makeError(name, ": map format version ", h.version, ", this build reads version ", kMapVersion,
-                         " (re-run prep on the source height field)");
+    if (h.version < kMinMapVersion || h.version > kMapVersion) {
+        return makeError(name, ": map format version ", h.version, ", this build reads versions ", kMinMapVersion,
+                         " to ", kMapVersion, " (re-run prep on the source height field)");
     }
     std::uint32_t storedCrc = ByteReader(bytes.subspan(kHeaderBytes - 4, 4)).get<std::uint32_t>();
     std::uint32_t actualCrc = crc32Of(bytes.first(kHeaderBytes - 4));
@@ -161,7 +161,7 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
     return h;
 }
 
-std::vector<std::uint8_t> encodeDirectory(std::span<const DirectoryEntry> entries)
+std::vector<std::uint8_t> encodeDirectory(std::span<const DirectoryEntry> entries, std::uint32_t version)
 {
     std::vector<std::uint8_t> bytes;
     bytes.reserve(entries.size() * kDirectoryEntryBytes);
@@ -180,7 +180,11 @@ std::vector<std::uint8_t> encodeDirectory(std::span<const DirectoryEntry> entrie
         w.put(e.deltaC);
         w.put(e.minCode);
         w.put(e.maxCode);
-        w.put(std::uint32_t{0});
+        if (version >= 2) {
+            w.put(e.detailDeltaC);
+        } else {
+            w.put(std::uint32_t{0});
+        }
     }
     return bytes;
 }
@@ -213,7 +217,11 @@ Expected<std::vector<DirectoryEntry>> decodeDirectory(std::span<const std::uint8
         e.deltaC = r.get<float>();
         e.minCode = r.get<std::uint16_t>();
         e.maxCode = r.get<std::uint16_t>();
-        r.get<std::uint32_t>();
+        if (header.hasDetailErrors()) {
+            e.detailDeltaC = r.get<float>();
+        } else {
+            r.get<std::uint32_t>();  // zero in version 1
+        }
 
         auto bad = [&](auto&&... what) {
             return makeError(name, ": directory entry for node ", e.id.toString(), ": ", what...);
@@ -232,6 +240,11 @@ Expected<std::vector<DirectoryEntry>> decodeDirectory(std::span<const std::uint8
         }
         if (e.minCode > e.maxCode || !(e.deltaC >= e.deltaM) || !(e.deltaM >= 0)) {
             return bad("inconsistent bounds or errors");
+        }
+        if (header.hasDetailErrors() &&
+            !(std::isfinite(e.detailDeltaC) && e.detailDeltaC >= 0.0f && e.detailDeltaC >= e.deltaC)) {
+            return bad("detail_delta_c ", e.detailDeltaC, " m is not a finite number >= 0 and >= delta_c (", e.deltaC,
+                       " m)");
         }
         if (e.hasChildren && e.id.level + 1 >= static_cast<int>(header.levels)) {
             return bad("flagged with children but is on the deepest level");

@@ -19,7 +19,10 @@
 namespace terrain {
 
 inline constexpr std::array<std::uint8_t, 8> kMapMagic = {0x89, 'T', 'M', 'A', 'P', '\r', '\n', 0x1a};
-inline constexpr std::uint32_t kMapVersion = 1;
+/// Version written. 2 added detail_delta_c to the directory entries (3.4.1); version 1 files are still read.
+inline constexpr std::uint32_t kMapVersion = 2;
+/// Oldest version read.
+inline constexpr std::uint32_t kMinMapVersion = 1;
 inline constexpr std::size_t kHeaderBytes = 256;
 inline constexpr std::size_t kDirectoryEntryBytes = 48;
 /// Samples of border kept on every side of a node's heights, used by subdivision (3.4.3 "Borders"):
@@ -69,6 +72,8 @@ struct MapHeader {
     /// Metres covered by one node side at `level`.
     double nodeSizeAt(int level) const { return spacingAt(level) * (chunkSize - 1); }
     double heightOf(std::uint16_t code) const { return heightOffset + heightStep * code; }
+    /// Whether directory entries carry detailDeltaC (version 2 and later).
+    bool hasDetailErrors() const { return version >= 2; }
 };
 
 /// One directory entry: where a node's payload is and what the LOD selection needs without loading it.
@@ -84,6 +89,9 @@ struct DirectoryEntry {
     float deltaC = 0.0f;         ///< metres: nested error, eq. 3.1 (max over children + deltaM)
     std::uint16_t minCode = 0;   ///< nested bounding box in height codes (3.2.12)
     std::uint16_t maxCode = 0;
+    /// metres: nested error including the detail synthesized below the static leaves (3.4.1): a leaf's is
+    /// its estimated detail error, an inner node's max over children + deltaM, so >= deltaC. Version 1: 0.
+    float detailDeltaC = 0.0f;
 
     std::uint64_t payloadBytes() const { return std::uint64_t{heightBytes} + textureBytes; }
 };
@@ -93,10 +101,13 @@ std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& header);
 /// Parses and validates a header; `name` is used in messages (the file's path).
 Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std::string& name);
 
-std::vector<std::uint8_t> encodeDirectory(std::span<const DirectoryEntry> entries);
+/// Serializes directory entries for a file of format `version` (version 1 stores zero for detailDeltaC).
+std::vector<std::uint8_t> encodeDirectory(std::span<const DirectoryEntry> entries, std::uint32_t version = kMapVersion);
 /// Parses and validates the directory against the header: sorted unique ids, ids inside their level,
-/// payloads inside the node area of the file, a complete quadtree (root present; every node flagged
-/// with children has all four; every other node's parent is present and flagged).
+/// payloads inside the node area of the file, errors and bounds consistent (0 <= delta_m <= delta_c;
+/// version 2: delta_c <= detail_delta_c, finite), a complete quadtree (root present; every node flagged
+/// with children has all four; every other node's parent is present and flagged). Version 1 entries get
+/// detailDeltaC = 0.
 Expected<std::vector<DirectoryEntry>> decodeDirectory(std::span<const std::uint8_t> bytes, const MapHeader& header,
                                                       const std::string& name);
 

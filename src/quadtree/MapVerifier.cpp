@@ -15,6 +15,7 @@ struct Checked {
     std::uint16_t minCode = 65535;
     std::uint16_t maxCode = 0;
     float deltaC = 0.0f;
+    float detailDeltaC = 0.0f;
 };
 
 class Verifier {
@@ -42,6 +43,7 @@ private:
     std::optional<Checked> visit(const StaticNode& node)
     {
         const DirectoryEntry& entry = *mMap.find(node.id);
+        const bool detail = mMap.header().hasDetailErrors();  // version 1 maps carry no detail errors
         const NodeWindow& window = mMap.window();
         const WindowRect inside = window.insideRect(node.id);
         Checked checked;
@@ -59,6 +61,7 @@ private:
         if (entry.hasChildren) {
             std::array<StaticNode, 4> children;
             float worst = 0.0f;
+            float worstDetail = 0.0f;
             for (int q = 0; q < 4; ++q) {
                 auto child = mMap.loadNode(node.id.child(q), node.heights);
                 if (!child.ok()) {
@@ -73,6 +76,7 @@ private:
                 checked.minCode = std::min(checked.minCode, sub->minCode);
                 checked.maxCode = std::max(checked.maxCode, sub->maxCode);
                 worst = std::max(worst, sub->deltaC);
+                worstDetail = std::max(worstDetail, sub->detailDeltaC);
             }
             const int n = static_cast<int>(mMap.header().chunkSize);
             const int w = window.size();
@@ -90,8 +94,20 @@ private:
                 problem(node.id, "delta_c is " + std::to_string(entry.deltaC) + " m but its children's nest to " +
                                      std::to_string(nested) + " m (eq. 3.1)");
             }
+            float nestedDetail = worstDetail + entry.deltaM;
+            if (detail && std::abs(nestedDetail - entry.detailDeltaC) > 1e-4f * std::max(1.0f, nestedDetail)) {
+                problem(node.id, "detail_delta_c is " + std::to_string(entry.detailDeltaC) +
+                                     " m but its children's nest to " + std::to_string(nestedDetail) +
+                                     " m (eq. 3.1 over the estimated leaf detail errors, 3.4.1)");
+            }
         } else if (entry.deltaM != 0.0f || entry.deltaC != 0.0f) {
             problem(node.id, "a leaf has a non-zero error");
+        }
+        if (detail && !(std::isfinite(entry.detailDeltaC) && entry.detailDeltaC >= 0.0f)) {
+            problem(node.id, "detail_delta_c " + std::to_string(entry.detailDeltaC) + " m is not a finite number >= 0");
+        } else if (detail && entry.detailDeltaC < entry.deltaC) {
+            problem(node.id, "detail_delta_c " + std::to_string(entry.detailDeltaC) + " m is below delta_c " +
+                                 std::to_string(entry.deltaC) + " m");
         }
         if (checked.minCode != entry.minCode || checked.maxCode != entry.maxCode) {
             problem(node.id, "bounding box codes " + std::to_string(entry.minCode) + ".." + std::to_string(entry.maxCode) +
@@ -99,6 +115,7 @@ private:
                                  std::to_string(checked.maxCode));
         }
         checked.deltaC = entry.deltaC;
+        checked.detailDeltaC = entry.detailDeltaC;
         return checked;
     }
 

@@ -105,6 +105,7 @@ struct NodeSummary {
     bool hasFilledNoData = false;  ///< the node's square holds input samples that were no-data
     float deltaM = 0.0f;
     float deltaC = 0.0f;
+    float detailDeltaC = 0.0f;  ///< deltaC over the leaves' estimated detail errors (3.4.1)
     std::uint16_t minCode = 0;
     std::uint16_t maxCode = 0;
     std::vector<std::uint8_t> texture;
@@ -122,9 +123,10 @@ struct EncodedBlock {
 class Builder {
 public:
     Builder(const MapHeader& header, const QuantizedGrid& grid, const TreeShape& shape, const TextureSource& texture,
-            const std::vector<std::uint8_t>& filledMask, const BuildOptions& options, std::atomic<std::uint64_t>& done)
+            const std::vector<std::uint8_t>& filledMask, const BuildOptions& options, std::atomic<std::uint64_t>& done,
+            std::atomic<std::int64_t>& detailNanoseconds)
         : mHeader(header), mGrid(grid), mShape(shape), mTexture(texture), mFilledMask(filledMask), mOptions(options),
-          mWindow(header), mDone(done)
+          mWindow(header), mDone(done), mDetailNanoseconds(detailNanoseconds)
     {
     }
 
@@ -154,6 +156,7 @@ public:
             // when it was pruned above the finest level, so edges shared with them match exactly.
             summary.texture = texturePyramid(id);
             summary.hasFilledNoData = containsFilledSample(id);
+            summary.detailDeltaC = leafDetailError(id, window);
             ++mDone;
             return summary;
         }
@@ -163,6 +166,7 @@ public:
         }
         // Emit the four children together (3.2.14: siblings are loaded together).
         float worstChild = 0.0f;
+        float worstChildDetail = 0.0f;
         for (int q = 0; q < 4; ++q) {
             const NodeId child = id.child(q);
             std::vector<std::uint16_t> childWindow(mWindow.sampleCount());
@@ -170,12 +174,14 @@ public:
             emit(child, encodeNodeHeights(mWindow, child, childWindow, window, mHeader.quantizerBin, mOptions.zlibLevel),
                  children[q], out);
             worstChild = std::max(worstChild, children[q].deltaC);
+            worstChildDetail = std::max(worstChildDetail, children[q].detailDeltaC);
             summary.hasFilledNoData = summary.hasFilledNoData || children[q].hasFilledNoData;
             summary.minCode = std::min(summary.minCode, children[q].minCode);
             summary.maxCode = std::max(summary.maxCode, children[q].maxCode);
         }
         summary.deltaM = static_cast<float>(simplificationErrorCodes(mGrid, mHeader, id) * mHeader.heightStep);
         summary.deltaC = worstChild + summary.deltaM;  // eq. 3.1
+        summary.detailDeltaC = worstChildDetail + summary.deltaM;
         summary.texture.resize(std::size_t{mHeader.textureSize} * mHeader.textureSize * 3);
         downsampleChildTextures({children[0].texture, children[1].texture, children[2].texture, children[3].texture},
                                 static_cast<int>(mHeader.textureSize), summary.texture);
@@ -193,6 +199,20 @@ public:
     }
 
 private:
+    /// The estimated error of the detail synthesized below leaf `id` (3.4.1); 0 without an estimator.
+    float leafDetailError(const NodeId& id, std::span<const std::uint16_t> window) const
+    {
+        if (!mOptions.leafDetailError) {
+            return 0.0f;
+        }
+        const auto start = std::chrono::steady_clock::now();
+        const float error = mOptions.leafDetailError(mHeader, id, window);
+        TERRAIN_EXPECTS(std::isfinite(error) && error >= 0.0f, "leafDetailError must return a finite error >= 0");
+        const auto spent = std::chrono::steady_clock::now() - start;
+        mDetailNanoseconds += std::chrono::duration_cast<std::chrono::nanoseconds>(spent).count();
+        return error;
+    }
+
     /// The texture of `id` as the pyramid from the finest level makes it.
     std::vector<std::uint8_t> texturePyramid(const NodeId& id) const
     {
@@ -241,6 +261,7 @@ private:
         entry.textureBytes = static_cast<std::uint32_t>(texture.size());
         entry.deltaM = summary.deltaM;
         entry.deltaC = summary.deltaC;
+        entry.detailDeltaC = summary.detailDeltaC;
         entry.minCode = summary.minCode;
         entry.maxCode = summary.maxCode;
         out.bytes.insert(out.bytes.end(), heights.begin(), heights.end());
@@ -260,6 +281,7 @@ private:
     const BuildOptions& mOptions;
     NodeWindow mWindow;
     std::atomic<std::uint64_t>& mDone;
+    std::atomic<std::int64_t>& mDetailNanoseconds;  ///< time spent in options.leafDetailError, all threads
 };
 
 }  // namespace
@@ -403,7 +425,8 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     file->write(encodeHeader(header).data(), kHeaderBytes);  // patched at the end
 
     std::atomic<std::uint64_t> done{0};
-    Builder builder(header, *grid, shape, *textureSource, filledMask, options, done);
+    std::atomic<std::int64_t> detailNanoseconds{0};
+    Builder builder(header, *grid, shape, *textureSource, filledMask, options, done, detailNanoseconds);
     std::vector<DirectoryEntry> directory;
     directory.reserve(totalNodes);
     auto append = [&](EncodedBlock& block) {
@@ -483,6 +506,16 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
 
     report.header = header;
     report.nodes = directory.size();
+    double detailSum = 0.0;  // in directory order, so the figures do not depend on the thread count
+    for (const DirectoryEntry& entry : directory) {
+        if (!entry.hasChildren) {
+            ++report.leaves;
+            report.maxLeafDetailError = std::max(report.maxLeafDetailError, entry.detailDeltaC);
+            detailSum += entry.detailDeltaC;
+        }
+    }
+    report.meanLeafDetailError = detailSum / static_cast<double>(report.leaves);
+    report.leafDetailSeconds = static_cast<double>(detailNanoseconds.load()) * 1e-9;
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return report;
 }

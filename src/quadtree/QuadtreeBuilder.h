@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -24,6 +25,13 @@ struct BuildOptions {
     std::optional<std::filesystem::path> texture;  ///< -t: RGB texture stretched over the input
     std::optional<std::filesystem::path> weights;  ///< -w: gray weight map for pruning (3.2.13)
     int zlibLevel = 6;
+    /// The error of the detail synthesized below static leaf `id` (3.4.1), in metres: finite and >= 0. Gets
+    /// the map's header (quantization, spacing, origin) and the leaf's window of W x W height codes (W = N +
+    /// 4, rows south to north, metres = heightOffset + heightStep * code). Called once for every leaf, from
+    /// the builder's worker threads at once: must be thread-safe, and must depend on its arguments only for
+    /// the map not to depend on the thread count. The builder nests the results into detailDeltaC (eq. 3.1).
+    /// Unset: no detail below the leaves, detailDeltaC = deltaC.
+    std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailError;
     /// Called now and then with the fraction done (0..1) and the current stage.
     std::function<void(double, std::string_view)> progress;
     /// Called for each warning (an option that had no effect, a default that was assumed).
@@ -41,6 +49,10 @@ struct BuildReport {
     std::uint64_t textureBytes = 0;  ///< node texture streams
     std::uint64_t storedSamples = 0; ///< node window samples, borders included
     double seconds = 0.0;
+    std::uint64_t leaves = 0;
+    float maxLeafDetailError = 0.0f;   ///< metres, over the leaves (0 without leafDetailError)
+    double meanLeafDetailError = 0.0;  ///< metres
+    double leafDetailSeconds = 0.0;    ///< time spent in leafDetailError, summed over the threads
 };
 
 /// Builds the map of `field` into `output` (written to a temporary name and renamed). The field is

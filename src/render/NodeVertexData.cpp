@@ -16,17 +16,19 @@ std::int16_t toSnorm16(double v) { return static_cast<std::int16_t>(std::lround(
 
 }  // namespace
 
-std::vector<NodeVertex> buildNodeVertices(const TemplateMesh& mesh, std::span<const std::uint16_t> window,
-                                          double heightStep, double spacing)
+std::vector<NodeVertex> buildNodeVertices(const TemplateMesh& mesh, std::span<const float> window, double spacing,
+                                          std::span<const std::uint8_t> materialWeights)
 {
     const int n = mesh.chunkSize;
     const int w = n + 2 * kBorder;
-    TERRAIN_EXPECTS(window.size() == static_cast<std::size_t>(w) * w, "window must be (N + 4)^2 codes");
+    TERRAIN_EXPECTS(window.size() == static_cast<std::size_t>(w) * w, "window must be (N + 4)^2 heights");
+    TERRAIN_EXPECTS(materialWeights.empty() || materialWeights.size() == static_cast<std::size_t>(n) * n * 4,
+                    "material weights must be N x N x 4 bytes");
     auto code = [&](int i, int j) -> double {
         return window[static_cast<std::size_t>(j + kBorder) * w + i + kBorder];
     };
-    // Slopes in codes per sample, turned into unit normals (x, y) with the height step and spacing.
-    const double scale = heightStep / spacing;
+    // Slopes in metres per sample, turned into unit normals (x, y) with the spacing.
+    const double scale = 1.0 / spacing;
     auto normal = [&](double gx, double gy, std::int16_t* out) {
         const double x = -gx * scale, y = -gy * scale;
         const double length = std::sqrt(x * x + y * y + 1.0);
@@ -55,8 +57,12 @@ std::vector<NodeVertex> buildNodeVertices(const TemplateMesh& mesh, std::span<co
         } else {
             parentGradient(i, j, pgx, pgy);
         }
-        v.own = static_cast<float>(own * heightStep);
-        v.parent = static_cast<float>(parent * heightStep);
+        v.own = static_cast<float>(own);
+        v.parent = static_cast<float>(parent);
+        if (!materialWeights.empty()) {
+            const std::uint8_t* weights = materialWeights.data() + (static_cast<std::size_t>(j) * n + i) * 4;
+            std::copy(weights, weights + 4, v.materialWeights);
+        }
         normal((code(i + 1, j) - code(i - 1, j)) * 0.5, (code(i, j + 1) - code(i, j - 1)) * 0.5, v.ownNormal);
         normal(pgx, pgy, v.parentNormal);
     }

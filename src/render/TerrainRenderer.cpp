@@ -2,6 +2,7 @@
 // (3.2.6), zigzag index buffer (3.2.10), front to back (3.2.11).
 #include "render/TerrainRenderer.h"
 
+#include "heightfield/Image.h"
 #include "render/NodeVertexData.h"
 #include "render/TemplateMesh.h"
 #include "render/ZigzagIndexBuffer.h"
@@ -9,19 +10,113 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace terrain {
 
+namespace {
+
+struct DetailLayer {
+    Image image;
+    int material = 0;
+    double size = 1.0;  ///< metres per repeat
+};
+
+Expected<std::vector<DetailLayer>> loadDetailLayers(const MaterialSet& materials, int maxLayers)
+{
+    std::vector<DetailLayer> layers;
+    for (std::size_t m = 0; m < materials.materials().size(); ++m) {
+        const Material& material = materials.materials()[m];
+        double size = material.detailTextureSize;
+        for (const auto& file : material.detailTextures) {
+            if (static_cast<int>(layers.size()) == maxLayers) {
+                return makeError(material.file, ": too many detail textures (the materials may have ", maxLayers,
+                                 " in all)");
+            }
+            auto image = readPngImage(file, 1);
+            TERRAIN_TRY(image);
+            if (!layers.empty() && (image->width != layers.front().image.width ||
+                                    image->height != layers.front().image.height)) {
+                return makeError(file.string(), ": detail texture is ", image->width, "x", image->height,
+                                 " but the first one is ", layers.front().image.width, "x",
+                                 layers.front().image.height, " (all detail textures share one size)");
+            }
+            layers.push_back({std::move(image).value(), static_cast<int>(m), size});
+            size /= 4.0;
+        }
+    }
+    return layers;
+}
+
+}  // namespace
+
 Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::filesystem::path& shaderDirectory,
-                                                                   const MapHeader& header, int vertexCacheSize)
+                                                                   const MapHeader& header, int vertexCacheSize,
+                                                                   const MaterialSet* materials)
 {
     std::unique_ptr<TerrainRenderer> r(new TerrainRenderer(header));
+    std::vector<DetailLayer> layers;
+    if (materials) {
+        TERRAIN_EXPECTS(materials->materials().size() <= 4, "at most 4 materials");
+        auto loaded = loadDetailLayers(*materials, kMaxDetailLayers);
+        TERRAIN_TRY(loaded);
+        layers = std::move(loaded).value();
+    }
     const bool padded = header.validWidth < header.gridSize() || header.validHeight < header.gridSize();
-    auto terrain = ShaderProgram::load(shaderDirectory, "terrain", padded ? std::vector<std::string>{"CLIP_TO_VALID"}
-                                                                          : std::vector<std::string>{});
+    std::vector<std::string> defines;
+    if (padded) {
+        defines.emplace_back("CLIP_TO_VALID");
+    }
+    if (!layers.empty()) {
+        defines.emplace_back("DETAIL");
+    }
+    auto terrain = ShaderProgram::load(shaderDirectory, "terrain", defines);
     TERRAIN_TRY(terrain);
     r->mTerrain = std::move(terrain.value());
+    if (!layers.empty()) {
+        const int w = layers.front().image.width, h = layers.front().image.height;
+        r->mDetail = gl::Texture::create();
+        glBindTexture(GL_TEXTURE_2D_ARRAY, r->mDetail.name());
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+        glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R8, w, h, static_cast<GLsizei>(layers.size()), 0, GL_RED,
+                     GL_UNSIGNED_BYTE, nullptr);
+        for (std::size_t k = 0; k < layers.size(); ++k) {
+            glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, static_cast<GLint>(k), w, h, 1, GL_RED, GL_UNSIGNED_BYTE,
+                            layers[k].image.pixels.data());
+        }
+        glGenerateMipmap(GL_TEXTURE_2D_ARRAY);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_REPEAT);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_REPEAT);
+        r->mTerrain.use();
+        glUniform1i(r->mTerrain.uniform("uDetail"), 2);
+        glUniform1i(r->mTerrain.uniform("uLayerCount"), static_cast<GLint>(layers.size()));
+        for (std::size_t k = 0; k < layers.size(); ++k) {
+            const std::string index = "[" + std::to_string(k) + "]";
+            glm::vec4 mask(0.0f);
+            mask[layers[k].material] = 1.0f;
+            glUniform4fv(r->mTerrain.uniform(("uLayerMaterialMask" + index).c_str()), 1, glm::value_ptr(mask));
+            glUniform1f(r->mTerrain.uniform(("uLayerScale" + index).c_str()), static_cast<float>(1.0 / layers[k].size));
+            r->mLayerSize.push_back(layers[k].size);
+        }
+        glm::vec4 tintColumns[3] = {glm::vec4(1.0f), glm::vec4(1.0f), glm::vec4(1.0f)};
+        for (std::size_t m = 0; m < materials->materials().size(); ++m) {
+            const auto& t = materials->materials()[m].tint;
+            glm::vec3 tint(t[0], t[1], t[2]);
+            const float luminance = glm::dot(tint, glm::vec3(0.2126f, 0.7152f, 0.0722f));
+            tint = luminance > 0.0f ? tint / luminance : glm::vec3(1.0f);
+            // A third of the tint: the map's colours (from -t or prep's height colouring) stay the base and
+            // the material only shifts them, so a grass tint does not paint a dry valley green.
+            constexpr float kTintStrength = 0.35f;
+            tint = glm::mix(glm::vec3(1.0f), tint, kTintStrength);
+            for (int c = 0; c < 3; ++c) {
+                tintColumns[c][static_cast<int>(m)] = tint[c];
+            }
+        }
+        glUniform4fv(r->mTerrain.uniform("uMaterialTintColumns"), 3, glm::value_ptr(tintColumns[0]));
+    }
     auto sky = ShaderProgram::load(shaderDirectory, "sky");
     TERRAIN_TRY(sky);
     r->mSky = std::move(sky.value());
@@ -50,6 +145,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
                            reinterpret_cast<const void*>(offsetof(TemplateVertex, skirt)));
     glEnableVertexAttribArray(2);  // the node's data: pointed at each node's buffer when it is drawn
     glEnableVertexAttribArray(3);
+    glEnableVertexAttribArray(4);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, r->mTemplateIndices.name());
     if (narrow) {
         const std::vector<std::uint16_t> shortIndices = narrowIndices(indices);
@@ -76,8 +172,9 @@ TerrainRenderer::GpuNode& TerrainRenderer::upload(const NodePtr& node, RenderSta
     gpu.data = node;
     gpu.lastFrame = mFrame;
     const int t = static_cast<int>(mHeader.textureSize);
-    const double spacing = mHeader.nodeSizeAt(node->id.level) / (mHeader.chunkSize - 1);
-    const std::vector<NodeVertex> vertices = buildNodeVertices(mMesh, node->heights, mHeader.heightStep, spacing);
+    std::vector<float> surface(node->heights.base.size());
+    node->heights.surface(surface);
+    const std::vector<NodeVertex> vertices = buildNodeVertices(mMesh, surface, node->spacing, node->materialWeights);
     gpu.vertices = gl::Buffer::create();
     glBindBuffer(GL_ARRAY_BUFFER, gpu.vertices.name());
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(NodeVertex)), vertices.data(),
@@ -151,6 +248,15 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
     glUniform1f(mTerrain.uniform("uHeightBase"), static_cast<float>(mHeader.heightOffset - camera.position.z));
     glUniform1f(mTerrain.uniform("uInverseCells"), 1.0f / static_cast<float>(mHeader.chunkSize - 1));
     glUniform1f(mTerrain.uniform("uTexels"), static_cast<float>(mHeader.textureSize));
+    if (!mLayerSize.empty()) {
+        glActiveTexture(GL_TEXTURE2);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mDetail.name());
+        mDetailActive = mTerrain.uniform("uDetailActive");
+        mLayerOrigin.resize(mLayerSize.size());
+        for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
+            mLayerOrigin[k] = mTerrain.uniform(("uLayerOrigin[" + std::to_string(k) + "]").c_str());
+        }
+    }
     const glm::vec3 sun = glm::normalize(style.sunDirection);
     glUniform3fv(mTerrain.uniform("uSunDirection"), 1, glm::value_ptr(sun));
     glUniform3fv(mTerrain.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
@@ -192,6 +298,22 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
                               reinterpret_cast<const void*>(offsetof(NodeVertex, own)));
         glVertexAttribPointer(3, 4, GL_SHORT, GL_TRUE, sizeof(NodeVertex),
                               reinterpret_cast<const void*>(offsetof(NodeVertex, ownNormal)));
+        glVertexAttribPointer(4, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(NodeVertex),
+                              reinterpret_cast<const void*>(offsetof(NodeVertex, materialWeights)));
+        if (!mLayerSize.empty()) {
+            // The fragment shader fades each layer out by 40 repeats away (shaders/terrain.frag): a node
+            // wholly beyond that for every layer skips the detail textures (a uniform branch).
+            const double finest = *std::min_element(mLayerSize.begin(), mLayerSize.end());
+            glUniform1i(mDetailActive, selected.distance < kDetailFadeRepeats * finest ? 1 : 0);
+            // The node's corner in repeats of each layer, reduced to [0, 1) in double: texture coordinates
+            // stay small and exact however far from the origin the node is.
+            const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(camera.position);
+            for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
+                const glm::dvec2 repeats = corner / mLayerSize[k];
+                const glm::dvec2 fraction = repeats - glm::floor(repeats);
+                glUniform2f(mLayerOrigin[k], static_cast<float>(fraction.x), static_cast<float>(fraction.y));
+            }
+        }
 
         glUniform2f(originLocation, static_cast<float>(selected.cameraRelativeOrigin.x),
                     static_cast<float>(selected.cameraRelativeOrigin.y));

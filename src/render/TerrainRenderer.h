@@ -10,6 +10,7 @@
 #include "render/GlObjects.h"
 #include "render/ShaderProgram.h"
 #include "render/TemplateMesh.h"
+#include "synthesis/Material.h"
 
 #include <glm/vec3.hpp>
 
@@ -45,9 +46,17 @@ struct RenderStats {
 class TerrainRenderer {
 public:
     /// Loads the shaders from `shaderDirectory` and builds the template mesh for `header`'s chunk size with
-    /// the zigzag order for `vertexCacheSize`. Needs a current GL context.
+    /// the zigzag order for `vertexCacheSize`. With `materials`, their detail textures are drawn over the
+    /// nodes' colours, blended by the nodes' material weights (NodeData::materialWeights): material m's k-th
+    /// detail_texture repeats every detail_texture_size / 4^k metres (a finer layer of the same ground).
+    /// All detail textures must have the same size (they share one texture array); at most kMaxDetailLayers.
+    /// Errors name the file. Needs a current GL context.
     static Expected<std::unique_ptr<TerrainRenderer>> create(const std::filesystem::path& shaderDirectory,
-                                                             const MapHeader& header, int vertexCacheSize);
+                                                             const MapHeader& header, int vertexCacheSize,
+                                                             const MaterialSet* materials = nullptr);
+
+    /// Detail texture layers the shader blends (shaders/terrain.frag, kMaxLayers).
+    static constexpr int kMaxDetailLayers = 8;
 
     /// Clears, draws the sky and every node of `streamer`'s current selection. `camera` must be the one the
     /// selection was made with.
@@ -76,6 +85,12 @@ private:
     GLenum mIndexType = GL_UNSIGNED_INT;
     std::uint64_t mTrianglesPerNode = 0;
     gl::VertexArray mEmptyVao;  ///< the sky's full-screen triangle needs no attributes
+    gl::Texture mDetail;        ///< GL_TEXTURE_2D_ARRAY of the detail layers, or none
+    std::vector<double> mLayerSize;  ///< metres per repeat of each detail layer
+    std::vector<GLint> mLayerOrigin; ///< uniform locations of uLayerOrigin[k]
+    GLint mDetailActive = -1;        ///< uniform location of uDetailActive
+    /// Repeats of a detail layer beyond which the fragment shader has faded it out (terrain.frag).
+    static constexpr double kDetailFadeRepeats = 40.0;
     std::unordered_map<std::uint64_t, GpuNode> mGpuNodes;
     std::uint64_t mFrame = 0;
 };

@@ -9,7 +9,7 @@
 // and read `ratio` (engine Mtriangles/s over brute force Mtriangles/s; target >= 0.8).
 #include "heightfield/HeightFieldIo.h"
 #include "lod/CameraPath.h"
-#include "lod/StaticNodeSource.h"
+#include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "quadtree/QuadtreeBuilder.h"
 #include "render/GlWindow.h"
@@ -83,12 +83,11 @@ void BM_ChunkRenderer(benchmark::State& state)
 {
     Scene& s = scene();
     auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, s.map->header(), 16).value();
-    MapLodTree tree(*s.map);
-    StaticNodeSource source(*s.map);
+    TerrainNodeSource source(*s.map, {});
     StreamerOptions options;
     options.cacheSize = s.map->directory().size();
     options.workers = 2;
-    auto streamer = TerrainStreamer::create(tree, source, options).value();
+    auto streamer = TerrainStreamer::create(source, extentOf(s.map->header()), options).value();
     SceneStyle style;
     style.drawSky = false;  // triangles only: the brute-force side draws no sky either
     double seconds = 0, triangles = 0;
@@ -148,12 +147,11 @@ void BM_BruteForceMesh(benchmark::State& state)
     // Per camera, the very triangles the engine drew (selected nodes, morphed, with skirts) merged into
     // one static mesh with positions and normals, drawn with one call and a plain lit shader: the raw
     // throughput of those triangles on this context. Building and uploading it is not timed.
-    MapLodTree tree(*s.map);
-    StaticNodeSource source(*s.map);
+    TerrainNodeSource source(*s.map, {});
     StreamerOptions options;
     options.cacheSize = s.map->directory().size();
     options.workers = 2;
-    auto streamer = TerrainStreamer::create(tree, source, options).value();
+    auto streamer = TerrainStreamer::create(source, extentOf(s.map->header()), options).value();
     const MapHeader& header = s.map->header();
     const TemplateMesh mesh = buildTemplateMesh(static_cast<int>(header.chunkSize));
     const std::vector<std::uint32_t> templateIndices = buildZigzagIndices(static_cast<int>(header.chunkSize), 16, true);
@@ -178,8 +176,10 @@ void BM_BruteForceMesh(benchmark::State& state)
             std::vector<std::uint32_t> indices;
             for (const SelectedNode& selected : streamer->selection().nodes) {
                 NodePtr node = streamer->node(selected.id);
-                const double spacing = selected.size / (header.chunkSize - 1);
-                const auto data = buildNodeVertices(mesh, node->heights, header.heightStep, spacing);
+                const double spacing = node->spacing;
+                std::vector<float> surface(node->heights.base.size());
+                node->heights.surface(surface);
+                const auto data = buildNodeVertices(mesh, surface, node->spacing, node->materialWeights);
                 NodePtr parent = selected.id.isRoot() ? node : streamer->node(selected.id.parent());
                 const double skirt = std::max(parent->deltaC, node->deltaC) + header.heightStep;
                 const float morph = selected.id.isRoot() ? 1.0f : selected.morph;

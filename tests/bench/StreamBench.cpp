@@ -6,7 +6,7 @@
 // The map is generated once (8193 x 8193 by default) into the temp directory and reused.
 #include "core/Memory.h"
 #include "lod/CameraPath.h"
-#include "lod/StaticNodeSource.h"
+#include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "quadtree/QuadtreeBuilder.h"
 
@@ -107,7 +107,7 @@ BENCHMARK(BM_DecodeStaticNode)->Unit(benchmark::kMicrosecond);
 void BM_ServerThroughput(benchmark::State& state)
 {
     const MapFile& map = benchMap();
-    StaticNodeSource source(map);
+    TerrainNodeSource source(map, {});
     const int workers = static_cast<int>(state.range(0));
     // Every group of levels 0..4 requested at once; the server loads them nearest first.
     std::vector<NodePtr> parents;
@@ -145,14 +145,13 @@ void BM_StreamLongPath(benchmark::State& state)
 {
     const MapFile& map = benchMap();
     const auto cacheSize = static_cast<std::size_t>(state.range(0));
-    MapLodTree tree(map);
-    StaticNodeSource source(map);
+    TerrainNodeSource source(map, {});
     const CameraPath path = longPath(map);
     for (auto _ : state) {
         StreamerOptions options;
         options.cacheSize = cacheSize;
         options.workers = 2;
-        auto streamer = TerrainStreamer::create(tree, source, options).value();
+        auto streamer = TerrainStreamer::create(source, extentOf(map.header()), options).value();
         Camera camera;
         std::size_t peakNodes = 0;
         std::vector<double> rssBySegment;

@@ -6,6 +6,7 @@
 #include "heightfield/Image.h"
 #include "lod/CameraPath.h"
 #include "lod/LodSelector.h"
+#include "lod/TerrainNodeSource.h"
 #include "quadtree/MapFile.h"
 #include "quadtree/QuadtreeBuilder.h"
 
@@ -13,7 +14,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <numbers>
+#include <sstream>
 
 namespace terrain {
 namespace {
@@ -31,8 +34,23 @@ protected:
         BuildOptions options;
         options.spacing = 90.0;
         options.threads = 2;
-        auto built = buildMap(std::move(field.value()), options, *sDir / "trinidad.map");
+        auto built = buildMap(field.value(), options, *sDir / "trinidad.map");
         ASSERT_TRUE(built.ok()) << built.error().message;
+        // The same terrain with the detail errors of the shipped materials below its leaves (3.4.1), as
+        // prep --material makes it.
+        std::vector<std::string> warnings;
+        auto materials = MaterialSet::load(detailMaterials(), warnings);
+        ASSERT_TRUE(materials.ok()) << materials.error().message;
+        auto synthesizer = DetailSynthesizer::create(
+            65, {"kobbelt", 1.0, std::make_shared<const MaterialSet>(std::move(materials).value())});
+        ASSERT_TRUE(synthesizer.ok()) << synthesizer.error().message;
+        options.leafDetailError = leafDetailErrorFunction(**synthesizer);
+        auto detailed = buildMap(std::move(field.value()), options, *sDir / "trinidad-detail.map");
+        ASSERT_TRUE(detailed.ok()) << detailed.error().message;
+        // A slow low flight (10 m/s, 30 m above a hillside) where dynamic nodes reach a few centimetres.
+        std::ofstream low(*sDir / "low.path");
+        low << "0 51000 51000 3700 215 -15\n"
+               "3 50979 50979 3700 215 -15\n";
         // A short low flight up a valley and over a ridge, then a steep look down (demos/trinidad.path's
         // opening and middle, sped up).
         std::ofstream path(*sDir / "flight.path");
@@ -49,12 +67,27 @@ protected:
     }
 
     static std::filesystem::path map() { return *sDir / "trinidad.map"; }
+    static std::filesystem::path detailMap() { return *sDir / "trinidad-detail.map"; }
+    static std::vector<std::filesystem::path> detailMaterials()
+    {
+        const std::filesystem::path dir = TERRAIN_MATERIALS_DIR;
+        return {dir / "grass.mat", dir / "rock.mat"};
+    }
+    /// Settings that fly the low path with the shipped materials (over detailMap()), plus `more`.
+    static std::vector<std::string> lowDetailFlight(std::vector<std::string> more)
+    {
+        const auto files = detailMaterials();
+        more.push_back("camera_path=" + (*sDir / "low.path").string());
+        more.push_back("detail_materials=" + files[0].string() + ", " + files[1].string());
+        return more;
+    }
     static std::filesystem::path flight() { return *sDir / "flight.path"; }
 
     /// Runs tengine in video mode with `settings` and returns its result; frames go to `frames`.
-    static test::RunResult video(const std::filesystem::path& frames, std::vector<std::string> settings)
+    static test::RunResult video(const std::filesystem::path& frames, std::vector<std::string> settings,
+                                 const std::filesystem::path& mapFile = {})
     {
-        std::vector<std::string> args = {map().string(),
+        std::vector<std::string> args = {mapFile.empty() ? map().string() : mapFile.string(),
                                          "--set", "camera_path=" + flight().string(),
                                          "--set", "video_mode=true",
                                          "--set", "video_ffmpeg=false",
@@ -284,7 +317,9 @@ TEST_F(TengineGLTest, GeomorphingHidesTheSwitchBetweenDetailLevels)
             {map().string(), "--set", "camera_path=" + (dir / "split.path").string(), "--set", "video_mode=true",
              "--set", "video_ffmpeg=false", "--set", "image_path=" + frames.string(), "--set", "window_width=320",
              "--set", "window_height=180", "--set", "frames_per_second=1", "--set", "draw_user_interface=false",
-             "--set", std::string("geomorph=") + (geomorph ? "true" : "false")});
+             "--set", std::string("geomorph=") + (geomorph ? "true" : "false"),
+             // The split was found in the static tree: no dynamic nodes, whose errors differ.
+             "--set", "detail_create_new_nodes=false"});
         EXPECT_EQ(run.exitCode, 0) << run.output;
         return meanDifference(frame(frames, 0), frame(frames, 1));
     };
@@ -297,6 +332,110 @@ TEST_F(TengineGLTest, GeomorphingHidesTheSwitchBetweenDetailLevels)
     EXPECT_LT(smooth, 0.5);
     RecordProperty("mean_difference_morphed", std::to_string(smooth));
     RecordProperty("mean_difference_popping", std::to_string(pop));
+}
+
+/// Rows of a video's frames.csv as maps from column name to value.
+std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& file)
+{
+    std::ifstream in(file);
+    std::string line;
+    std::getline(in, line);
+    std::vector<std::string> names;
+    for (std::stringstream header(line); std::getline(header, line, ',');) {
+        names.push_back(line);
+    }
+    std::vector<std::map<std::string, double>> rows;
+    while (std::getline(in, line)) {
+        std::stringstream fields(line);
+        std::map<std::string, double> row;
+        for (const auto& name : names) {
+            std::string value;
+            std::getline(fields, value, ',');
+            row[name] = std::stod(value);
+        }
+        rows.push_back(std::move(row));
+    }
+    return rows;
+}
+
+TEST_F(TengineGLTest, DetailFlightHasDynamicNodesAndNoHoles)
+{
+    // The viewer's hole check over a low flight with detail synthesis: dynamic nodes next to static ones
+    // and to each other at many levels, skirts and all, leave no pixel of the clear colour.
+    test::ScratchDir frames;
+    auto run = video(frames.path(),
+                     lowDetailFlight({"frames_per_second=4", "draw_sky=false", "draw_user_interface=false",
+                                      "clear_color=1,0,1", "haze_distance=0", "camera_z_far=150000", "worker_threads=2"}),
+                     detailMap());
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    auto mapFile = MapFile::open(detailMap(), ReaderKind::Stream);
+    ASSERT_TRUE(mapFile.ok());
+    const MapHeader& header = (*mapFile)->header();
+    const double zMin = header.heightOf((*mapFile)->directory().front().minCode) - 10.0;  // displacement below
+    auto path = CameraPath::load(*sDir / "low.path");
+    ASSERT_TRUE(path.ok());
+    const auto rows = readCsv(frames.path() / "frames.csv");
+    ASSERT_EQ(rows.size(), 13u);
+    for (std::size_t f = 0; f < rows.size(); ++f) {
+        EXPECT_GT(rows[f].at("nodes_dynamic"), 20) << "frame " << f;
+        Image image = frame(frames.path(), static_cast<int>(f));
+        Camera camera;
+        camera.viewportWidth = image.width;
+        camera.viewportHeight = image.height;
+        camera.verticalFov = 60.0 * std::numbers::pi / 180;
+        camera.farPlane = 150000;
+        path->evaluate(static_cast<double>(f) / 4.0).applyTo(camera);
+        int holes = 0, checked = 0;
+        for (int y = 0; y < image.height; ++y) {
+            for (int x = 0; x < image.width; ++x) {
+                if (mustHitTerrain(camera, header, zMin, x, y)) {
+                    ++checked;
+                    holes += isHole(image.pixel(x, y)) ? 1 : 0;
+                }
+            }
+        }
+        EXPECT_GT(checked, image.width * image.height / 2) << "frame " << f;
+        EXPECT_EQ(holes, 0) << "frame " << f;
+    }
+}
+
+TEST_F(TengineGLTest, DetailShowsUpCloseAndRunsRepeatIdentically)
+{
+    // The paper's figure 5.2: the same low view with detail synthesis off, subdivision only and with the
+    // materials. Detail changes the near ground; two runs with two workers give the same frames.
+    auto render = [&](const std::filesystem::path& frames, std::vector<std::string> settings) {
+        settings.push_back("video_frames=1");
+        settings.push_back("draw_user_interface=false");
+        auto run = video(frames, lowDetailFlight(settings), detailMap());
+        EXPECT_EQ(run.exitCode, 0) << run.output;
+        return frame(frames, 0);
+    };
+    test::ScratchDir off, subdivided, full, again;
+    const Image plain = render(off.path(), {"detail_create_new_nodes=false"});
+    const Image smooth = render(subdivided.path(), {"detail_add_material=false"});
+    const Image detailed = render(full.path(), {"worker_threads=2"});
+    const Image repeat = render(again.path(), {"worker_threads=2"});
+    EXPECT_TRUE(detailed.pixels == repeat.pixels) << "detail frames must not depend on thread timing";
+    // Compare the lower half (the near ground).
+    auto lowerHalfDifference = [](const Image& a, const Image& b) {
+        double sum = 0;
+        std::size_t count = 0;
+        for (int y = a.height / 2; y < a.height; ++y) {
+            for (int x = 0; x < a.width; ++x) {
+                for (int c = 0; c < 3; ++c) {
+                    sum += std::abs(int(a.pixel(x, y)[c]) - int(b.pixel(x, y)[c]));
+                    ++count;
+                }
+            }
+        }
+        return sum / static_cast<double>(count);
+    };
+    const double materialEffect = lowerHalfDifference(detailed, smooth);
+    const double subdivisionEffect = lowerHalfDifference(smooth, plain);
+    RecordProperty("difference_materials", std::to_string(materialEffect));
+    RecordProperty("difference_subdivision", std::to_string(subdivisionEffect));
+    EXPECT_GT(materialEffect, 2.0) << "detail textures and displacement must show near the camera";
+    EXPECT_GT(subdivisionEffect, 0.2) << "subdivision reshapes the near ground";
 }
 
 }  // namespace

@@ -24,11 +24,14 @@ constexpr ReaderKind kReaders[] = {ReaderKind::Stream, ReaderKind::MemoryMapped}
 const char* readerName(ReaderKind kind) { return kind == ReaderKind::Stream ? "stream" : "memory_mapped"; }
 
 std::filesystem::path buildSmallMap(const test::ScratchDir& dir, const std::string& name = "small.map",
-                                    double maxError = 0.0)
+                                    double maxError = 0.0, bool detail = false)
 {
-    // 65 x 65 samples, chunk 17: three levels, 21 nodes.
+    // 65 x 65 samples, chunk 17: three levels, 21 nodes. With `detail`, leaves get fake detail errors.
     BuildOptions options = test::testOptions(17);
     options.maxError = maxError;
+    if (detail) {
+        options.leafDetailError = test::fakeLeafDetailError;
+    }
     auto report = buildMap(test::hillyField(65, 65, 41), options, dir / name);
     EXPECT_TRUE(report.ok()) << report.error().message;
     return dir / name;
@@ -139,7 +142,7 @@ TEST(MapFileTest, VerifyFindsNothingWrongWithSoundMaps)
 {
     test::ScratchDir dir;
     for (double maxError : {0.0, 4.0}) {
-        const auto path = buildSmallMap(dir, "m" + std::to_string(maxError) + ".map", maxError);
+        const auto path = buildSmallMap(dir, "m" + std::to_string(maxError) + ".map", maxError, maxError > 0);
         for (ReaderKind kind : kReaders) {
             auto map = test::openMap(path, kind);
             ASSERT_TRUE(map);
@@ -157,7 +160,7 @@ TEST(MapFileTest, VerifyFindsNothingWrongWithSoundMaps)
 TEST(MapFileTest, RawBytesFollowTheFormatDescription)
 {
     test::ScratchDir dir;
-    const auto path = buildSmallMap(dir);
+    const auto path = buildSmallMap(dir, "small.map", 0.0, true);
     const Bytes bytes = test::readFileBytes(path);
     auto map = test::openMap(path);
     ASSERT_TRUE(map);
@@ -165,9 +168,10 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     auto u32 = [&](std::size_t offset) { return static_cast<std::uint32_t>(test::readLe(bytes, offset, 4)); };
     auto u64 = [&](std::size_t offset) { return test::readLe(bytes, offset, 8); };
     auto f64 = [&](std::size_t offset) { return std::bit_cast<double>(u64(offset)); };
+    auto f32 = [&](std::size_t offset) { return std::bit_cast<float>(u32(offset)); };
     const Bytes magic = {0x89, 'T', 'M', 'A', 'P', 0x0d, 0x0a, 0x1a};
     EXPECT_TRUE(std::equal(magic.begin(), magic.end(), bytes.begin()));
-    EXPECT_EQ(u32(8), 1u);
+    EXPECT_EQ(u32(8), 2u);
     EXPECT_EQ(u32(12), 256u);
     EXPECT_EQ(u32(16), 17u);
     EXPECT_EQ(u32(20), 2u);
@@ -196,15 +200,21 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
         NodeId id;
         bool children;
         std::uint64_t offset, size;
+        float deltaM, deltaC, detailDeltaC;
     };
     std::vector<Raw> raw;
     for (std::size_t k = 0; k < 21; ++k) {
         const std::size_t e = directoryOffset + 48 * k;
-        const Raw r{{bytes[e], u32(e + 4), u32(e + 8)}, (bytes[e + 1] & 1) != 0, u64(e + 12),
-                    std::uint64_t{u32(e + 20)} + u32(e + 24)};
+        const Raw r{{bytes[e], u32(e + 4), u32(e + 8)},
+                    (bytes[e + 1] & 1) != 0,
+                    u64(e + 12),
+                    std::uint64_t{u32(e + 20)} + u32(e + 24),
+                    f32(e + 32),
+                    f32(e + 36),
+                    f32(e + 44)};
         EXPECT_EQ(u32(e + 28), zlibCrc(std::span(bytes).subspan(r.offset, r.size))) << r.id.toString();
         EXPECT_EQ(test::readLe(bytes, e + 2, 2), 0u);
-        EXPECT_EQ(u32(e + 44), 0u);
+        EXPECT_EQ(r.detailDeltaC, map->directory()[k].detailDeltaC) << r.id.toString();
         if (!raw.empty()) {
             EXPECT_LT(raw.back().id.key(), r.id.key()) << "directory not sorted by key at entry " << k;
         }
@@ -219,6 +229,22 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     }
     EXPECT_EQ(byOffset.back().offset + byOffset.back().size, directoryOffset);
     EXPECT_EQ(byOffset.back().id, NodeId::root());
+    // detail_delta_c: the leaves' estimates (here the fake one), nested like delta_c (eq. 3.1).
+    for (const Raw& r : raw) {
+        if (!r.children) {
+            EXPECT_EQ(r.detailDeltaC, test::fakeLeafDetailError(h, r.id, {})) << r.id.toString();
+            EXPECT_EQ(r.deltaC, 0.0f) << r.id.toString();
+            continue;
+        }
+        float worst = 0.0f;
+        for (int q = 0; q < 4; ++q) {
+            auto child = std::find_if(raw.begin(), raw.end(), [&](const Raw& o) { return o.id == r.id.child(q); });
+            ASSERT_NE(child, raw.end());
+            worst = std::max(worst, child->detailDeltaC);
+        }
+        EXPECT_EQ(r.detailDeltaC, worst + r.deltaM) << r.id.toString();
+        EXPECT_GE(r.detailDeltaC, r.deltaC) << r.id.toString();
+    }
     for (const Raw& r : raw) {
         if (r.children) {
             auto at = [&](int q) {
@@ -380,7 +406,7 @@ MapParts readParts(const std::filesystem::path& path)
 /// A consistent file from the parts: directory re-encoded, its size and CRC and the header CRC updated.
 Bytes assemble(MapParts parts)
 {
-    auto directory = encodeDirectory(parts.entries);
+    auto directory = encodeDirectory(parts.entries, parts.header.version);
     parts.header.nodeCount = static_cast<std::uint32_t>(parts.entries.size());
     parts.header.directoryOffset = parts.body.size();
     parts.header.directoryBytes = directory.size();
@@ -521,7 +547,7 @@ TEST(MapFileTest, BadHeaderFieldsAreErrors)
     const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
     const Case cases[] = {
         {"magic", 1, 1, 'X', false, "not a terrain map"},
-        {"version 2", 8, 4, 2, true, "version 2"},
+        {"version 3", 8, 4, 3, true, "version 3"},
         {"version 0", 8, 4, 0, true, "version 0"},
         {"header checksum", 150, 1, 'x', false, "checksum"},
         {"header size", 12, 4, 255, true, "header size 255"},
@@ -589,6 +615,9 @@ TEST(MapFileTest, InconsistentDirectoriesAreErrorsNamingTheNode)
     const auto path = buildSmallMap(dir);
     const MapParts parts = readParts(path);
     ASSERT_EQ(parts.entries.size(), 21u);
+    const auto inner = std::find_if(parts.entries.begin(), parts.entries.end(),
+                                    [](const auto& e) { return e.id == NodeId{1, 0, 1}; });
+    ASSERT_GT(inner->deltaC, 0.0f) << "the detail_delta_c below delta_c case needs delta_c > 0";
     auto at = [](std::vector<DirectoryEntry>& entries, NodeId id) -> DirectoryEntry& {
         return *std::find_if(entries.begin(), entries.end(), [&](const auto& e) { return e.id == id; });
     };
@@ -613,6 +642,12 @@ TEST(MapFileTest, InconsistentDirectoriesAreErrorsNamingTheNode)
         {"NaN delta_m", [&](auto& e) { at(e, {1, 0, 1}).deltaM = std::nanf(""); }, "1/0/1"},
         {"negative delta_m", [&](auto& e) { at(e, {1, 0, 1}).deltaM = -1.0f; }, "1/0/1"},
         {"deepest-level node with children", [&](auto& e) { at(e, {2, 3, 3}).hasChildren = true; }, "2/3/3"},
+        {"negative detail_delta_c", [&](auto& e) { at(e, {2, 1, 1}).detailDeltaC = -0.5f; }, "2/1/1"},
+        {"NaN detail_delta_c", [&](auto& e) { at(e, {1, 0, 1}).detailDeltaC = std::nanf(""); }, "1/0/1"},
+        {"infinite detail_delta_c",
+         [&](auto& e) { at(e, {1, 0, 1}).detailDeltaC = std::numeric_limits<float>::infinity(); }, "1/0/1"},
+        {"detail_delta_c below delta_c",
+         [&](auto& e) { at(e, {1, 0, 1}).detailDeltaC = at(e, {1, 0, 1}).deltaC * 0.5f; }, "1/0/1"},
         {"root without children flag", [&](auto& e) { at(e, NodeId::root()).hasChildren = false; }, "has no parent"},
         {"missing child", [&](auto& e) { e.erase(std::find_if(e.begin(), e.end(), [](const auto& x) { return x.id == NodeId{2, 1, 1}; })); },
          "2/1/1"},
@@ -632,6 +667,140 @@ TEST(MapFileTest, InconsistentDirectoriesAreErrorsNamingTheNode)
                 << c.what << ": '" << map.error().message << "' does not mention '" << c.mentions << "'";
         }
     }
+}
+
+// ---- Detail errors (version 2) and version 1 files ----
+
+TEST(MapFileTest, DetailDeltaCRoundTripsThroughTheDirectory)
+{
+    test::ScratchDir dir;
+    const MapParts parts = readParts(buildSmallMap(dir));
+    struct Case {
+        const char* what;
+        float above;  ///< detailDeltaC = deltaC + above
+    };
+    const Case cases[] = {
+        {"no detail (equal to delta_c)", 0.0f},
+        {"the smallest step above", std::numeric_limits<float>::denorm_min()},
+        {"centimetres", 0.01f},
+        {"a fraction", 1.0f / 3.0f},
+        {"kilometres", 1234.5f},
+        {"the largest float", std::numeric_limits<float>::max()},
+    };
+    for (const Case& c : cases) {
+        MapParts changed = parts;
+        for (std::size_t k = 0; k < changed.entries.size(); ++k) {
+            // Vary by node as well, so entries cannot be swapped unnoticed.
+            auto& e = changed.entries[k];
+            const bool largest = c.above == std::numeric_limits<float>::max();
+            e.detailDeltaC = largest ? c.above : e.deltaC + c.above * static_cast<float>(k + 1);
+        }
+        test::writeFileBytes(dir / "detail.map", assemble(changed));
+        for (ReaderKind kind : kReaders) {
+            auto map = test::openMap(dir / "detail.map", kind);
+            ASSERT_TRUE(map) << c.what;
+            EXPECT_TRUE(map->header().hasDetailErrors());
+            ASSERT_EQ(map->directory().size(), changed.entries.size());
+            for (std::size_t k = 0; k < changed.entries.size(); ++k) {
+                const DirectoryEntry& read = map->directory()[k];
+                EXPECT_EQ(std::bit_cast<std::uint32_t>(read.detailDeltaC),
+                          std::bit_cast<std::uint32_t>(changed.entries[k].detailDeltaC))
+                    << c.what << ", " << read.id.toString() << ", " << readerName(kind);
+                EXPECT_EQ(read.deltaC, changed.entries[k].deltaC) << c.what;
+                EXPECT_EQ(read.minCode, changed.entries[k].minCode) << c.what;
+            }
+        }
+    }
+}
+
+TEST(MapFileTest, Version1MapsStillOpenDecodeAndVerify)
+{
+    // A version 1 file written by hand from the format description: version 1 in the header, the last 4
+    // bytes of every directory entry zero, both checksums recomputed.
+    test::ScratchDir dir;
+    const auto path = buildSmallMap(dir, "v2.map", 0.0, true);
+    Bytes bytes = test::readFileBytes(path);
+    const std::uint64_t directoryOffset = test::readLe(bytes, 120, 8);
+    const std::uint64_t count = test::readLe(bytes, 116, 4);
+    test::writeLe(bytes, 8, 1, 4);
+    for (std::uint64_t k = 0; k < count; ++k) {
+        test::writeLe(bytes, directoryOffset + 48 * k + 44, 0, 4);
+    }
+    test::writeLe(bytes, 136, zlibCrc(std::span(bytes).subspan(directoryOffset)), 4);
+    test::writeLe(bytes, 252, zlibCrc(std::span(bytes).first(252)), 4);
+    test::writeFileBytes(dir / "v1.map", bytes);
+
+    // The encoder writes the same bytes for a version 1 header.
+    MapParts v1 = readParts(path);
+    v1.header.version = 1;
+    EXPECT_TRUE(assemble(v1) == bytes);
+
+    auto current = test::openMap(path);
+    ASSERT_TRUE(current);
+    for (ReaderKind kind : kReaders) {
+        SCOPED_TRACE(readerName(kind));
+        auto map = test::openMap(dir / "v1.map", kind);
+        ASSERT_TRUE(map);
+        EXPECT_EQ(map->header().version, 1u);
+        EXPECT_FALSE(map->header().hasDetailErrors());
+        ASSERT_EQ(map->directory().size(), current->directory().size());
+        for (std::size_t k = 0; k < map->directory().size(); ++k) {
+            const DirectoryEntry& old = map->directory()[k];
+            const DirectoryEntry& now = current->directory()[k];
+            EXPECT_EQ(old.detailDeltaC, 0.0f) << old.id.toString();
+            EXPECT_EQ(old.id, now.id);
+            EXPECT_EQ(old.deltaM, now.deltaM);
+            EXPECT_EQ(old.deltaC, now.deltaC);
+            EXPECT_EQ(old.minCode, now.minCode);
+            EXPECT_EQ(old.maxCode, now.maxCode);
+            EXPECT_EQ(old.crc, now.crc);
+        }
+        auto tree = test::decodeTree(*map);
+        EXPECT_TRUE(tree.ok()) << tree.error().message;
+        auto problems = verifyMap(*map);
+        EXPECT_TRUE(problems.empty()) << problems.front();
+    }
+}
+
+TEST(MapFileTest, VerifyCatchesWrongDetailErrors)
+{
+    // Each change decodes (every detail_delta_c stays finite and >= delta_c) but breaks the nesting.
+    test::ScratchDir dir;
+    const MapParts parts = readParts(buildSmallMap(dir, "small.map", 0.0, true));
+    auto at = [](std::vector<DirectoryEntry>& entries, NodeId id) -> DirectoryEntry& {
+        return *std::find_if(entries.begin(), entries.end(), [&](const auto& e) { return e.id == id; });
+    };
+    struct Case {
+        const char* what;
+        std::function<void(std::vector<DirectoryEntry>&)> change;
+        const char* mentions;  ///< the node whose nesting no longer holds
+    };
+    const Case cases[] = {
+        {"inner node's too large", [&](auto& e) { at(e, {1, 0, 1}).detailDeltaC += 1.0f; }, "1/0/1"},
+        {"inner node's only delta_c", [&](auto& e) { at(e, {1, 1, 0}).detailDeltaC = at(e, {1, 1, 0}).deltaC; },
+         "1/1/0"},
+        {"leaf's raised above its siblings", [&](auto& e) { at(e, {2, 1, 1}).detailDeltaC += 5.0f; }, "1/0/0"},
+        {"root's too small", [&](auto& e) { at(e, NodeId::root()).detailDeltaC -= 0.125f; }, "0/0/0"},
+    };
+    for (const Case& c : cases) {
+        MapParts damaged = parts;
+        c.change(damaged.entries);
+        test::writeFileBytes(dir / "wrong.map", assemble(damaged));
+        auto map = test::openMap(dir / "wrong.map");
+        ASSERT_TRUE(map) << c.what;
+        auto problems = verifyMap(*map);
+        ASSERT_FALSE(problems.empty()) << c.what << " was not noticed";
+        EXPECT_TRUE(std::any_of(problems.begin(), problems.end(), [&](const std::string& p) {
+            return mentions(p, c.mentions) && mentions(p, "detail_delta_c") &&
+                   mentions(p, (dir / "wrong.map").string());
+        })) << c.what << ": " << problems.front();
+    }
+    // The untouched map verifies.
+    test::writeFileBytes(dir / "right.map", assemble(parts));
+    auto map = test::openMap(dir / "right.map");
+    ASSERT_TRUE(map);
+    auto problems = verifyMap(*map);
+    EXPECT_TRUE(problems.empty()) << problems.front();
 }
 
 }  // namespace

@@ -117,6 +117,13 @@ inline BuildOptions testOptions(int chunkSize, int threads = 1)
     return options;
 }
 
+/// A stand-in for prep's leaf detail error estimate (BuildOptions::leafDetailError): a multiple of 1/4 m
+/// from 0.25 to 1.25 m that depends on the leaf's position only, so nested sums are exact in float.
+inline float fakeLeafDetailError(const MapHeader&, const NodeId& id, std::span<const std::uint16_t>)
+{
+    return 0.25f * static_cast<float>(1 + (id.x * 7 + id.y * 3) % 5);
+}
+
 // ---- Files ----
 
 inline Bytes readFileBytes(const std::filesystem::path& path)

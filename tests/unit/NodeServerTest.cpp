@@ -37,7 +37,7 @@ public:
         auto n = std::make_shared<NodeData>();
         n->id = id;
         n->hasChildren = true;
-        n->heights.assign(69 * 69, static_cast<std::uint16_t>(id.key()));
+        n->codes.assign(69 * 69, static_cast<std::uint16_t>(id.key()));
         return n;
     }
 
@@ -150,7 +150,7 @@ TEST(NodeServerTest, WorkersLoadEverythingAndMatchInline)
         for (auto& group : server.takeCompleted()) {
             EXPECT_TRUE(group.children.ok());
             for (const auto& child : *group.children) {
-                loaded[child->id.key()] = child->heights.front();
+                loaded[child->id.key()] = child->codes.front();
             }
         }
         (void)parent;

@@ -291,6 +291,10 @@ TEST(PrepCliTest, BadArgumentsAndInputsAreErrorsNamingTheCulprit)
     test::writeFileBytes(dir / "truncated.png", std::span(real).first(real.size() / 2));
     test::writeFileBytes(dir / "notes.txt", test::Bytes(64, 'a'));
     const std::string missing = (dir / "missing.png").string();
+    const std::string badMaterial = (dir / "bad.mat").string();
+    const std::string text = "name = bad\namplitude = loud\n";
+    test::writeFileBytes(badMaterial, test::Bytes(text.begin(), text.end()));
+    const std::string grass = (std::filesystem::path(TERRAIN_MATERIALS_DIR) / "grass.mat").string();
     struct Case {
         std::vector<std::string> args;
         std::string mentions;
@@ -316,6 +320,15 @@ TEST(PrepCliTest, BadArgumentsAndInputsAreErrorsNamingTheCulprit)
         {{(dir / "notes.txt").string()}, (dir / "notes.txt").string()},
         {{small, "-t", missing}, missing},
         {{small, "-w", (dir / "corrupt.png").string()}, (dir / "corrupt.png").string()},
+        {{small, "--material"}, "--material needs a value"},
+        {{small, "--material", (dir / "missing.mat").string()}, (dir / "missing.mat").string()},
+        {{small, "--material", grass, "--material", badMaterial}, badMaterial + ":2"},
+        {{small, "--material", grass, "--material", grass, "--material", grass, "--material", grass, "--material",
+          grass},
+         "at most 4"},
+        {{small, "--detail-scheme", "loop"}, "'loop'"},
+        {{small, "--detail-factor", "2.5"}, "--detail-factor"},
+        {{small, "--detail-factor", "x"}, "--detail-factor"},
     };
     for (const Case& c : cases) {
         std::string line;
@@ -336,6 +349,9 @@ TEST(PrepCliTest, HelpPrintsUsage)
     auto result = test::runProgram(kPrep, {"--help"});
     EXPECT_EQ(result.exitCode, 0);
     EXPECT_TRUE(mentions(result.output, "usage: prep")) << result.output;
+    for (const char* option : {"--material", "--detail-scheme", "--detail-factor"}) {
+        EXPECT_TRUE(mentions(result.output, option)) << option << "\n" << result.output;
+    }
 }
 
 TEST(PrepCliTest, DefaultOutputIsTheInputWithExtensionMap)
@@ -437,6 +453,75 @@ TEST(PrepCliTest, InterruptedPrepLeavesNothingBehind)
         EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal) << "signal " << signal << ", status " << status;
         EXPECT_TRUE(dir.list().empty()) << "signal " << signal << " left " << dir.list().front();
     }
+}
+
+TEST(PrepCliTest, MaterialsGiveLeafDetailErrorsIndependentOfThreads)
+{
+    // prep --material on real data, as demos/run preps the demo terrain: the leaves get the estimated error
+    // of the detail synthesized below them (3.4.1), nested into detail_delta_c; the stored heights and
+    // textures do not change; the map does not depend on the thread count.
+    test::ScratchDir dir;
+    const std::string input = test::testDataPath("jacksboro_fault_dem_403x344.png").string();
+    const std::filesystem::path materials = TERRAIN_MATERIALS_DIR;
+    auto prep = [&](const std::string& name, std::vector<std::string> extra) {
+        std::vector<std::string> args = {input, "-h", "30", "-o", (dir / name).string()};
+        args.insert(args.end(), extra.begin(), extra.end());
+        return test::runProgram(kPrep, args);
+    };
+    const std::vector<std::string> detail = {"--material", (materials / "grass.mat").string(), "--material",
+                                             (materials / "rock.mat").string()};
+    std::vector<std::string> oneThread = detail, twoThreads = detail;
+    oneThread.insert(oneThread.end(), {"--threads", "1"});
+    twoThreads.insert(twoThreads.end(), {"--threads", "2"});
+    const RunResult one = prep("one.map", oneThread);
+    ASSERT_EQ(one.exitCode, 0) << one.output;
+    const RunResult two = prep("two.map", twoThreads);
+    ASSERT_EQ(two.exitCode, 0) << two.output;
+    const RunResult plain = prep("plain.map", {"--threads", "2"});
+    ASSERT_EQ(plain.exitCode, 0) << plain.output;
+    const RunResult bilinear = prep("bilinear.map", {"--detail-scheme", "bilinear", "--detail-factor", "0"});
+    ASSERT_EQ(bilinear.exitCode, 0) << bilinear.output;
+    EXPECT_TRUE(mentions(one.output, "leaf error max")) << one.output;
+    EXPECT_TRUE(mentions(one.output, "materials grass rock, kobbelt omega 1;")) << one.output;
+    EXPECT_TRUE(mentions(one.output, "estimating")) << one.output;
+    EXPECT_TRUE(mentions(plain.output, "subdivision only")) << plain.output;
+    EXPECT_TRUE(mentions(bilinear.output, "bilinear;")) << bilinear.output;
+    EXPECT_TRUE(mentions(bilinear.output, "warning: --detail-factor has no effect")) << bilinear.output;
+
+    const test::Bytes bytesOne = test::readFileBytes(dir / "one.map");
+    EXPECT_TRUE(bytesOne == test::readFileBytes(dir / "two.map")) << "--threads 1 and 2 wrote different maps";
+    for (const char* name : {"one.map", "plain.map", "bilinear.map"}) {
+        auto verify = test::runProgram(kTool, {"verify", (dir / name).string()});
+        EXPECT_EQ(verify.exitCode, 0) << name << ": " << verify.output;
+    }
+
+    auto map = test::openMap(dir / "one.map");
+    auto without = test::openMap(dir / "plain.map");
+    ASSERT_TRUE(map && without);
+    EXPECT_TRUE(map->header().hasDetailErrors());
+    // Only the directory differs: heights and textures are the same.
+    const test::Bytes bytesPlain = test::readFileBytes(dir / "plain.map");
+    ASSERT_EQ(map->header().directoryOffset, without->header().directoryOffset);
+    const auto nodesEnd = static_cast<std::ptrdiff_t>(map->header().directoryOffset);
+    EXPECT_TRUE(std::equal(bytesOne.begin() + 256, bytesOne.begin() + nodesEnd, bytesPlain.begin() + 256));
+    float largest = 0.0f;
+    int leaves = 0, grew = 0;
+    for (std::size_t k = 0; k < map->directory().size(); ++k) {
+        const DirectoryEntry& e = map->directory()[k];
+        const DirectoryEntry& p = without->directory()[k];
+        EXPECT_EQ(e.deltaC, p.deltaC) << e.id.toString();
+        EXPECT_GE(e.detailDeltaC, e.deltaC) << e.id.toString();
+        if (!e.hasChildren) {
+            ++leaves;
+            EXPECT_GT(e.detailDeltaC, 0.0f) << e.id.toString();
+            largest = std::max(largest, e.detailDeltaC);
+            grew += e.detailDeltaC > p.detailDeltaC ? 1 : 0;
+        }
+    }
+    EXPECT_GT(grew, leaves / 2) << "the materials' displacement should add to most leaves' error";
+    char printed[64];
+    std::snprintf(printed, sizeof printed, "leaf error max %.3f m", static_cast<double>(largest));
+    EXPECT_TRUE(mentions(one.output, printed)) << printed << "\n" << one.output;
 }
 
 // ---- tengine-tool errors ----

@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 #include <limits>
+#include <mutex>
+#include <set>
 
 namespace terrain {
 namespace {
@@ -406,15 +408,20 @@ TEST(QuadtreeBuilderTest, FileIsByteIdenticalForAnyThreadCount)
         const char* name;
         HeightField field;
         double maxError;
+        bool detail = false;  ///< with leaf detail errors
     };
     const Case cases[] = {{"lossless", test::hillyField(129, 129, 19), 0.0},
-                          {"lossy padded", test::roughField(129, 100, 20, 0, 4000), 3.0}};
+                          {"lossy padded", test::roughField(129, 100, 20, 0, 4000), 3.0},
+                          {"lossy padded, leaf detail errors", test::roughField(129, 100, 20, 0, 4000), 3.0, true}};
     for (const Case& c : cases) {
         test::ScratchDir dir;
         test::Bytes reference;
         for (int threads : {1, 2, 3, 4, 8}) {
             BuildOptions options = test::testOptions(17, threads);
             options.maxError = c.maxError;
+            if (c.detail) {
+                options.leafDetailError = test::fakeLeafDetailError;
+            }
             const auto path = dir / ("t" + std::to_string(threads) + ".map");
             auto report = buildMap(c.field, options, path);
             ASSERT_TRUE(report.ok()) << report.error().message;
@@ -634,6 +641,91 @@ TEST(QuadtreeBuilderTest, UniformWeightsChooseTheDepth)
         EXPECT_EQ(built.map->directory().size(), c.nodes) << "gray " << int{c.gray};
         expectFourChildrenOrNone(*built.map);
         EXPECT_TRUE(verifyMap(*built.map).empty()) << "gray " << int{c.gray};
+    }
+}
+
+// ---- Leaf detail errors (3.4.1) ----
+
+TEST(QuadtreeBuilderTest, LeafDetailErrorsAreAskedOncePerLeafAndNestIntoDetailDeltaC)
+{
+    struct Case {
+        const char* name;
+        HeightField field;
+        int chunk;
+        std::uint8_t westWeight;  ///< gray of a weight map's west half (east half white); 255: no pruning
+        bool estimator;           ///< false: no leafDetailError, detailDeltaC must equal deltaC
+    };
+    const Case cases[] = {
+        {"full tree", test::hillyField(129, 129, 31), 17, 255, true},
+        {"full tree, no estimator", test::hillyField(129, 129, 31), 17, 255, false},
+        {"padded", test::roughField(70, 41, 32, 0, 3000), 9, 255, true},
+        {"pruned west half: leaves on three levels", test::roughField(129, 129, 33, 0, 2000), 17, 100, true},
+        {"root alone", test::hillyField(17, 17, 34), 17, 255, true},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        test::ScratchDir dir;
+        BuildOptions options = test::testOptions(c.chunk, 2);
+        if (c.westWeight != 255) {
+            auto gray = [&](int x, int) { return x < 4 ? c.westWeight : std::uint8_t{255}; };
+            Image weights{8, 8, 1, grayPixels(8, 8, gray)};
+            ASSERT_TRUE(writePngImage(dir / "w.png", weights).ok());
+            options.weights = dir / "w.png";
+        }
+        std::mutex mutex;
+        std::map<std::uint64_t, std::vector<std::uint16_t>> asked;  // by key: the window each leaf was given
+        int repeats = 0;
+        if (c.estimator) {
+            options.leafDetailError = [&](const MapHeader& h, const NodeId& id, std::span<const std::uint16_t> window) {
+                EXPECT_EQ(window.size(), static_cast<std::size_t>(h.windowSize() * h.windowSize()));
+                std::lock_guard lock(mutex);
+                repeats += asked.count(id.key()) ? 1 : 0;
+                asked[id.key()].assign(window.begin(), window.end());
+                return test::fakeLeafDetailError(h, id, window);
+            };
+        }
+        const Built built = buildAndDecode(dir, c.field, options);
+        ASSERT_TRUE(built.map);
+        EXPECT_TRUE(built.header().hasDetailErrors());
+        EXPECT_EQ(repeats, 0);
+        std::set<int> leafLevels;
+        float largest = 0.0f;
+        double sum = 0.0;
+        for (const DirectoryEntry& entry : built.map->directory()) {
+            const std::string node = entry.id.toString();
+            EXPECT_GE(entry.detailDeltaC, entry.deltaC) << node;
+            if (!entry.hasChildren) {
+                leafLevels.insert(entry.id.level);
+                const float expected = c.estimator ? test::fakeLeafDetailError(built.header(), entry.id, {}) : 0.0f;
+                EXPECT_EQ(entry.detailDeltaC, expected) << node;
+                largest = std::max(largest, entry.detailDeltaC);
+                sum += entry.detailDeltaC;
+                if (c.estimator) {
+                    // The window it was given is the leaf's stored window.
+                    auto it = asked.find(entry.id.key());
+                    ASSERT_NE(it, asked.end()) << node << " was never asked for";
+                    EXPECT_EQ(it->second, built.node(entry.id).heights) << node;
+                }
+                continue;
+            }
+            EXPECT_FALSE(asked.count(entry.id.key())) << "inner node " << node << " was asked for";
+            float worstChild = 0.0f;
+            for (int q = 0; q < 4; ++q) {
+                worstChild = std::max(worstChild, built.map->find(entry.id.child(q))->detailDeltaC);
+            }
+            EXPECT_EQ(entry.detailDeltaC, worstChild + entry.deltaM) << node;  // eq. 3.1, the same float sum
+            if (!c.estimator) {
+                EXPECT_EQ(entry.detailDeltaC, entry.deltaC) << node;
+            }
+        }
+        EXPECT_EQ(asked.size(), c.estimator ? built.report.leaves : 0u);
+        EXPECT_EQ(built.report.leaves, built.map->directory().size() - (built.map->directory().size() - 1) / 4);
+        EXPECT_EQ(built.report.maxLeafDetailError, largest);
+        EXPECT_NEAR(built.report.meanLeafDetailError, sum / static_cast<double>(built.report.leaves), 1e-9);
+        if (c.westWeight != 255) {
+            EXPECT_GE(leafLevels.size(), 2u) << "the weight map should leave leaves on several levels";
+        }
+        EXPECT_TRUE(verifyMap(*built.map).empty());
     }
 }
 

@@ -120,6 +120,14 @@ const std::vector<ValidCase>& validCases()
         {"detail_subdivision_factor=2", [](const O& o) { return o.detailSubdivisionFactor == 2.0; }},
         {"detail_add_material=no", [](const O& o) { return !o.detailAddMaterial; }},
         {"detail_material_type=1", [](const O& o) { return o.detailMaterialType == 1; }},
+        {"detail_subdivision_scheme=catmull-clark", [](const O& o) { return o.detailSubdivisionScheme == "catmull-clark"; }},
+        {"detail_subdivision_scheme=bilinear", [](const O& o) { return o.detailSubdivisionScheme == "bilinear"; }},
+        {"detail_materials=a.mat, /m/b.mat", [](const O& o) {
+             return o.detailMaterials == std::vector<std::filesystem::path>{"a.mat", "/m/b.mat"};
+         }},
+        {"material_path=my/materials", [](const O& o) { return o.materialPath == "my/materials"; }},
+        {"detail_velocity_limit=0", [](const O& o) { return o.detailVelocityLimit == 0.0; }},
+        {"detail_velocity_limit=12.5", [](const O& o) { return o.detailVelocityLimit == 12.5; }},
         {"camera_fov=1.5", [](const O& o) { return o.cameraFov == 1.5; }},
         {"camera_fov=178.9", [](const O& o) { return o.cameraFov == 178.9; }},
         {"camera_z_near=0.1", [](const O& o) { return o.cameraZNear == 0.1; }},
@@ -257,6 +265,10 @@ TEST(TengineOptions, InvalidValuesAreErrorsSayingWhatIsExpected)
         {"detail_add_material=", "true or false (also yes/no, on/off, 1/0)"},
         {"detail_material_type=2", "an integer in [0, 1]"},
         {"detail_material_type=-1", "an integer in [0, 1]"},
+        {"detail_subdivision_scheme=loop", "kobbelt, bilinear or catmull-clark"},
+        {"detail_materials=a.mat,,b.mat", "empty or .mat paths separated by commas (at most 4)"},
+        {"detail_materials=a.mat,b.mat,c.mat,d.mat,e.mat", "empty or .mat paths separated by commas (at most 4)"},
+        {"detail_velocity_limit=-1", "a number >= 0 (samples per second)"},
         {"camera_fov=1", "a number in (1, 179) (degrees)"},
         {"camera_fov=179", "a number in (1, 179) (degrees)"},
         {"camera_z_near=0", "a number > 0 (metres)"},
@@ -301,7 +313,7 @@ TEST(TengineOptions, InvalidValuesAreErrorsSayingWhatIsExpected)
     // Every key that can be invalid has a case: all but the paths, which take any text.
     for (std::string_view key : tengineOptionKeys()) {
         bool isPath = key == "map_file" || key == "camera_path" || key == "log_file" || key == "image_path" ||
-                      key == "shader_path";
+                      key == "shader_path" || key == "material_path";
         EXPECT_EQ(keysWithInvalidCases.count(std::string(key)) == 1, !isPath) << key;
     }
 }

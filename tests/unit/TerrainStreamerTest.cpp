@@ -2,7 +2,7 @@
 #include "MapTestSupport.h"
 
 #include "lod/CameraPath.h"
-#include "lod/StaticNodeSource.h"
+#include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 
 #include <gtest/gtest.h>
@@ -45,12 +45,11 @@ protected:
 
 TEST_F(TerrainStreamerTest, CacheNeverExceedsItsCapacityAndEverythingDrawnIsResident)
 {
-    MapLodTree tree(*mMap);
-    StaticNodeSource source(*mMap);
+    TerrainNodeSource source(*mMap, {});
     StreamerOptions options;
     options.cacheSize = 45;
     options.workers = 0;  // inline: deterministic
-    auto streamer = TerrainStreamer::create(tree, source, options);
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
     ASSERT_TRUE(streamer.ok()) << streamer.error().message;
     const CameraPath path = flight();
     Camera camera;
@@ -74,12 +73,11 @@ TEST_F(TerrainStreamerTest, CacheNeverExceedsItsCapacityAndEverythingDrawnIsResi
 
 TEST_F(TerrainStreamerTest, ConvergesToTheSelectionWithEverythingResident)
 {
-    MapLodTree tree(*mMap);
-    StaticNodeSource source(*mMap);
+    TerrainNodeSource source(*mMap, {});
     StreamerOptions options;
     options.cacheSize = mMap->directory().size();
     options.workers = 2;
-    auto streamer = TerrainStreamer::create(tree, source, options);
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
     ASSERT_TRUE(streamer.ok());
     Camera camera;
     flight().evaluate(25.0).applyTo(camera);
@@ -90,7 +88,7 @@ TEST_F(TerrainStreamerTest, ConvergesToTheSelectionWithEverythingResident)
         (*streamer)->drain();
     }
     LodSelection reference;
-    selectNodes(tree, camera, 2.0, {}, reference);  // every node resident
+    selectNodes((*streamer)->tree(), camera, 2.0, {}, reference);  // every node resident
     ASSERT_EQ((*streamer)->selection().nodes.size(), reference.nodes.size());
     for (std::size_t i = 0; i < reference.nodes.size(); ++i) {
         EXPECT_EQ((*streamer)->selection().nodes[i].id, reference.nodes[i].id);
@@ -99,7 +97,7 @@ TEST_F(TerrainStreamerTest, ConvergesToTheSelectionWithEverythingResident)
     for (const auto& selected : reference.nodes) {
         auto direct = mMap->loadPath(selected.id);
         ASSERT_TRUE(direct.ok());
-        EXPECT_EQ((*streamer)->node(selected.id)->heights, direct->heights) << selected.id.toString();
+        EXPECT_EQ((*streamer)->node(selected.id)->codes, direct->heights) << selected.id.toString();
     }
 }
 
@@ -121,12 +119,11 @@ TEST_F(TerrainStreamerTest, ACorruptNodeIsReportedOnceAndItsParentKeepsBeingDraw
     }
     auto map = MapFile::open(mDir / "hills.map", ReaderKind::MemoryMapped);
     ASSERT_TRUE(map.ok());
-    MapLodTree tree(**map);
-    StaticNodeSource source(**map);
+    TerrainNodeSource source(**map, {});
     StreamerOptions options;
     options.cacheSize = (*map)->directory().size();
     options.workers = 1;
-    auto streamer = TerrainStreamer::create(tree, source, options);
+    auto streamer = TerrainStreamer::create(source, extentOf((*map)->header()), options);
     ASSERT_TRUE(streamer.ok());
     std::vector<std::string> reports;
     (*streamer)->onLoadError([&](const std::string& message) { reports.push_back(message); });

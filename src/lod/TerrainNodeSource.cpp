@@ -1,0 +1,155 @@
+// Static and dynamic nodes (paper 3.2.14, 3.4.1, 3.4.3, 4.2.4).
+#include "lod/TerrainNodeSource.h"
+
+#include "core/Check.h"
+#include "synthesis/LeafErrorEstimator.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace terrain {
+
+TerrainNodeSource::TerrainNodeSource(const MapFile& map, DetailPolicy policy) : mMap(map), mPolicy(policy)
+{
+    TERRAIN_EXPECTS(!policy.synthesizer || policy.synthesizer->chunkSize() == static_cast<int>(map.header().chunkSize),
+                    "the synthesizer's chunk size must be the map's");
+    TERRAIN_EXPECTS(policy.minimumSpacing >= 0.0, "lod_minimum_spacing must be >= 0");
+    if (policy.synthesizer && policy.synthesizer->settings().materials) {
+        for (const Material& m : policy.synthesizer->settings().materials->materials()) {
+            if (m.displacement) {
+                mDisplacementBound = std::max(mDisplacementBound, m.fractal.amplitude);
+            }
+        }
+    }
+}
+
+WindowPlacement windowPlacement(const MapHeader& h, const NodeId& id)
+{
+    const std::int64_t cells = h.chunkSize - 1;
+    return {h.originX,
+            h.originY,
+            h.heightOffset,
+            h.spacingAt(id.level),
+            static_cast<std::int64_t>(id.x) * cells - kBorder,
+            static_cast<std::int64_t>(id.y) * cells - kBorder};
+}
+
+std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
+    const DetailSynthesizer& synthesizer)
+{
+    return [&synthesizer](const MapHeader& h, const NodeId& id, std::span<const std::uint16_t> codes) {
+        DualHeightMap leaf;
+        leaf.size = h.windowSize();
+        leaf.base.resize(codes.size());
+        for (std::size_t k = 0; k < codes.size(); ++k) {
+            leaf.base[k] = static_cast<float>(h.heightStep * codes[k]);  // as loadStatic makes it
+        }
+        return estimateLeafDetailError(std::move(leaf), windowPlacement(h, id), synthesizer, id.key());
+    };
+}
+
+WindowPlacement TerrainNodeSource::placement(const NodeId& id) const
+{
+    return windowPlacement(mMap.header(), id);
+}
+
+bool TerrainNodeSource::childrenAllowed(const NodeId& id, bool hasStaticChildren) const
+{
+    if (!hasStaticChildren && !mPolicy.synthesizer) {
+        return false;
+    }
+    return id.level < NodeId::kMaxLevel && mMap.header().spacingAt(id.level + 1) >= mPolicy.minimumSpacing;
+}
+
+Expected<NodePtr> TerrainNodeSource::loadStatic(const NodeId& id, const NodeData* parent) const
+{
+    auto node =
+        mMap.loadNode(id, parent ? std::span<const std::uint16_t>(parent->codes) : std::span<const std::uint16_t>());
+    TERRAIN_TRY(node);
+    const MapHeader& h = mMap.header();
+    const DirectoryEntry* entry = mMap.find(id);
+    TERRAIN_ASSERT(entry);
+    const bool detail = mPolicy.synthesizer != nullptr;
+    auto data = std::make_shared<NodeData>();
+    data->id = id;
+    data->isStatic = true;
+    data->hasStaticChildren = entry->hasChildren;
+    data->hasChildren = childrenAllowed(id, entry->hasChildren);
+    // With detail, errors include what synthesis adds below the static leaves (3.4.1, estimated by prep).
+    data->deltaC = detail && h.hasDetailErrors() ? entry->detailDeltaC : entry->deltaC;
+    data->zMin = h.heightOf(entry->minCode) - mDisplacementBound;
+    data->zMax = h.heightOf(entry->maxCode) + mDisplacementBound;
+    data->spacing = h.spacingAt(id.level);
+    data->codes = std::move(node->heights);
+    DualHeightMap& map = data->heights;
+    map.size = static_cast<int>(h.windowSize());
+    map.base.resize(data->codes.size());
+    for (std::size_t k = 0; k < data->codes.size(); ++k) {
+        map.base[k] = static_cast<float>(h.heightStep * data->codes[k]);
+    }
+    if (detail) {
+        const WindowPlacement where = placement(id);
+        mPolicy.synthesizer->displace(where, parent && parent->heights.hasDisplacement() ? &parent->heights : nullptr,
+                                      id.isRoot() ? 0 : id.quadrant(), map);
+        data->materialWeights = mPolicy.synthesizer->materialWeights(map, where);
+    }
+    data->texture = std::move(node->texture);
+    return NodePtr(std::move(data));
+}
+
+NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) const
+{
+    const MapHeader& h = mMap.header();
+    const DetailSynthesizer& synthesizer = *mPolicy.synthesizer;
+    const NodeId id = parent.id.child(quadrant);
+    const WindowPlacement where = placement(id);
+    auto data = std::make_shared<NodeData>();
+    data->id = id;
+    data->isStatic = false;
+    data->hasStaticChildren = false;
+    data->hasChildren = childrenAllowed(id, false);
+    data->deltaC = parent.deltaC * 0.5f;  // 3.4.1: "half the error of their parent"
+    data->spacing = where.spacing;
+    data->heights = synthesizer.synthesizeChild(parent.heights, quadrant, where);
+    data->materialWeights = synthesizer.materialWeights(data->heights, where);
+    data->texture = upsampleTexture(parent.texture, static_cast<int>(h.textureSize), quadrant);
+    // The box: the node's base samples plus whatever displacement its descendants may add, kept inside the
+    // parent's so boxes stay nested (3.2.12).
+    const int n = static_cast<int>(h.chunkSize), w = data->heights.size;
+    float lo = data->heights.base[static_cast<std::size_t>(kBorder) * w + kBorder], hi = lo;
+    for (int j = kBorder; j < kBorder + n; ++j) {
+        for (int i = kBorder; i < kBorder + n; ++i) {
+            const float b = data->heights.base[static_cast<std::size_t>(j) * w + i];
+            lo = std::min(lo, b);
+            hi = std::max(hi, b);
+        }
+    }
+    data->zMin = std::clamp(h.heightOffset + lo - mDisplacementBound, parent.zMin, parent.zMax);
+    data->zMax = std::clamp(h.heightOffset + hi + mDisplacementBound, data->zMin, parent.zMax);
+    return data;
+}
+
+Expected<NodePtr> TerrainNodeSource::loadRoot()
+{
+    return loadStatic(NodeId::root(), nullptr);
+}
+
+Expected<ChildNodes> TerrainNodeSource::loadChildren(const NodeData& parent)
+{
+    if (!parent.hasChildren) {
+        return makeError(mMap.name(), ": node ", parent.id.toString(), " has no children");
+    }
+    ChildNodes children;
+    for (int q = 0; q < 4; ++q) {
+        if (parent.hasStaticChildren) {
+            auto child = loadStatic(parent.id.child(q), &parent);
+            TERRAIN_TRY(child);
+            children[static_cast<std::size_t>(q)] = std::move(child.value());
+        } else {
+            children[static_cast<std::size_t>(q)] = synthesize(parent, q);
+        }
+    }
+    return children;
+}
+
+}  // namespace terrain

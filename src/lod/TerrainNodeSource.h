@@ -1,0 +1,61 @@
+// Where the runtime's nodes come from (paper 3.2.14, 3.4.3 "Creation of Dynamic Nodes", 4.2.4): static
+// nodes are read and decoded from the .map; below the static leaves, dynamic nodes are synthesized from
+// their parent (subdivision + material displacement, synthesis/DetailSynthesizer.h). Both get the
+// material displacement, so a static leaf and its dynamic children nest exactly.
+#pragma once
+
+#include "lod/NodeData.h"
+#include "quadtree/MapFile.h"
+#include "synthesis/DetailSynthesizer.h"
+
+#include <functional>
+#include <span>
+
+namespace terrain {
+
+/// Where node `id`'s window lies in the world of the map with header `h` (synthesis/DetailSynthesizer.h):
+/// the one placement rule shared by the viewer, prep's detail error estimate and height queries.
+WindowPlacement windowPlacement(const MapHeader& h, const NodeId& id);
+
+/// QuadtreeBuilder's leafDetailError for `synthesizer` (paper 3.4.1): the leaf's codes as the viewer's
+/// base heights, placed as the viewer places them, estimated by estimateLeafDetailError with the node's
+/// key as the seed. `synthesizer` must outlive the returned function.
+std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
+    const DetailSynthesizer& synthesizer);
+
+/// How far synthesis goes.
+struct DetailPolicy {
+    /// The synthesizer (detail_create_new_nodes on); null: the static map as stored, nothing synthesized.
+    /// Needs a map with detail errors (MapHeader::hasDetailErrors) for the selection to refine below the
+    /// static leaves. Must outlive the source.
+    const DetailSynthesizer* synthesizer = nullptr;
+    /// lod_minimum_spacing: no node, static or dynamic, with a sample spacing below this (metres, >= 0).
+    double minimumSpacing = 0.0;
+};
+
+class TerrainNodeSource final : public NodeSource {
+public:
+    /// `map` must outlive the source. Precondition: the synthesizer's chunk size is the map's.
+    TerrainNodeSource(const MapFile& map, DetailPolicy policy);
+
+    Expected<NodePtr> loadRoot() override;
+    /// Static children from the map, or four dynamic children of a static leaf or dynamic node. Fails
+    /// (naming the node) for a node without children.
+    Expected<ChildNodes> loadChildren(const NodeData& parent) override;
+
+    /// Where a node's window lies in the world (synthesis/DetailSynthesizer.h).
+    WindowPlacement placement(const NodeId& id) const;
+    /// The most the displacement moves the surface, metres (the bounding boxes grow by it).
+    double displacementBound() const { return mDisplacementBound; }
+
+private:
+    Expected<NodePtr> loadStatic(const NodeId& id, const NodeData* parent) const;
+    NodePtr synthesize(const NodeData& parent, int quadrant) const;
+    bool childrenAllowed(const NodeId& id, bool hasStaticChildren) const;
+
+    const MapFile& mMap;
+    DetailPolicy mPolicy;
+    double mDisplacementBound = 0.0;
+};
+
+}  // namespace terrain

@@ -1,0 +1,180 @@
+// Dynamic node synthesis (paper 3.4.3 "Adding Nodes to the Quadtree", 4.2.4 "Detail Generation System").
+#include "synthesis/DetailSynthesizer.h"
+
+#include "core/Check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace terrain {
+
+Expected<std::unique_ptr<const DetailSynthesizer>> DetailSynthesizer::create(int chunkSize, DetailSettings settings)
+{
+    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1, k >= 1");
+    if (!(std::isfinite(settings.omega) && settings.omega >= 0.0 && settings.omega <= 2.0)) {
+        return makeError("detail_subdivision_factor ", settings.omega, " must be in [0, 2]");
+    }
+    if (settings.materials && settings.materials->materials().size() > kMaxDetailMaterials) {
+        return makeError("a material set holds at most ", kMaxDetailMaterials, " materials, not ",
+                         settings.materials->materials().size());
+    }
+    auto subdivider = makeSubdivider(settings.scheme, chunkSize, settings.omega);
+    TERRAIN_TRY(subdivider);
+    return std::unique_ptr<const DetailSynthesizer>(
+        new DetailSynthesizer(std::move(subdivider.value()), std::move(settings)));
+}
+
+DetailSynthesizer::DetailSynthesizer(std::unique_ptr<Subdivider> subdivider, DetailSettings settings)
+    : mSubdivider(std::move(subdivider)), mSettings(std::move(settings))
+{
+    const int w = windowSize();
+    mNewSamples.assign(static_cast<std::size_t>(w) * w, 0);
+    for (int j = 0; j < w; ++j) {
+        for (int i = 0; i < w; ++i) {
+            // Window index c is child coordinate c - 2: even c lies on a parent sample.
+            mNewSamples[static_cast<std::size_t>(j) * w + i] = (i % 2 != 0 || j % 2 != 0) ? 1 : 0;
+        }
+    }
+}
+
+namespace {
+
+/// atan(g) for g >= 0, |error| < 1e-5 rad (a minimax polynomial on [0, 1] and atan(g) = pi/2 - atan(1/g)
+/// above): a few multiplications instead of a libm call, for the thousands of slopes of every node.
+/// Deterministic like any arithmetic here (-ffp-contract=off).
+double fastAtan(double g)
+{
+    const bool inverted = g > 1.0;
+    const double x = inverted ? 1.0 / g : g;
+    const double x2 = x * x;
+    const double a =
+        x * (0.99997726 +
+             x2 * (-0.33262347 + x2 * (0.19354346 + x2 * (-0.11643287 + x2 * (0.05265332 + x2 * -0.01172120)))));
+    return inverted ? std::numbers::pi / 2 - a : a;
+}
+
+}  // namespace
+
+double DetailSynthesizer::slopeDegrees(const DualHeightMap& map, int i, int j, double spacing) const
+{
+    const int w = map.size;
+    auto at = [&](int x, int y) { return static_cast<double>(map.base[static_cast<std::size_t>(y) * w + x]); };
+    const int x0 = std::max(i - 1, 0), x1 = std::min(i + 1, w - 1);
+    const int y0 = std::max(j - 1, 0), y1 = std::min(j + 1, w - 1);
+    const double dx = (at(x1, j) - at(x0, j)) / ((x1 - x0) * spacing);
+    const double dy = (at(i, y1) - at(i, y0)) / ((y1 - y0) * spacing);
+    return fastAtan(std::sqrt(dx * dx + dy * dy)) * (180.0 / std::numbers::pi);
+}
+
+void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightMap* parent, int quadrant,
+                                 DualHeightMap& map) const
+{
+    const int w = windowSize();
+    TERRAIN_EXPECTS(map.size == w && map.base.size() == static_cast<std::size_t>(w) * w,
+                    "the map's window does not match the synthesizer's chunk size");
+    if (!addsDisplacement()) {
+        map.displacement.clear();
+        return;
+    }
+    const std::size_t count = static_cast<std::size_t>(w) * w;
+    map.displacement.assign(count, 0.0f);
+    // One material covers everything: its weight is 1 whatever the slope and height.
+    const bool placed = mSettings.materials->materials().size() > 1;
+    std::vector<float> slope(count), height(count);
+    for (int j = 0; j < w && placed; ++j) {
+        for (int i = 0; i < w; ++i) {
+            const std::size_t k = static_cast<std::size_t>(j) * w + i;
+            if (parent && mNewSamples[k] == 0) {
+                continue;
+            }
+            slope[k] = static_cast<float>(slopeDegrees(map, i, j, where.spacing));
+            height[k] = static_cast<float>(where.heightOffset + map.base[k]);
+        }
+    }
+    std::span<const std::uint8_t> mask;
+    if (parent) {
+        TERRAIN_EXPECTS(parent->size == w && parent->displacement.size() == count, "the parent has no displacement");
+        TERRAIN_EXPECTS(quadrant >= 0 && quadrant < 4, "quadrant must be 0..3");
+        mask = mNewSamples;
+        const int half = (chunkSize() - 1) / 2;
+        const int px0 = 1 + (quadrant & 1) * half, py0 = 1 + (quadrant >> 1) * half;
+        for (int j = 0; j < w; j += 2) {
+            for (int i = 0; i < w; i += 2) {
+                map.displacement[static_cast<std::size_t>(j) * w + i] =
+                    parent->displacement[static_cast<std::size_t>(py0 + j / 2) * w + px0 + i / 2];
+            }
+        }
+    }
+    mSettings.materials->displacementGrid(where.grid(w), slope, height, map.displacement, mask);
+}
+
+DualHeightMap DetailSynthesizer::synthesizeChild(const DualHeightMap& parent, int quadrant,
+                                                 const WindowPlacement& where) const
+{
+    const int w = windowSize();
+    TERRAIN_EXPECTS(parent.size == w && parent.base.size() == static_cast<std::size_t>(w) * w,
+                    "the parent's window does not match the synthesizer's chunk size");
+    DualHeightMap child;
+    child.size = w;
+    child.base.resize(static_cast<std::size_t>(w) * w);
+    mSubdivider->subdivide(parent.base, quadrant, child.base);
+    displace(where, parent.hasDisplacement() ? &parent : nullptr, quadrant, child);
+    return child;
+}
+
+std::vector<std::uint8_t> DetailSynthesizer::materialWeights(const DualHeightMap& map,
+                                                             const WindowPlacement& where) const
+{
+    if (!addsDisplacement()) {
+        return {};
+    }
+    const int n = chunkSize();
+    const int w = windowSize();
+    const auto& set = *mSettings.materials;
+    std::vector<std::uint8_t> out(static_cast<std::size_t>(n) * n * 4, 0);
+    if (set.materials().size() == 1) {
+        for (std::size_t k = 0; k < out.size(); k += 4) {
+            out[k] = 255;
+        }
+        return out;
+    }
+    double weights[kMaxDetailMaterials] = {};
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            const int wi = i + kWindowBorder, wj = j + kWindowBorder;
+            const double height = where.heightOffset + map.base[static_cast<std::size_t>(wj) * w + wi];
+            set.weights(slopeDegrees(map, wi, wj, where.spacing), height, weights);
+            std::uint8_t* px = out.data() + (static_cast<std::size_t>(j) * n + i) * 4;
+            for (std::size_t m = 0; m < set.materials().size(); ++m) {
+                px[m] = static_cast<std::uint8_t>(std::lround(std::clamp(weights[m], 0.0, 1.0) * 255.0));
+            }
+        }
+    }
+    return out;
+}
+
+std::vector<std::uint8_t> upsampleTexture(std::span<const std::uint8_t> parent, int textureSize, int quadrant)
+{
+    const int t = textureSize;
+    TERRAIN_EXPECTS(isValidChunkSize(t), "texture size must be 2^k + 1");
+    TERRAIN_EXPECTS(parent.size() >= static_cast<std::size_t>(t) * t * 3, "the parent texture holds T * T RGB texels");
+    const int half = (t - 1) / 2;
+    const int px0 = (quadrant & 1) * half, py0 = (quadrant >> 1) * half;
+    std::vector<std::uint8_t> out(static_cast<std::size_t>(t) * t * 3);
+    auto texel = [&](int x, int y) { return parent.data() + (static_cast<std::size_t>(y) * t + x) * 3; };
+    for (int j = 0; j < t; ++j) {
+        const int y0 = py0 + j / 2, y1 = py0 + (j + 1) / 2;
+        for (int i = 0; i < t; ++i) {
+            const int x0 = px0 + i / 2, x1 = px0 + (i + 1) / 2;
+            std::uint8_t* o = out.data() + (static_cast<std::size_t>(j) * t + i) * 3;
+            for (int c = 0; c < 3; ++c) {
+                const int sum = texel(x0, y0)[c] + texel(x1, y0)[c] + texel(x0, y1)[c] + texel(x1, y1)[c];
+                o[c] = static_cast<std::uint8_t>((sum + 2) / 4);
+            }
+        }
+    }
+    return out;
+}
+
+}  // namespace terrain

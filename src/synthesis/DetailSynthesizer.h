@@ -1,0 +1,96 @@
+// Detail synthesis of dynamic nodes (paper 3.3, 3.4.3, 4.2.4): a child's base height field is subdivided
+// from its parent's base (Subdivider.h), and a displacement height field from the materials (Material.h)
+// is added on top (DualHeightMap.h). Static nodes get the same displacement, so a static leaf and the
+// dynamic children below it nest exactly.
+//
+// Nesting and seams. The displacement of a window sample is defined where the sample first appears in
+// the quadtree: a sample that is also a parent sample (even window position) copies the parent's value;
+// a new (odd) sample evaluates the materials at its world position (SampleGrid), weighted by the slope and
+// height of the base there. So (1) a child's even samples equal its parent's samples, base and
+// displacement, and geomorphing to the parent's surface is exact; (2) two neighbouring nodes compute
+// every shared sample from the same inputs with the same operations: bit-identical edges, no seams;
+// (3) the result depends only on the node, not on the thread or the order of requests.
+#pragma once
+
+#include "core/Expected.h"
+#include "synthesis/DualHeightMap.h"
+#include "synthesis/Fractal.h"
+#include "synthesis/Material.h"
+#include "synthesis/Subdivider.h"
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace terrain {
+
+/// The detail_* options that shape synthesized geometry.
+struct DetailSettings {
+    std::string scheme = "kobbelt";  ///< detail_subdivision_scheme: kobbelt | bilinear | catmull-clark
+    double omega = 1.0;              ///< detail_subdivision_factor, [0, 2]; kobbelt only
+    /// detail_add_material: the materials whose displacement is added; null adds none (subdivision only).
+    /// At most kMaxDetailMaterials materials (the renderer blends that many detail textures).
+    std::shared_ptr<const MaterialSet> materials;
+};
+
+/// Most materials a set may hold: their weights travel to the GPU as one RGBA8 value per sample.
+inline constexpr std::size_t kMaxDetailMaterials = 4;
+
+/// Where a node's window lies. Window sample (i, j) is at world x = originX + (gx0 + i) * spacing (and y
+/// alike); its absolute height is heightOffset + base (the map's height offset: bases are stored relative
+/// to it so float keeps millimetres).
+struct WindowPlacement {
+    double originX = 0.0;
+    double originY = 0.0;
+    double heightOffset = 0.0;
+    double spacing = 1.0;  ///< metres between the node's samples, > 0
+    std::int64_t gx0 = 0;  ///< global sample index at the node's level of window sample (0, 0)
+    std::int64_t gy0 = 0;
+
+    SampleGrid grid(int windowSize) const { return {originX, originY, gx0, gy0, spacing, windowSize, windowSize}; }
+};
+
+class DetailSynthesizer {
+public:
+    /// Chunk size N (2^k + 1); an unknown scheme, omega outside [0, 2] or more than kMaxDetailMaterials
+    /// materials is an error naming the option.
+    static Expected<std::unique_ptr<const DetailSynthesizer>> create(int chunkSize, DetailSettings settings);
+
+    int chunkSize() const { return mSubdivider->chunkSize(); }
+    int windowSize() const { return chunkSize() + 2 * kWindowBorder; }
+    const DetailSettings& settings() const { return mSettings; }
+    bool addsDisplacement() const { return mSettings.materials != nullptr; }
+
+    /// Sets map.displacement from map.base (W x W): with `parent` (the parent's map; this node is its child
+    /// `quadrant`), samples at even window positions copy the parent's displacement and the others are
+    /// evaluated; without (the root), every sample is evaluated. Clears it when no materials are set.
+    void displace(const WindowPlacement& where, const DualHeightMap* parent, int quadrant, DualHeightMap& map) const;
+
+    /// Dynamic child `quadrant` (0..3) of `parent`: base subdivided, then displace(). `where` places the child.
+    DualHeightMap synthesizeChild(const DualHeightMap& parent, int quadrant, const WindowPlacement& where) const;
+
+    /// The material weights of the node's N x N samples (border excluded), rows south to north, 4 bytes per
+    /// sample: round(255 * weight of material m) for m < materials; empty when no materials are set.
+    std::vector<std::uint8_t> materialWeights(const DualHeightMap& map, const WindowPlacement& where) const;
+
+    /// Slope in degrees (0 flat) of the base at window sample (i, j): central differences, one-sided on
+    /// the window's edge; within 0.001 degrees of the exact value (a polynomial arctangent).
+    double slopeDegrees(const DualHeightMap& map, int i, int j, double spacing) const;
+
+private:
+    DetailSynthesizer(std::unique_ptr<Subdivider> subdivider, DetailSettings settings);
+
+    std::unique_ptr<Subdivider> mSubdivider;
+    DetailSettings mSettings;
+    std::vector<std::uint8_t> mNewSamples;  ///< W x W: 1 where a child sample is not a parent sample
+};
+
+/// A dynamic node's colour texture (3.4.5, before detail textures): its parent's texture over quadrant
+/// `quadrant`, upsampled bilinearly to T x T RGB. Corner texels sit on the node's corners, so the child's
+/// texel i lies at parent texel qx (T - 1) / 2 + i / 2 and neighbours share their edge texels.
+/// Preconditions: T = 2^k + 1 >= 3, parent holds T * T * 3 bytes.
+std::vector<std::uint8_t> upsampleTexture(std::span<const std::uint8_t> parent, int textureSize, int quadrant);
+
+}  // namespace terrain

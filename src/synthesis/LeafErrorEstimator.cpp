@@ -1,0 +1,137 @@
+// Paper 3.4.1, "Approximating Leaf Node Error": stochastic sampling of the detail added below a static leaf.
+#include "synthesis/LeafErrorEstimator.h"
+
+#include "core/Check.h"
+#include "quadtree/TemplateTriangulation.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <utility>
+#include <vector>
+
+namespace terrain {
+
+namespace {
+
+/// splitmix64: a small, fully specified generator, so the choices are the same on every platform.
+class SplitMix64 {
+public:
+    explicit SplitMix64(std::uint64_t seed) : mState(seed) {}
+
+    std::uint64_t next()
+    {
+        std::uint64_t z = (mState += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    /// Uniform in [0, n) for small n (the bias of a 64-bit modulo is far below anything measurable).
+    int below(int n) { return static_cast<int>(next() % static_cast<std::uint64_t>(n)); }
+
+private:
+    std::uint64_t mState;
+};
+
+/// The leaf's surface (base + displacement) with (0, 0) at its south-west sample, in leaf sample units.
+class LeafSurface {
+public:
+    LeafSurface(const DualHeightMap& leaf, int chunkSize) : mN(chunkSize), mW(leaf.size), mHeights(leaf.base.size())
+    {
+        for (std::size_t k = 0; k < mHeights.size(); ++k) {
+            mHeights[k] = static_cast<double>(leaf.height(k));
+        }
+    }
+
+    /// Height at (x, y) in [0, N - 1]^2, interpolated along the template triangles.
+    double at(double x, double y) const
+    {
+        const int cx = std::min(static_cast<int>(x), mN - 2);
+        const int cy = std::min(static_cast<int>(y), mN - 2);
+        const double* row0 = mHeights.data() + static_cast<std::size_t>(cy + kWindowBorder) * mW + cx + kWindowBorder;
+        const double* row1 = row0 + mW;
+        return interpolateQuad(row0[0], row0[1], row1[0], row1[1], x - cx, y - cy);
+    }
+
+private:
+    int mN;
+    int mW;
+    std::vector<double> mHeights;  ///< W x W
+};
+
+/// Largest |node - leaf| over the node's N x N samples; node sample (i, j) lies at leaf position
+/// (x0 + i * step, y0 + j * step). Positions are dyadic fractions: exact in double.
+double deviation(const LeafSurface& leaf, const DualHeightMap& node, int chunkSize, double x0, double y0, double step)
+{
+    const int w = node.size;
+    double worst = 0.0;
+    for (int j = 0; j < chunkSize; ++j) {
+        const double y = y0 + j * step;
+        const std::size_t row = static_cast<std::size_t>(j + kWindowBorder) * w + kWindowBorder;
+        for (int i = 0; i < chunkSize; ++i) {
+            const double d = std::abs(static_cast<double>(node.height(row + i)) - leaf.at(x0 + i * step, y));
+            worst = std::max(worst, d);
+        }
+    }
+    return worst;
+}
+
+}  // namespace
+
+WindowPlacement childPlacement(const WindowPlacement& parent, int quadrant, int chunkSize)
+{
+    TERRAIN_EXPECTS(quadrant >= 0 && quadrant < 4, "quadrant must be 0..3");
+    // Window sample 0 of a node at position X is global sample X (N - 1) - border, at the node's level.
+    const std::int64_t cells = chunkSize - 1;
+    WindowPlacement child = parent;
+    child.spacing = parent.spacing * 0.5;
+    child.gx0 = 2 * (parent.gx0 + kWindowBorder) + (quadrant & 1) * cells - kWindowBorder;
+    child.gy0 = 2 * (parent.gy0 + kWindowBorder) + (quadrant >> 1) * cells - kWindowBorder;
+    return child;
+}
+
+float estimateLeafDetailError(DualHeightMap leaf, const WindowPlacement& where, const DetailSynthesizer& synthesizer,
+                              std::uint64_t seed, const LeafErrorSampling& sampling)
+{
+    const int n = synthesizer.chunkSize();
+    const int w = synthesizer.windowSize();
+    TERRAIN_EXPECTS(leaf.size == w && leaf.base.size() == static_cast<std::size_t>(w) * w,
+                    "the leaf's window does not match the synthesizer's chunk size");
+    TERRAIN_EXPECTS(sampling.descents >= 1 && sampling.descents <= 4, "descents must be 1..4");
+    TERRAIN_EXPECTS(sampling.depth >= 1, "depth must be >= 1");
+    // The runtime displaces a static leaf from its static parent's displacement; here it has no parent, so
+    // its even samples are evaluated at its own spacing. Only their material weights can differ (slope at a
+    // finer spacing), and only where materials blend: the same surface up to that blend.
+    synthesizer.displace(where, nullptr, 0, leaf);
+    const LeafSurface surface(leaf, n);
+
+    SplitMix64 random(seed);
+    std::array<int, 4> children = {0, 1, 2, 3};
+    for (int k = 3; k > 0; --k) {  // Fisher-Yates: the descents go through distinct children
+        std::swap(children[static_cast<std::size_t>(k)], children[static_cast<std::size_t>(random.below(k + 1))]);
+    }
+    const double half = (n - 1) / 2.0;
+    double worst = 0.0;
+    for (int d = 0; d < sampling.descents; ++d) {
+        int quadrant = children[static_cast<std::size_t>(d)];
+        WindowPlacement place = childPlacement(where, quadrant, n);
+        DualHeightMap node = synthesizer.synthesizeChild(leaf, quadrant, place);
+        // The node's south-west sample in leaf sample units, and its spacing in them.
+        double x0 = (quadrant & 1) * half, y0 = (quadrant >> 1) * half, step = 0.5;
+        for (int level = 1;; ++level) {
+            worst = std::max(worst, deviation(surface, node, n, x0, y0, step));
+            if (level == sampling.depth) {
+                break;
+            }
+            quadrant = random.below(4);
+            x0 += (quadrant & 1) * half * step;
+            y0 += (quadrant >> 1) * half * step;
+            step *= 0.5;
+            place = childPlacement(place, quadrant, n);
+            node = synthesizer.synthesizeChild(node, quadrant, place);
+        }
+    }
+    return static_cast<float>(worst);
+}
+
+}  // namespace terrain
