@@ -39,14 +39,12 @@ uniform int uDetailActive;               // 0: the whole node is too far for any
 
 vec3 detailFactor()
 {
-    if (uDetailActive == 0) {
-        return vec3(1.0);
-    }
-    // Per material: the product of its layers. Straight-line code over uniform-indexed data (no branch
-    // per fragment, no indexing by a varying): llvmpipe runs it several times faster than a branchy loop.
+    // Per material: the product of its layers (1 where faded out). No branch per fragment, no indexing by
+    // a varying; the loop is skipped for whole nodes beyond the fade (a uniform branch). The tint applies
+    // at every distance, so the skip leaves no seam.
     vec4 layers = vec4(1.0);
     float distance = length(vRelative);
-    for (int k = 0; k < uLayerCount; ++k) {
+    for (int k = 0; k < uLayerCount * uDetailActive; ++k) {
         // Gray 0.5 is neutral; kDetailContrast scales the rest, so the tile modulates the node's colour
         // rather than replacing it. Faded out between 10 and 40 repeats away: farther, the repetition of
         // the tile would show as a regular pattern, and the node's own texture carries what matters there.

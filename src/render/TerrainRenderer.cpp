@@ -302,9 +302,9 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
                               reinterpret_cast<const void*>(offsetof(NodeVertex, materialWeights)));
         if (!mLayerSize.empty()) {
             // The fragment shader fades each layer out by 40 repeats away (shaders/terrain.frag): a node
-            // wholly beyond that for every layer skips the detail textures (a uniform branch).
-            const double finest = *std::min_element(mLayerSize.begin(), mLayerSize.end());
-            glUniform1i(mDetailActive, selected.distance < kDetailFadeRepeats * finest ? 1 : 0);
+            // wholly beyond that for every layer (the coarsest fades last) skips the detail textures.
+            const double coarsest = *std::max_element(mLayerSize.begin(), mLayerSize.end());
+            glUniform1i(mDetailActive, selected.distance < kDetailFadeRepeats * coarsest ? 1 : 0);
             // The node's corner in repeats of each layer, reduced to [0, 1) in double: texture coordinates
             // stay small and exact however far from the origin the node is.
             const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(camera.position);
