@@ -19,6 +19,35 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kDegrees = 180.0 / kPi;
+/// Largest |coordinate| in metres and |time| in seconds a keyframe may hold: a million kilometres and
+/// thirty years are beyond any terrain or flight, and small enough that the spline arithmetic (squared
+/// distances, ghost points 2 p1 - p2) stays finite. Found by fuzzing (tests/data/fuzz/camera_path).
+constexpr double kMaxCoordinate = 1e9;
+constexpr double kMaxTime = 1e9;
+
+/// Why a keyframe's values are unusable (not finite, out of range), or empty. Angles in radians.
+std::string keyframeProblem(const CameraKeyframe& k)
+{
+    const double values[] = {k.time, k.position.x, k.position.y, k.position.z, k.yaw, k.pitch};
+    static constexpr const char* kNames[] = {"time", "x", "y", "z", "yaw", "pitch"};
+    for (int f = 0; f < 6; ++f) {
+        if (!std::isfinite(values[f])) {
+            return std::string(kNames[f]) + " is not finite";
+        }
+    }
+    if (std::abs(k.time) > kMaxTime) {
+        return "time " + formatNumber(k.time) + " s is outside [-1e9, 1e9]";
+    }
+    for (int f = 1; f <= 3; ++f) {
+        if (std::abs(values[f]) > kMaxCoordinate) {
+            return std::string(kNames[f]) + " " + formatNumber(values[f]) + " m is outside [-1e9, 1e9]";
+        }
+    }
+    if (std::abs(k.pitch) > kPi / 2 + 1e-12) {
+        return "pitch " + formatNumber(k.pitch * kDegrees) + " degrees is outside [-90, 90]";
+    }
+    return {};
+}
 
 /// Wraps an angle in radians into (-pi, pi].
 double wrapAngle(double a)
@@ -73,13 +102,8 @@ Expected<CameraPath> CameraPath::fromKeyframes(std::vector<CameraKeyframe> keys,
     }
     for (std::size_t i = 0; i < keys.size(); ++i) {
         const CameraKeyframe& k = keys[i];
-        if (!std::isfinite(k.time) || !std::isfinite(k.position.x) || !std::isfinite(k.position.y) ||
-            !std::isfinite(k.position.z) || !std::isfinite(k.yaw) || !std::isfinite(k.pitch)) {
-            return makeError(name, ": keyframe ", i, " has a value that is not finite");
-        }
-        if (std::abs(k.pitch) > kPi / 2 + 1e-12) {
-            return makeError(name, ": keyframe ", i, ": pitch ", k.pitch * kDegrees,
-                             " degrees is outside [-90, 90]");
+        if (const std::string problem = keyframeProblem(k); !problem.empty()) {
+            return makeError(name, ": keyframe ", i, ": ", problem);
         }
         if (i > 0 && !(k.time > keys[i - 1].time)) {
             return makeError(name, ": keyframe ", i, ": time ", k.time, " is not after the previous keyframe's time ",
@@ -136,11 +160,15 @@ Expected<CameraPath> CameraPath::parse(std::string_view text, const std::string&
         if (std::abs(v[5]) > 90.0) {
             return makeError(name, ":", lineNumber, ": pitch ", v[5], " is outside [-90, 90] degrees");
         }
+        const CameraKeyframe key{v[0], {v[1], v[2], v[3]}, v[4] / kDegrees, v[5] / kDegrees};
+        if (const std::string problem = keyframeProblem(key); !problem.empty()) {
+            return makeError(name, ":", lineNumber, ": ", problem);
+        }
         if (!keys.empty() && !(v[0] > keys.back().time)) {
             return makeError(name, ":", lineNumber, ": time ", v[0], " is not after the previous keyframe's time ",
                              keys.back().time, " (line ", previousLine, ")");
         }
-        keys.push_back({v[0], {v[1], v[2], v[3]}, v[4] / kDegrees, v[5] / kDegrees});
+        keys.push_back(key);
         previousLine = lineNumber;
     }
     if (keys.size() < 2) {

@@ -47,7 +47,7 @@ void toBytes(const double* c, std::uint8_t* rgb)
 
 HeightColouring::HeightColouring(const QuantizedGrid& grid, const MapHeader& header, double heightMin,
                                  double heightMax)
-    : mGrid(grid), mHeader(header), mTable(static_cast<std::size_t>(kTableSteps) * kTableSteps * 3)
+    : mGrid(grid), mTable(static_cast<std::size_t>(kTableSteps) * kTableSteps * 3)
 {
     heightMax = std::max(heightMax, heightMin + header.heightStep);
     mCodeMin = (heightMin - header.heightOffset) / header.heightStep;

@@ -41,7 +41,6 @@ private:
     const std::uint8_t* colourAt(std::int64_t x, std::int64_t y) const;
 
     const QuantizedGrid& mGrid;
-    const MapHeader& mHeader;
     double mCodeMin;          ///< code of the lowest valid height
     double mHeightStepsPerCode;  ///< table rows per code
     double mSlopeStepsPerCode;   ///< table columns per code of height difference over 2 samples

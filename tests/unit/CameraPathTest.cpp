@@ -50,6 +50,12 @@ INSTANTIATE_TEST_SUITE_P(
         BadPathCase{"TimeGoingBack", "0 0 0 0 0 0\n5 0 0 0 0 0\n4 1 0 0 0 0\n",
                     "demo.path:3: time 4 is not after the previous keyframe's time 5 (line 2)"},
         BadPathCase{"PitchOutOfRange", "0 0 0 0 0 0\n1 0 0 0 0 91\n", "demo.path:2: pitch 91 is outside [-90, 90] degrees"},
+        // Found by fuzzing: finite but huge values overflowed the spline to inf/NaN poses.
+        BadPathCase{"CoordinateBeyondAMillionKilometres", "0 0 0 0 0 0\n1 5.9e105 0 0 0 0\n",
+                    "demo.path:2: x 5.9e+105 m is outside [-1e9, 1e9]"},
+        BadPathCase{"TimeBeyondThirtyYears", "0 0 0 0 0 0\n2e9 0 0 0 0 0\n",
+                    "demo.path:2: time 2000000000 s is outside [-1e9, 1e9]"},
+        BadPathCase{"InfiniteHeight", "0 0 0 0 0 0\n1 0 0 inf 0 0\n", "demo.path:2: z: 'inf' is not a number"},
         BadPathCase{"OneKeyframe", "# only one\n0 0 0 0 0 0 # here\n", "demo.path: a camera path needs at least 2 keyframes, found 1"},
         BadPathCase{"Empty", "", "demo.path: a camera path needs at least 2 keyframes, found 0"},
         BadPathCase{"OnlyComments", "# nothing\n   \n\t# more\n", "demo.path: a camera path needs at least 2 keyframes, found 0"}),
@@ -199,6 +205,18 @@ TEST(CameraPathTest, FromKeyframesChecksTheRules)
     auto back = CameraPath::fromKeyframes({{1.0, {}, 0.0, 0.0}, {0.5, {}, 0.0, 0.0}}, "mem");
     ASSERT_FALSE(back.ok());
     EXPECT_EQ(back.error().message, "mem: keyframe 1: time 0.5 is not after the previous keyframe's time 1");
+    auto far = CameraPath::fromKeyframes({{0.0, {}, 0.0, 0.0}, {1.0, {0.0, -2e9, 0.0}, 0.0, 0.0}}, "mem");
+    ASSERT_FALSE(far.ok());
+    EXPECT_EQ(far.error().message, "mem: keyframe 1: y -2000000000 m is outside [-1e9, 1e9]");
+    // The largest allowed values still give finite poses everywhere.
+    auto edge = CameraPath::fromKeyframes(
+        {{-1e9, {-1e9, -1e9, -1e9}, 0.0, 0.0}, {0.0, {1e9, 1e9, 1e9}, 3.0, 1.5}, {1e9, {-1e9, 1e9, -1e9}, -3.0, -1.5}},
+        "mem");
+    ASSERT_TRUE(edge.ok()) << edge.error().message;
+    for (double t = -1e9; t <= 1e9; t += 1.25e8) {
+        const CameraPose pose = edge->evaluate(t);
+        EXPECT_TRUE(std::isfinite(pose.position.x + pose.position.y + pose.position.z + pose.yaw + pose.pitch)) << t;
+    }
 }
 
 }  // namespace

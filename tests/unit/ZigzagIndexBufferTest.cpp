@@ -109,7 +109,8 @@ void checkTemplateTriangles(int n, const std::vector<Triangle>& tris, bool withS
             ne += v->i == i0 + 1 && v->j == j0 + 1;
             nw += v->i == i0 && v->j == j0 + 1;
         }
-        ASSERT_TRUE(sw == 1 && ne == 1) << "grid triangle " << k << " is not split along the SW-NE diagonal";
+        ASSERT_TRUE(sw == 1 && ne == 1 && se + nw == 1)
+            << "grid triangle " << k << " is not a half quad split along the SW-NE diagonal";
         (se == 1 ? lower : upper)[static_cast<std::size_t>(j0 * quads + i0)] += 1;
     }
     for (std::size_t q = 0; q < lower.size(); ++q) {
