@@ -92,8 +92,9 @@ struct Reader {
             return fail("expected a file name");
         }
         std::filesystem::path path = directory / entry.value;
-        if (!std::filesystem::is_regular_file(path)) {
-            return fail("no such file: " + path.string());
+        std::error_code ec;  // the non-throwing form: a name too long or unreadable is an error value too
+        if (!std::filesystem::is_regular_file(path, ec)) {
+            return fail("no such file: " + path.string() + (ec ? " (" + ec.message() + ")" : ""));
         }
         return path;
     }

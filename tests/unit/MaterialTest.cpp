@@ -208,6 +208,17 @@ TEST(Material, InvalidValuesNameFileLineAndKey)
         EXPECT_EQ(message.rfind("bad.mat:3: " + key + " = ", 0), 0u) << message;
         EXPECT_NE(message.find(b.says), std::string::npos) << message;
     }
+    // Found by fuzzing: a file name longer than the system allows threw std::filesystem_error.
+    for (const char* key : {"bitmap", "detail_texture"}) {
+        std::vector<std::string> warnings;
+        auto config = ConfigFile::parse(std::string(key) + " = " + std::string(300, 'x') + ".png\n", "long.mat");
+        ASSERT_TRUE(config.ok());
+        auto m = parseMaterial(*config, warnings);
+        ASSERT_FALSE(m.ok()) << key;
+        EXPECT_EQ(m.error().message.rfind("long.mat:1: " + std::string(key) + " = ", 0), 0u) << m.error().message;
+        EXPECT_NE(m.error().message.find("no such file"), std::string::npos) << m.error().message;
+        EXPECT_NE(m.error().message.find("File name too long"), std::string::npos) << m.error().message;
+    }
 }
 
 TEST(Material, BitmapDisplacementNeedsABitmap)
