@@ -8,6 +8,7 @@
 #include "quadtree/QuadtreeBuilder.h"
 #include "synthesis/DetailSynthesizer.h"
 
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -228,6 +229,9 @@ private:
 
 int main(int argc, char** argv)
 {
+    // Over a file size limit (ulimit -f) write() fails with EFBIG once SIGXFSZ is ignored; by default the
+    // signal would kill prep with a core dump instead of the error naming the output.
+    std::signal(SIGXFSZ, SIG_IGN);
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--help") == 0) {
             std::fputs(kUsage, stdout);

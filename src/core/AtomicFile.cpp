@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <fcntl.h>
+#include <pthread.h>
 #include <unistd.h>
 
 namespace terrain {
@@ -17,6 +19,49 @@ std::filesystem::path temporaryNameFor(const std::filesystem::path& path)
     auto name = path.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
     return path.parent_path() / name;
 }
+
+/// strerror plus what the user can do about the errors a full disk or a size limit gives.
+std::string describeWriteError(int error)
+{
+    std::string text = std::strerror(error);
+    if (error == ENOSPC) {
+        text += " (the disk is full: free some space or write the output elsewhere)";
+    } else if (error == EDQUOT) {
+        text += " (the disk quota is used up: free some space or write the output elsewhere)";
+    } else if (error == EFBIG) {
+        text += " (the file is larger than this process may write, see ulimit -f, or than the filesystem allows)";
+    }
+    return text;
+}
+
+/// Blocks the signals that ask a program to stop (Ctrl-C, kill, a closed terminal) in the calling thread
+/// while alive, so a stop requested between naming the output and renaming it takes effect after the
+/// rename instead of leaving the named temporary behind. SIGKILL cannot be blocked; that window stays (two
+/// system calls wide), as does any other thread of the process that does not block these signals.
+class StopSignalsDeferred {
+public:
+    StopSignalsDeferred()
+    {
+        sigset_t stop;
+        sigemptyset(&stop);
+        for (int signal : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) {
+            sigaddset(&stop, signal);
+        }
+        mBlocked = ::pthread_sigmask(SIG_BLOCK, &stop, &mPrevious) == 0;
+    }
+    ~StopSignalsDeferred()
+    {
+        if (mBlocked) {
+            ::pthread_sigmask(SIG_SETMASK, &mPrevious, nullptr);
+        }
+    }
+    StopSignalsDeferred(const StopSignalsDeferred&) = delete;
+    StopSignalsDeferred& operator=(const StopSignalsDeferred&) = delete;
+
+private:
+    sigset_t mPrevious{};
+    bool mBlocked = false;
+};
 }  // namespace
 
 AtomicFile::AtomicFile(std::FILE* file, std::filesystem::path path, std::filesystem::path temporaryPath)
@@ -118,8 +163,9 @@ Status AtomicFile::commit()
     }
     if (error != 0) {
         discard();
-        return makeError(mPath.string(), ": write failed: ", std::strerror(error));
+        return makeError(mPath.string(), ": write failed: ", describeWriteError(error));
     }
+    const StopSignalsDeferred deferred;
     if (mTemporaryPath.empty()) {
         // Give the unnamed file a name next to the target, then rename that over the target (linkat
         // cannot replace an existing file).
@@ -128,7 +174,7 @@ Status AtomicFile::commit()
         if (::linkat(AT_FDCWD, procPath.c_str(), AT_FDCWD, temporary.c_str(), AT_SYMLINK_FOLLOW) != 0) {
             int linkError = errno;
             discard();
-            return makeError(mPath.string(), ": cannot give the output a name: ", std::strerror(linkError));
+            return makeError(mPath.string(), ": cannot give the output a name: ", describeWriteError(linkError));
         }
         mTemporaryPath = temporary;
     }

@@ -1,7 +1,9 @@
 // Output files that appear whole or not at all: written to an unnamed file in the target directory
 // (O_TMPFILE; a named temporary where the filesystem lacks it), flushed, synced, then named and renamed
 // over the final name. An interrupted or failed write leaves no partial file; with O_TMPFILE not even a
-// temporary survives a killed process.
+// temporary survives a killed process (SIGINT, SIGTERM, SIGHUP and SIGQUIT are held off in the committing
+// thread between naming the file and renaming it; only SIGKILL in those two system calls can leave the
+// name). A full disk or a file size limit is reported by commit() as such, naming the path.
 #pragma once
 
 #include "core/Expected.h"

@@ -1,14 +1,19 @@
 #include "core/Memory.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <sys/resource.h>
 #include <unistd.h>
 
 namespace terrain {
 
-std::uint64_t availableMemoryBytes()
+namespace {
+
+/// MemAvailable from /proc/meminfo, else physical memory, else 1 GiB.
+std::uint64_t systemAvailableBytes()
 {
     std::ifstream meminfo("/proc/meminfo");
     std::string key;
@@ -25,6 +30,34 @@ std::uint64_t availableMemoryBytes()
         return static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(pageSize);
     }
     return std::uint64_t{1} << 30;
+}
+
+/// Address space left under RLIMIT_AS (`ulimit -v`), or nothing when there is no limit.
+std::optional<std::uint64_t> addressSpaceHeadroom()
+{
+    rlimit limit{};
+    if (::getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) {
+        return std::nullopt;
+    }
+    std::ifstream statm("/proc/self/statm");
+    std::uint64_t pages = 0;
+    if (!(statm >> pages)) {
+        return std::nullopt;
+    }
+    const std::uint64_t used = pages * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
+    const auto cap = static_cast<std::uint64_t>(limit.rlim_cur);
+    return cap > used ? cap - used : 0;
+}
+
+}  // namespace
+
+std::uint64_t availableMemoryBytes()
+{
+    std::uint64_t available = systemAvailableBytes();
+    if (auto headroom = addressSpaceHeadroom()) {
+        available = std::min(available, *headroom);
+    }
+    return std::max<std::uint64_t>(available, 1);
 }
 
 Status checkAllocation(std::uint64_t bytes, std::string_view what)
@@ -56,10 +89,10 @@ std::uint64_t currentResidentBytes()
 
 std::string formatBytes(std::uint64_t bytes)
 {
-    const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+    const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
     double value = static_cast<double>(bytes);
     int unit = 0;
-    while (value >= 1024.0 && unit < 4) {
+    while (value >= 1024.0 && unit < 6) {
         value /= 1024.0;
         ++unit;
     }

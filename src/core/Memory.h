@@ -11,7 +11,7 @@
 namespace terrain {
 
 /// Bytes of memory the system can give this process now (MemAvailable from /proc/meminfo, else physical
-/// memory). Never 0.
+/// memory), no more than the address space left under RLIMIT_AS (`ulimit -v`) when one is set. Never 0.
 std::uint64_t availableMemoryBytes();
 
 /// Fails, naming `what`, when `bytes` exceeds the memory available now. Call before large allocations.

@@ -217,7 +217,8 @@ Expected<HeightField> readBtHeightField(const std::filesystem::path& path, const
     const std::uint64_t foundBytes = file->size() - kBtHeaderSize;
     if (foundBytes < expectedBytes) {
         return makeError(path.string(), ": truncated: expected ", expectedBytes, " bytes of samples, found ",
-                         foundBytes);
+                         foundBytes, " (the header says ", header->columns, "x", header->rows, " ",
+                         sampleTypeName(*header), " samples)");
     }
 
     HeightField field;

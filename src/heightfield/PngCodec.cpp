@@ -3,6 +3,7 @@
 #include "heightfield/PngCodec.h"
 
 #include "core/AtomicFile.h"
+#include "core/Check.h"
 #include "core/Memory.h"
 
 #include <cerrno>
@@ -15,6 +16,9 @@
 namespace terrain::detail {
 
 namespace {
+
+/// Deflate's largest compression ratio: a 258-byte match coded in 2 bits (RFC 1951; zlib's tech notes).
+constexpr std::uint64_t kDeflateMaxRatio = 1032;
 
 /// Where libpng's error callback leaves its message before jumping back.
 struct PngErrorState {
@@ -192,10 +196,12 @@ Expected<DecodedPng> decodePng(const std::filesystem::path& path, PngReadMode mo
     }
     png_init_io(handles.png, file.get());
     png_set_sig_bytes(handles.png, sizeof signature);
+    // libpng's own default limit (1000000 pixels a side) would refuse a larger image with a message that
+    // gives no size; allow what the format allows and refuse below, naming the size and the reason.
+    png_set_user_limits(handles.png, PNG_UINT_31_MAX, PNG_UINT_31_MAX);
     if (!pngReadInfo(handles.png, handles.info)) {
         return makeError(name, ": corrupt PNG header: ", errorState.message);
     }
-
     DecodedPng decoded;
     decoded.width = static_cast<int>(png_get_image_width(handles.png, handles.info));
     decoded.height = static_cast<int>(png_get_image_height(handles.png, handles.info));
@@ -204,6 +210,31 @@ Expected<DecodedPng> decodePng(const std::filesystem::path& path, PngReadMode mo
     if (mode == PngReadMode::NativeGray && decoded.sourceColorType != PNG_COLOR_TYPE_GRAY) {
         return makeError(name, ": expected a grayscale PNG, found ", pngColorTypeName(decoded.sourceColorType));
     }
+
+    // Sizes are checked here, from the header alone: png_read_update_info (in pngSetTransforms) already
+    // allocates row buffers as wide as the image.
+    const std::uint64_t pixelCount = std::uint64_t(decoded.width) * std::uint64_t(decoded.height);
+    std::ostringstream what;
+    what << name << ": a " << decoded.width << "x" << decoded.height << " PNG";
+    // A header that claims more than the file can hold: the image data as stored (a filter byte plus the
+    // packed samples per row; interlaced images store a little more) compresses at most 1032:1 with
+    // deflate (a 258-byte match in 2 bits), so the file must have at least a 1032th of it.
+    const std::uint64_t storedRowBytes = png_get_rowbytes(handles.png, handles.info);
+    const std::uint64_t storedBytes = std::uint64_t(decoded.height) * (storedRowBytes + 1);
+    const std::uint64_t fileBytes = std::filesystem::file_size(path, ec);
+    const std::uint64_t leastCompressed = storedBytes / kDeflateMaxRatio;
+    if (!ec && fileBytes < leastCompressed) {
+        return makeError(what.str(), " needs at least ", leastCompressed,
+                         " bytes of compressed image data (deflate compresses at most ", kDeflateMaxRatio,
+                         ":1), but the file has ", fileBytes, " bytes: its header is wrong or the file is truncated");
+    }
+    // The pixels after the transforms below (NativeGray: 1 or 2 bytes a sample; Convert8: `channels`
+    // bytes), the caller's own buffer, and libpng's two rows as stored (current and previous).
+    const std::uint64_t bytesPerPixel =
+        mode == PngReadMode::NativeGray ? (decoded.sourceBitDepth == 16 ? 2 : 1) : std::uint64_t(channels);
+    TERRAIN_TRY(checkAllocation(pixelCount * (bytesPerPixel + extraBytesPerPixel) + 2 * (storedRowBytes + 1),
+                                what.str()));
+
     if (!pngSetTransforms(handles.png, handles.info, mode, channels)) {
         return makeError(name, ": unsupported PNG: ", errorState.message);
     }
@@ -217,12 +248,8 @@ Expected<DecodedPng> decodePng(const std::filesystem::path& path, PngReadMode mo
     }
 
     const std::uint64_t rowBytes = png_get_rowbytes(handles.png, handles.info);
-    const std::uint64_t pixelCount = std::uint64_t(decoded.width) * std::uint64_t(decoded.height);
     const std::uint64_t imageBytes = rowBytes * std::uint64_t(decoded.height);
-    std::ostringstream what;
-    what << name << ": a " << decoded.width << "x" << decoded.height << " PNG";
-    TERRAIN_TRY(checkAllocation(imageBytes + pixelCount * extraBytesPerPixel, what.str()));
-
+    TERRAIN_ASSERT(imageBytes <= pixelCount * bytesPerPixel);  // the memory check above was an upper bound
     decoded.pixels.resize(static_cast<std::size_t>(imageBytes));
     std::vector<png_bytep> rows(static_cast<std::size_t>(decoded.height));
     for (std::size_t y = 0; y < rows.size(); ++y) {

@@ -142,7 +142,7 @@ Expected<HeightField> readTerHeightField(const std::filesystem::path& path, cons
             const std::uint64_t foundBytes = file->size() - std::min(file->size(), position);
             if (foundBytes < expectedBytes) {
                 return makeError(name, ": truncated: expected ", expectedBytes, " bytes of samples, found ",
-                                 foundBytes);
+                                 foundBytes, " (the header says ", field.width, "x", field.height, " samples)");
             }
             detail::allocateSamples(field);
             const std::uint64_t width = std::uint64_t(field.width);

@@ -1,5 +1,6 @@
 #include "quadtree/MapFile.h"
 
+#include "core/MappedCopy.h"
 #include "quadtree/TextureCodec.h"
 
 #include <algorithm>
@@ -32,7 +33,8 @@ private:
     int mFd;
 };
 
-Status preadAll(int fd, std::uint64_t offset, std::size_t size, std::uint8_t* out, const std::string& name)
+/// Reads exactly `size` bytes at `offset`. Errors say what went wrong; callers prefix the file (and node).
+Status preadAll(int fd, std::uint64_t offset, std::size_t size, std::uint8_t* out)
 {
     std::size_t done = 0;
     while (done < size) {
@@ -41,12 +43,22 @@ Status preadAll(int fd, std::uint64_t offset, std::size_t size, std::uint8_t* ou
             continue;
         }
         if (n < 0) {
-            return makeError(name, ": read error: ", std::strerror(errno));
+            return makeError("read error: ", std::strerror(errno));
         }
         if (n == 0) {
-            return makeError(name, ": file is truncated (read past its end at offset ", offset + done, ")");
+            return makeError("file is truncated (read past its end at offset ", offset + done, ")");
         }
         done += static_cast<std::size_t>(n);
+    }
+    return {};
+}
+
+/// preadAll with the file named in the message.
+Status preadAll(int fd, std::uint64_t offset, std::size_t size, std::uint8_t* out, const std::string& name)
+{
+    auto status = preadAll(fd, offset, size, out);
+    if (!status.ok()) {
+        return makeError(name, ": ", status.error().message);
     }
     return {};
 }
@@ -62,7 +74,7 @@ public:
 protected:
     Status readBytes(std::uint64_t offset, std::size_t size, std::uint8_t* out) const override
     {
-        return preadAll(mFd, offset, size, out, name());
+        return preadAll(mFd, offset, size, out);
     }
 
 private:
@@ -71,24 +83,43 @@ private:
 
 class MappedMapFile final : public MapFile {
 public:
-    MappedMapFile(std::string name, MapHeader header, std::vector<DirectoryEntry> directory, void* data,
+    MappedMapFile(std::string name, MapHeader header, std::vector<DirectoryEntry> directory, int fd, void* data,
                   std::size_t size)
-        : MapFile(std::move(name), std::move(header), std::move(directory)), mData(data), mSize(size)
+        : MapFile(std::move(name), std::move(header), std::move(directory)), mFd(fd), mData(data), mSize(size)
     {
     }
-    ~MappedMapFile() override { ::munmap(mData, mSize); }
+    ~MappedMapFile() override
+    {
+        ::munmap(mData, mSize);
+        ::close(mFd);
+    }
 
 protected:
     Status readBytes(std::uint64_t offset, std::size_t size, std::uint8_t* out) const override
     {
         if (offset + size > mSize) {
-            return makeError(name(), ": file is truncated (read past its end at offset ", offset, ")");
+            return makeError("file is truncated (read past its end at offset ", offset, ")");
         }
-        std::memcpy(out, static_cast<const std::uint8_t*>(mData) + offset, size);
-        return {};
+        // Another process may have truncated the file since it was mapped (prep replaces a map by renaming
+        // a new file over it, which leaves this one whole; `truncate`, or copying over it in place, do not).
+        // Touching a page past the new end raises SIGBUS. The size check gives the usual case a plain
+        // message; a truncation between it and the copy (MapFaultTest hits that window within a second of
+        // trying) is caught by copyFromMapping. Bytes changed in place are not detected here: the payload's
+        // CRC catches them.
+        struct stat info {};
+        if (::fstat(mFd, &info) != 0) {
+            return makeError("cannot read the file's size: ", std::strerror(errno));
+        }
+        const auto current = static_cast<std::uint64_t>(info.st_size);
+        if (offset + size > current) {
+            return makeError("file is truncated: it is now ", current, " bytes (", mSize,
+                             " when opened), this read needs bytes ", offset, " to ", offset + size);
+        }
+        return copyFromMapping(out, static_cast<const std::uint8_t*>(mData) + offset, size);
     }
 
 private:
+    int mFd;  ///< kept open for fstat: the mapping's size is the file's size at open
     void* mData;
     std::size_t mSize;
 };
@@ -128,8 +159,9 @@ Expected<std::unique_ptr<MapFile>> MapFile::open(const std::filesystem::path& pa
     auto header = decodeHeader(headerBytes, name);
     TERRAIN_TRY(header);
     if (header->directoryOffset + header->directoryBytes != fileSize) {
-        return makeError(name, ": file is ", fileSize, " bytes but its directory ends at byte ",
-                         header->directoryOffset + header->directoryBytes, " (truncated or extended)");
+        return makeError(name, ": file is ", fileSize, " bytes but its directory of ", header->nodeCount,
+                         " nodes ends at byte ", header->directoryOffset + header->directoryBytes,
+                         " (truncated or extended)");
     }
     std::vector<std::uint8_t> directoryBytes(header->directoryBytes);
     TERRAIN_TRY(preadAll(fd.get(), header->directoryOffset, directoryBytes.size(), directoryBytes.data(), name));
@@ -141,8 +173,8 @@ Expected<std::unique_ptr<MapFile>> MapFile::open(const std::filesystem::path& pa
         if (data == MAP_FAILED) {
             return makeError(name, ": cannot memory-map: ", std::strerror(errno));
         }
-        return std::unique_ptr<MapFile>(
-            new MappedMapFile(name, std::move(header.value()), std::move(directory.value()), data, fileSize));
+        return std::unique_ptr<MapFile>(new MappedMapFile(name, std::move(header.value()), std::move(directory.value()),
+                                                          fd.release(), data, fileSize));
     }
     return std::unique_ptr<MapFile>(
         new StreamMapFile(name, std::move(header.value()), std::move(directory.value()), fd.release()));
@@ -158,7 +190,10 @@ const DirectoryEntry* MapFile::find(const NodeId& id) const
 Expected<std::vector<std::uint8_t>> MapFile::readPayload(const DirectoryEntry& entry) const
 {
     std::vector<std::uint8_t> payload(entry.payloadBytes());
-    TERRAIN_TRY(readBytes(entry.offset, payload.size(), payload.data()));
+    auto read = readBytes(entry.offset, payload.size(), payload.data());
+    if (!read.ok()) {
+        return makeError(mName, ": node ", entry.id.toString(), ": ", read.error().message);
+    }
     std::uint32_t crc = crc32Of(payload);
     if (crc != entry.crc) {
         return makeError(mName, ": node ", entry.id.toString(), ": checksum mismatch (stored ", entry.crc,

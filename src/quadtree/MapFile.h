@@ -43,7 +43,8 @@ public:
     const DirectoryEntry* find(const NodeId& id) const;
     const std::string& name() const { return mName; }
 
-    /// Reads a node's payload and checks its CRC. Safe to call from several threads at once.
+    /// Reads a node's payload and checks its CRC. Errors name the file and the node: a checksum mismatch,
+    /// or a file truncated since it was opened. Safe to call from several threads at once.
     Expected<std::vector<std::uint8_t>> readPayload(const DirectoryEntry& entry) const;
 
     /// Reads and decodes a node. `parentHeights` is the parent's decoded window (empty for the root).
@@ -55,7 +56,8 @@ public:
 
 protected:
     MapFile(std::string name, MapHeader header, std::vector<DirectoryEntry> directory);
-    /// Reads `size` bytes at `offset` into `out`.
+    /// Reads `size` bytes at `offset` into `out`. Errors say what went wrong (e.g. the file is now shorter);
+    /// readPayload prefixes the file and node. Must not crash when the file shrinks while open.
     virtual Status readBytes(std::uint64_t offset, std::size_t size, std::uint8_t* out) const = 0;
 
 private:

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <zlib.h>
 
 namespace terrain {
@@ -153,8 +154,10 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
         return bad("valid region ", h.validX0, ",", h.validY0, " ", h.validWidth, "x", h.validHeight,
                    " does not fit the ", grid, "x", grid, " grid");
     }
+    // The offset is checked against wrapping too: offset + bytes must be the file's size, and a sum that
+    // wraps past 2^64 could match a small file while claiming a directory of hundreds of gigabytes.
     if (h.nodeCount < 1 || h.directoryBytes != std::uint64_t{h.nodeCount} * kDirectoryEntryBytes ||
-        h.directoryOffset < kHeaderBytes) {
+        h.directoryOffset < kHeaderBytes || h.directoryOffset > UINT64_MAX - h.directoryBytes) {
         return bad("directory of ", h.nodeCount, " nodes at offset ", h.directoryOffset, " with ",
                    h.directoryBytes, " bytes is inconsistent");
     }

@@ -2,6 +2,7 @@
 // byte, independently of our writers, so a symmetric writer/reader bug cannot hide), round trips, no-data,
 // and clear errors naming the file for every kind of bad input.
 #include "heightfield/HeightFieldIo.h"
+#include "heightfield/Image.h"
 
 #include "TestSupport.h"
 
@@ -918,6 +919,78 @@ TEST(HeightFieldIoTest, DemoTerrainRoundTripsExactlyThroughPngBtAndRaw)
     // Byte-identical to the original PNG's pixel rows.
     const auto original = readGray16Rows(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
     EXPECT_TRUE(readGray16Rows(dir / "d.png") == original);
+}
+
+// ---- Oversized headers ----
+
+TEST(HeightFieldIoTest, OversizedDimensionsAreRefusedBeforeAllocating)
+{
+    // Tiny hand-made files whose headers claim the largest sizes their fields can hold, and sizes that
+    // would fit in memory but not in the file. Each read runs in a child that may allocate at most 1 GiB
+    // more (RLIMIT_AS): a reader that allocated before refusing would throw std::bad_alloc there.
+    auto btSamples = [](LeBytes b) {
+        b.bytes.resize(256 + 12, 0);
+        return b.bytes;
+    };
+    auto terWithSize = [](int sizeField, int xPoints, int yPoints) {
+        LeBytes b = terHeader().text("SIZE").u16(sizeField).u16(0);
+        if (xPoints > 0) {
+            b.text("XPTS").u16(xPoints).u16(0).text("YPTS").u16(yPoints).u16(0);
+        }
+        return b.text("ALTW").i16(1).i16(0).i16(1).i16(2).i16(3).bytes;
+    };
+    struct Case {
+        const char* name;
+        Bytes bytes;
+        const char* size;  ///< how the message must give the size
+        int rawWidth = 0, rawHeight = 0;
+    };
+    const Case cases[] = {
+        {"png-largest.png", pngWithHeader(0x7fffffff, 0x7fffffff), "2147483647x2147483647"},
+        {"png-2^30.png", pngWithHeader(1u << 30, 1u << 30), "1073741824x1073741824"},
+        {"png-fits-memory.png", pngWithHeader(20000, 20000), "20000x20000"},  // 800 MB pixels + 1.6 GB floats
+        {"bt-largest.bt", btSamples(btHeader(3, 0x7fffffff, 0x7fffffff, 4, 1, 1, 0, 2, 0, 1)), "2147483647x2147483647"},
+        {"bt-2^30.bt", btSamples(btHeader(3, 1 << 30, 1 << 30, 2, 0, 1, 0, 2, 0, 1)), "1073741824x1073741824"},
+        {"bt-fits-memory.bt", btSamples(btHeader(3, 10000, 10000, 2, 0, 1, 0, 2, 0, 1)), "10000x10000"},
+        {"ter-largest-size.ter", terWithSize(65535, 0, 0), "65536x65536"},
+        {"ter-largest-points.ter", terWithSize(65534, 65535, 65535), "65535x65535"},
+        {"ter-fits-memory.ter", terWithSize(9999, 10000, 10000), "10000x10000"},
+        {"raw-largest.raw", Bytes(12, 0), "2147483647x2147483647", 0x7fffffff, 0x7fffffff},
+        {"raw-2^30.raw", Bytes(12, 0), "1073741824x1073741824", 1 << 30, 1 << 30},
+        {"raw-fits-memory.raw", Bytes(12, 0), "10000x10000", 10000, 10000},
+    };
+    test::ScratchDir dir;
+    std::string checked;
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        writeBytes(dir / c.name, c.bytes);
+        const auto path = dir / c.name;
+        HeightFieldReadOptions options;
+        options.rawWidth = c.rawWidth;
+        options.rawHeight = c.rawHeight;
+        const auto run = test::runWithMemoryLimit([&] {
+            auto field = readHeightField(path, options);
+            return field.ok() ? std::string("accepted") : "refused: " + field.error().message;
+        });
+        ASSERT_EQ(run.outcome, test::LimitedRun::Outcome::Returned) << test::describe(run);
+        ASSERT_EQ(run.text.rfind("refused: ", 0), 0u) << test::describe(run);
+        EXPECT_TRUE(run.text.find(path.string()) != std::string::npos) << run.text;
+        EXPECT_TRUE(run.text.find(c.size) != std::string::npos) << run.text << "\ndoes not give the size " << c.size;
+        const auto named = run.text.find(path.string() + ": ");
+        checked += std::string(c.name) + ": " +
+                   (named == std::string::npos ? run.text : run.text.substr(named + path.string().size() + 2)) + "; ";
+    }
+    // PNG textures and weight maps go through the image reader: the same refusal.
+    for (const char* name : {"png-2^30.png", "png-fits-memory.png"}) {
+        const auto path = dir / name;
+        const auto run = test::runWithMemoryLimit([&] {
+            auto image = readPngImage(path, 3);
+            return image.ok() ? std::string("accepted") : "refused: " + image.error().message;
+        });
+        ASSERT_EQ(run.outcome, test::LimitedRun::Outcome::Returned) << name << ": " << test::describe(run);
+        EXPECT_EQ(run.text.rfind("refused: " + path.string(), 0), 0u) << name << ": " << run.text;
+    }
+    ::testing::Test::RecordProperty("checked", checked);
 }
 
 }  // namespace

@@ -592,6 +592,69 @@ TEST(MapFileTest, BadHeaderFieldsAreErrors)
     }
 }
 
+TEST(MapFileTest, OversizedHeaderFieldsAreRefusedBeforeAllocating)
+{
+    // The largest values the header's fields can hold, with a valid header checksum, each opened (and its
+    // root loaded) in a child that may allocate at most 1 GiB more (RLIMIT_AS): refused with the file and
+    // the value named, or, for the largest sizes the format allows, a clean error from the node's data.
+    test::ScratchDir dir;
+    const Bytes good = test::readFileBytes(buildSmallMap(dir));
+    const std::uint64_t fileSize = good.size();
+    const std::uint64_t allNodes = 0xffffffffull;
+    struct Field {
+        std::size_t offset;
+        int size;
+        std::uint64_t value;
+    };
+    struct Case {
+        const char* what;
+        std::vector<Field> fields;
+        const char* mentions;
+    };
+    const Case cases[] = {
+        {"chunk size 2^31 + 1", {{16, 4, (1ull << 31) + 1}}, "chunk size 2147483649"},
+        {"2^32 - 1 levels", {{24, 4, 0xffffffff}}, "level count 4294967295"},
+        {"texture size 2^31 + 1", {{28, 4, (1ull << 31) + 1}}, "texture size 2147483649"},
+        {"2^32 - 1 nodes, directory past the end", {{116, 4, allNodes}, {128, 8, allNodes * 48}},
+         "directory of 4294967295 nodes"},
+        // offset + size wraps around 2^64 to the file's size: would read a 192 GiB directory.
+        {"2^32 - 1 nodes, directory offset wrapping to the file's end",
+         {{116, 4, allNodes}, {128, 8, allNodes * 48}, {120, 8, fileSize - allNodes * 48}},
+         "directory of 4294967295 nodes"},
+        {"directory of 2^63 bytes", {{128, 8, 1ull << 63}}, "9223372036854775808 bytes"},
+        // Accepted by the header: the largest chunks, levels and textures the format allows.
+        {"chunk 1025, 24 levels, texture 4097", {{16, 4, 1025}, {24, 4, 24}, {28, 4, 4097}}, "node 0/0/0"},
+    };
+    std::string checked;
+    for (const Case& c : cases) {
+        Bytes bad = good;
+        for (const Field& f : c.fields) {
+            test::writeLe(bad, f.offset, f.value, f.size);
+        }
+        test::writeLe(bad, 252, zlibCrc(std::span(bad).first(252)), 4);
+        const auto path = dir / "oversized.map";
+        test::writeFileBytes(path, bad);
+        for (ReaderKind kind : kReaders) {
+            SCOPED_TRACE(std::string(c.what) + ", " + readerName(kind));
+            const auto run = test::runWithMemoryLimit([&] {
+                auto map = MapFile::open(path, kind);
+                if (!map.ok()) {
+                    return "refused: " + map.error().message;
+                }
+                auto root = (*map)->loadNode(NodeId::root(), {});
+                return root.ok() ? std::string("accepted") : "refused: " + root.error().message;
+            });
+            ASSERT_EQ(run.outcome, test::LimitedRun::Outcome::Returned) << test::describe(run);
+            EXPECT_EQ(run.text.rfind("refused: " + path.string() + ": ", 0), 0u) << test::describe(run);
+            EXPECT_TRUE(mentions(run.text, c.mentions)) << run.text << "\ndoes not mention " << c.mentions;
+            if (kind == ReaderKind::Stream) {
+                checked += std::string(c.what) + ": " + run.text.substr(run.text.find(": ", 9) + 2) + "; ";
+            }
+        }
+    }
+    ::testing::Test::RecordProperty("checked", checked);
+}
+
 TEST(MapFileTest, DamagedDirectoryBytesAreAChecksumError)
 {
     test::ScratchDir dir;

@@ -3,8 +3,17 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
+#include <fcntl.h>
+#include <fstream>
+#include <iterator>
+#include <new>
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <thread>
 #include <unistd.h>
 
 namespace terrain::test {
@@ -69,6 +78,137 @@ RunResult runProgram(const std::string& program, const std::vector<std::string>&
     int status = ::pclose(pipe);
     result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     return result;
+}
+
+pid_t spawnProgram(const std::string& program, const std::vector<std::string>& args,
+                   const std::filesystem::path& outputFile, const std::function<void()>& beforeExec)
+{
+    // Everything the child needs is made before fork: after it, only async-signal-safe calls.
+    std::vector<std::string> strings = {program};
+    strings.insert(strings.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& s : strings) {
+        argv.push_back(s.data());
+    }
+    argv.push_back(nullptr);
+    const std::string output = outputFile.string();
+    const pid_t child = ::fork();
+    if (child != 0) {
+        return child;
+    }
+    ::signal(SIGINT, SIG_DFL);
+    ::signal(SIGTERM, SIG_DFL);
+    const int in = ::open("/dev/null", O_RDONLY);
+    const int out = ::open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (in < 0 || out < 0) {
+        ::_exit(127);
+    }
+    ::dup2(in, STDIN_FILENO);
+    ::dup2(out, STDOUT_FILENO);
+    ::dup2(out, STDERR_FILENO);
+    if (beforeExec) {
+        beforeExec();
+    }
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+}
+
+std::optional<int> waitForProgram(pid_t pid, double timeoutSeconds)
+{
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeoutSeconds);
+    int status = 0;
+    while (::waitpid(pid, &status, WNOHANG) == 0) {
+        if (std::chrono::steady_clock::now() > deadline) {
+            ::kill(pid, SIGKILL);
+            ::waitpid(pid, &status, 0);
+            return std::nullopt;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return status;
+}
+
+std::string describeWaitStatus(int status)
+{
+    if (WIFEXITED(status)) {
+        return "exit code " + std::to_string(WEXITSTATUS(status));
+    }
+    if (WIFSIGNALED(status)) {
+        return "killed by signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
+    }
+    return "wait status " + std::to_string(status);
+}
+
+LimitedRun runWithMemoryLimit(const std::function<std::string()>& body, std::uint64_t headroomBytes)
+{
+    LimitedRun run;
+    int channel[2];
+    if (::pipe(channel) != 0) {
+        return run;
+    }
+    const pid_t child = ::fork();
+    if (child == 0) {
+        ::close(channel[0]);
+        std::uint64_t pages = 0;
+        std::ifstream("/proc/self/statm") >> pages;
+        const auto used = static_cast<rlim_t>(pages * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE)));
+        const rlimit limit{used + headroomBytes, used + headroomBytes};
+        std::string message;
+        if (pages == 0 || ::setrlimit(RLIMIT_AS, &limit) != 0) {
+            message = "Ecannot set RLIMIT_AS";
+        } else {
+            try {
+                message = "R" + body();
+            } catch (const std::bad_alloc&) {
+                message = "B";
+            }
+        }
+        std::size_t done = 0;
+        while (done < message.size()) {
+            const ssize_t n = ::write(channel[1], message.data() + done, message.size() - done);
+            if (n <= 0) {
+                break;
+            }
+            done += static_cast<std::size_t>(n);
+        }
+        ::_exit(0);
+    }
+    ::close(channel[1]);
+    std::string message;
+    char buffer[4096];
+    for (ssize_t n; (n = ::read(channel[0], buffer, sizeof buffer)) > 0;) {
+        message.append(buffer, static_cast<std::size_t>(n));
+    }
+    ::close(channel[0]);
+    if (child < 0 || ::waitpid(child, &run.status, 0) != child) {
+        return run;
+    }
+    if (WIFEXITED(run.status) && WEXITSTATUS(run.status) == 0 && !message.empty()) {
+        run.outcome = message[0] == 'R' ? LimitedRun::Outcome::Returned
+                      : message[0] == 'B' ? LimitedRun::Outcome::OutOfMemory
+                                          : LimitedRun::Outcome::Died;
+        run.text = message.substr(1);
+    }
+    return run;
+}
+
+std::string describe(const LimitedRun& run)
+{
+    switch (run.outcome) {
+    case LimitedRun::Outcome::Returned:
+        return "returned '" + run.text + "'";
+    case LimitedRun::Outcome::OutOfMemory:
+        return "ran out of memory (std::bad_alloc): it allocated before refusing";
+    case LimitedRun::Outcome::Died:
+        break;
+    }
+    return "the child died: " + describeWaitStatus(run.status) + (run.text.empty() ? "" : ", " + run.text);
+}
+
+std::string readTextFile(const std::filesystem::path& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 std::filesystem::path testDataPath(const std::string& name) { return std::filesystem::path(TERRAIN_TEST_DATA_DIR) / name; }

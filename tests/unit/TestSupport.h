@@ -1,8 +1,12 @@
 // Shared helpers for unit tests: scratch directories, running the apps, test data paths.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <string>
+#include <sys/types.h>
 #include <vector>
 
 namespace terrain::test {
@@ -32,6 +36,44 @@ struct RunResult {
 
 /// Runs `program` with `args` (no shell quoting issues: each arg is quoted), capturing its output.
 RunResult runProgram(const std::string& program, const std::vector<std::string>& args);
+
+/// Starts `program` with `args` in the background (fork + exec) and returns its pid (-1 if fork failed):
+/// stdout and stderr go to `outputFile` (created or truncated), stdin is /dev/null, SIGINT and SIGTERM
+/// have their default dispositions (a shell that started the tests in the background may ignore them, and
+/// ignored signals survive exec). `beforeExec` runs in the child just before exec (setrlimit, signal
+/// dispositions); it must not allocate or take locks. A child that cannot exec exits with 127.
+pid_t spawnProgram(const std::string& program, const std::vector<std::string>& args,
+                   const std::filesystem::path& outputFile, const std::function<void()>& beforeExec = {});
+
+/// Waits for a spawned program and returns its wait status (see waitpid). After `timeoutSeconds` it is
+/// killed (SIGKILL) and reaped, and the result is empty.
+std::optional<int> waitForProgram(pid_t pid, double timeoutSeconds);
+
+/// "exit code 3", "killed by signal 9 (Killed)": a wait status for messages.
+std::string describeWaitStatus(int status);
+
+/// What a function run by runWithMemoryLimit did.
+struct LimitedRun {
+    enum class Outcome {
+        Returned,     ///< it returned `text`
+        OutOfMemory,  ///< it threw std::bad_alloc: it tried to allocate past the limit
+        Died,         ///< the child was killed by a signal or exited on its own (see `status`)
+    };
+    Outcome outcome = Outcome::Died;
+    std::string text;
+    int status = 0;  ///< the child's wait status
+};
+
+/// Runs `body` in a forked child whose address space may grow by at most `headroomBytes` over its size
+/// at the fork (RLIMIT_AS), so an allocation the code under test should have refused to make fails there
+/// with std::bad_alloc rather than succeeding. Call from a single-threaded test.
+LimitedRun runWithMemoryLimit(const std::function<std::string()>& body, std::uint64_t headroomBytes = 1ull << 30);
+
+/// "returned '...'", "ran out of memory (std::bad_alloc)", "exit code 3": for messages.
+std::string describe(const LimitedRun& run);
+
+/// The whole of a text file; empty if it cannot be read.
+std::string readTextFile(const std::filesystem::path& path);
 
 std::filesystem::path testDataPath(const std::string& name);  ///< tests/data/<name>
 std::filesystem::path demoDataPath(const std::string& name);  ///< demos/data/<name>
