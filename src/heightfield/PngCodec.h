@@ -30,8 +30,10 @@ struct DecodedPng {
     std::vector<std::uint8_t> pixels;  ///< rows top to bottom, channel-interleaved
 };
 
-/// Decodes a PNG. `channels` is used by Convert8 only. Before allocating the pixels, refuses an image
-/// whose pixels plus `extraBytesPerPixel` per pixel (the caller's own later buffer) do not fit in memory.
+/// Decodes a PNG. `channels` is used by Convert8 only. From the header alone, before libpng or this
+/// allocates anything as large as a row, refuses (naming the file and the size) an image the file is too
+/// small to hold (deflate's 1032:1 limit) and one whose pixels plus `extraBytesPerPixel` per pixel (the
+/// caller's own later buffer) do not fit in memory. Any size the format allows (2^31 - 1 a side) is read.
 Expected<DecodedPng> decodePng(const std::filesystem::path& path, PngReadMode mode, int channels,
                                std::uint64_t extraBytesPerPixel);
 
