@@ -1,7 +1,7 @@
 // tengine: the viewer (paper 4.2, 4.4.2). Wires options, map, streamer, renderer and window together;
 // three ways to drive the camera: the user (mouse and keys), demo_mode (camera_path in real time, looping)
-// and video_mode (camera_path once at a fixed time step, every frame saved as a PNG, plus a CSV of
-// per-frame statistics and, when ffmpeg is installed, an MP4).
+// and video_mode (camera_path once at a fixed time step, every frame (or every video_save_every-th) saved
+// as a PNG, plus a CSV of per-frame statistics and, when ffmpeg is installed, an MP4).
 #include "DetailSetup.h"
 #include "TengineOptions.h"
 
@@ -18,6 +18,7 @@
 #include <GLFW/glfw3.h>
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -111,10 +112,16 @@ private:
     bool mHeld[GLFW_KEY_LAST + 1] = {};
 };
 
+/// Video mode's frames.csv columns. Per frame: cache_hits, cache_misses, requests_made, requests_completed
+/// and requests_failed (groups that could not be loaded); now: cache_nodes, requests_pending (queued plus
+/// loading), resident_bytes (the process's resident set) and deepest_level (of the nodes drawn; below the
+/// map's levels - 1 they are dynamic); since the start: requests_pending_peak (the most queued plus loading
+/// at once, NodeServerStats::peakPending). New columns go at the end: readers cut columns by position.
 std::string csvHeader()
 {
     return "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
-           "requests_made,requests_completed,requests_pending\n";
+           "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,resident_bytes,"
+           "deepest_level\n";
 }
 
 bool commandExists(const char* name)
@@ -251,7 +258,7 @@ int run(const ParsedCommandLine& parsed)
     const auto start = std::chrono::steady_clock::now();
     auto previous = start;
     double fps = 0.0;
-    std::uint64_t hitsBefore = 0, missesBefore = 0, requestedBefore = 0, completedBefore = 0;
+    std::uint64_t hitsBefore = 0, missesBefore = 0, requestedBefore = 0, completedBefore = 0, failedBefore = 0;
     std::size_t frame = 0;
     glm::dvec3 previousPosition = camera.position;
     std::string recordPath = o.cameraPath.empty() ? "recorded.path" : o.cameraPath.string() + ".recorded";
@@ -337,25 +344,34 @@ int run(const ParsedCommandLine& parsed)
             glFinish();
             const double milliseconds =
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frameStart).count();
-            char name[32];
-            std::snprintf(name, sizeof name, "frame_%05zu.png", frame);
-            auto written = writePngImage(o.imagePath / name, captureFrame(camera.viewportWidth, camera.viewportHeight));
-            if (!written.ok()) {
-                log(written.error().message);
-                return 1;
+            if (o.videoSaveEvery > 0 && frame % static_cast<std::size_t>(o.videoSaveEvery) == 0) {
+                char name[32];
+                std::snprintf(name, sizeof name, "frame_%05zu.png", frame);
+                auto written =
+                    writePngImage(o.imagePath / name, captureFrame(camera.viewportWidth, camera.viewportHeight));
+                if (!written.ok()) {
+                    log(written.error().message);
+                    return 1;
+                }
+            }
+            int deepestLevel = 0;
+            for (const SelectedNode& node : (*streamer)->selection().nodes) {
+                deepestLevel = std::max(deepestLevel, node.id.level);
             }
             std::ostringstream row;
             row << frame << ',' << time << ',' << milliseconds << ',' << renderStats.triangles << ','
                 << renderStats.staticNodes << ',' << renderStats.dynamicNodes << ',' << cache.size() << ','
                 << cache.hits() - hitsBefore << ',' << cache.misses() - missesBefore << ','
                 << server.requested - requestedBefore << ',' << server.completed - completedBefore << ','
-                << server.queued + server.inFlight << '\n';
+                << server.queued + server.inFlight << ',' << server.failed - failedBefore << ',' << server.peakPending
+                << ',' << currentResidentBytes() << ',' << deepestLevel << '\n';
             csvText += row.str();
         }
         hitsBefore = cache.hits();
         missesBefore = cache.misses();
         requestedBefore = server.requested;
         completedBefore = server.completed;
+        failedBefore = server.failed;
         (*window)->swapBuffers();
     }
 
@@ -367,8 +383,17 @@ int run(const ParsedCommandLine& parsed)
             log(written.error().message);
             return 1;
         }
-        std::printf("tengine: %zu frames written to %s (statistics in %s)\n", frame, o.imagePath.c_str(), csvPath.c_str());
-        if (o.videoFfmpeg && commandExists("ffmpeg")) {
+        if (o.videoSaveEvery == 1) {
+            std::printf("tengine: %zu frames written to %s (statistics in %s)\n", frame, o.imagePath.c_str(),
+                        csvPath.c_str());
+        } else {
+            const std::size_t every = static_cast<std::size_t>(o.videoSaveEvery);
+            std::printf("tengine: %zu frames rendered, %zu of them written to %s (statistics in %s)\n", frame,
+                        every > 0 ? (frame + every - 1) / every : 0, o.imagePath.c_str(), csvPath.c_str());
+        }
+        if (o.videoFfmpeg && o.videoSaveEvery != 1) {
+            log("no MP4: video_save_every is " + std::to_string(o.videoSaveEvery) + ", not every frame was saved");
+        } else if (o.videoFfmpeg && commandExists("ffmpeg")) {
             const auto mp4 = o.imagePath / "video.mp4";
             const auto partial = o.imagePath / "video.partial.mp4";
             std::string command = "ffmpeg -loglevel error -y -framerate " + std::to_string(o.framesPerSecond) + " -i '" +

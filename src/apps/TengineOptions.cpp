@@ -465,6 +465,10 @@ std::vector<OptionSpec> makeOptionTable()
                            &O::imagePath, PathKind::Output, "a directory path"));
     t.push_back(intOption("video_frames", kGroupVideo, "Stop video mode after this many frames; 0 = the whole path.",
                           &O::videoFrames, 0, INT_MAX, "frames"));
+    t.push_back(intOption("video_save_every", kGroupVideo,
+                          "Save every Nth video frame as a PNG (frames 0, N, 2N, ...; names keep the frame number); "
+                          "0 saves none, only frames.csv (long soak runs). An MP4 needs every frame: 1.",
+                          &O::videoSaveEvery, 0, INT_MAX, "frames"));
     t.push_back(boolOption("video_ffmpeg", kGroupVideo,
                            "After video mode, make an MP4 of the frames when ffmpeg is on the PATH.", &O::videoFfmpeg));
     return t;

@@ -78,6 +78,7 @@ struct TengineOptions {
     int framesPerSecond = 30;                    ///< frames_per_second: video frames per path second, [1, 240]
     std::filesystem::path imagePath = "frames";  ///< image_path: directory for video frames
     int videoFrames = 0;                         ///< video_frames: >= 0; stop after this many, 0 = whole path
+    int videoSaveEvery = 1;                      ///< video_save_every: >= 0; PNG of every Nth frame, 0 = none
     bool videoFfmpeg = true;                     ///< video_ffmpeg: make an MP4 when ffmpeg is on PATH
 
     bool operator==(const TengineOptions&) const = default;

@@ -70,6 +70,8 @@ void NodeServer::submit(std::span<const LoadRequest> wanted)
         ++mStats.requested;
         added = true;
     }
+    // A worker only moves a request from the queue to in flight; only admitting one here raises the sum.
+    mStats.peakPending = std::max(mStats.peakPending, mQueue.size() + mStats.inFlight);
     lock.unlock();
     if (added) {
         mWork.notify_all();

@@ -41,6 +41,9 @@ struct NodeServerStats {
     std::uint64_t failed = 0;      ///< groups that could not be loaded
     std::size_t queued = 0;        ///< waiting for a worker now
     std::size_t inFlight = 0;      ///< being loaded now
+    /// Most requests queued or loading at once since the server started (sampled where it can grow: after
+    /// submit() admits requests), at most queueLimit + workers.
+    std::size_t peakPending = 0;
 };
 
 class NodeServer {

@@ -83,8 +83,14 @@ TEST(NodeServerTest, QueueIsBoundedAndKeepsTheNearest)
     auto stats = server.stats();
     EXPECT_EQ(stats.queued, 2u);
     EXPECT_EQ(stats.rejected, 2u);
+    EXPECT_EQ(stats.peakPending, 2u);
     server.drain();
     EXPECT_EQ(source.order, (std::vector<NodeId>{kB, kD}));
+    // The remaining two fit now; the peak stays the most pending at once, not the total.
+    server.submit(requests({{kA, 40}, {kC, 30}}));
+    server.drain();
+    EXPECT_EQ(server.stats().requested, 4u);
+    EXPECT_EQ(server.stats().peakPending, 2u);
 }
 
 TEST(NodeServerTest, StaleRequestsAreCancelled)
@@ -147,6 +153,7 @@ TEST(NodeServerTest, WorkersLoadEverythingAndMatchInline)
         }
         server.submit(wanted);
         server.drain();
+        EXPECT_EQ(server.stats().peakPending, wanted.size()) << "all admitted at once, none loaded yet";
         for (auto& group : server.takeCompleted()) {
             EXPECT_TRUE(group.children.ok());
             for (const auto& child : *group.children) {

@@ -81,6 +81,7 @@ TEST(TengineOptions, DefaultsAreTheDocumentedOnes)
     EXPECT_EQ(o.framesPerSecond, 30);
     EXPECT_EQ(o.imagePath, "frames");
     EXPECT_EQ(o.videoFrames, 0);
+    EXPECT_EQ(o.videoSaveEvery, 1);
     EXPECT_TRUE(o.videoFfmpeg);
     std::vector<std::string> warnings;
     EXPECT_TRUE(validateTengineOptions(o, warnings).ok());
@@ -157,6 +158,8 @@ const std::vector<ValidCase>& validCases()
         {"frames_per_second=240", [](const O& o) { return o.framesPerSecond == 240; }},
         {"image_path=out dir/frames", [](const O& o) { return o.imagePath == "out dir/frames"; }},
         {"video_frames=300", [](const O& o) { return o.videoFrames == 300; }},
+        {"video_save_every=0", [](const O& o) { return o.videoSaveEvery == 0; }},
+        {"video_save_every=25", [](const O& o) { return o.videoSaveEvery == 25; }},
         {"video_ffmpeg=false", [](const O& o) { return !o.videoFfmpeg; }},
     };
     return cases;
@@ -297,6 +300,8 @@ TEST(TengineOptions, InvalidValuesAreErrorsSayingWhatIsExpected)
         {"frames_per_second=241", "an integer in [1, 240]"},
         {"frames_per_second=29.97", "an integer in [1, 240]"},
         {"video_frames=-1", "an integer >= 0 (frames)"},
+        {"video_save_every=-1", "an integer >= 0 (frames)"},
+        {"video_save_every=2.5", "an integer >= 0 (frames)"},
         {"video_ffmpeg=auto", "true or false (also yes/no, on/off, 1/0)"},
         {"render=vulkan", "gl or dx"},
         {"memory=gl_foo", "gl_std, gl_vbo or gl_var"},
