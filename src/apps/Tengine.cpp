@@ -399,12 +399,18 @@ int run(const ParsedCommandLine& parsed)
             std::string command = "ffmpeg -loglevel error -y -framerate " + std::to_string(o.framesPerSecond) + " -i '" +
                                   (o.imagePath / "frame_%05d.png").string() +
                                   "' -c:v libx264 -pix_fmt yuv420p -crf 20 '" + partial.string() + "'";
-            if (std::system(command.c_str()) == 0) {
-                std::filesystem::rename(partial, mp4);
-                std::printf("tengine: video written to %s\n", mp4.c_str());
-            } else {
-                std::filesystem::remove(partial);
+            std::error_code ec;  // non-throwing forms: a failed rename is reported, not an uncaught exception
+            if (std::system(command.c_str()) != 0) {
+                std::filesystem::remove(partial, ec);
                 log("ffmpeg failed; the frames are still in " + o.imagePath.string());
+            } else if (std::filesystem::rename(partial, mp4, ec); ec) {
+                const std::string why = ec.message();
+                std::filesystem::remove(partial, ec);
+                log(mp4.string() + ": cannot name the video: " + why + "; the frames are still in " +
+                    o.imagePath.string());
+                return 1;
+            } else {
+                std::printf("tengine: video written to %s\n", mp4.c_str());
             }
         }
     }
