@@ -2,6 +2,7 @@
 // bits, and the map file cut to half while tengine runs on it with the memory-mapped reader. tengine must
 // finish the flight (exit 0), name the file and node in its output, and draw the parents instead: no frame
 // shows the clear colour where a view ray must hit the ground.
+#include "GlTestSupport.h"
 #include "TestSupport.h"
 
 #include "core/Camera.h"
@@ -25,7 +26,9 @@
 namespace terrain {
 namespace {
 
-constexpr std::uint8_t kHole[3] = {255, 0, 255};  // clear_color=1,0,1: a colour the scene never produces
+using test::isHole;
+using test::mustHitTerrain;
+
 constexpr double kFramesPerSecond = 4.0;
 constexpr double kFarPlane = 150000.0;
 constexpr int kWidth = 320, kHeight = 180;
@@ -110,30 +113,6 @@ protected:
 };
 
 test::ScratchDir* FaultGLTest::sDir = nullptr;
-
-bool isHole(const std::uint8_t* p) { return p[0] == kHole[0] && p[1] == kHole[1] && p[2] == kHole[2]; }
-
-/// Whether the view ray through pixel (px, py) must hit the terrain: it goes down and reaches the lowest
-/// terrain height inside the input's area and before the far plane (the same rule as TengineGLTest's).
-bool mustHitTerrain(const Camera& camera, const MapHeader& header, double zMin, int px, int py)
-{
-    const double ndcX = (px + 0.5) / camera.viewportWidth * 2 - 1;
-    const double ndcY = 1 - (py + 0.5) / camera.viewportHeight * 2;
-    const double tanHalf = std::tan(camera.verticalFov / 2);
-    const glm::dvec3 direction = glm::normalize(camera.forward() + camera.right() * (ndcX * tanHalf * camera.aspect()) +
-                                                camera.up() * (ndcY * tanHalf));
-    if (direction.z >= -1e-6) {
-        return false;
-    }
-    const double t = (zMin - camera.position.z) / direction.z;
-    const glm::dvec3 hit = camera.position + t * direction;
-    const double depth = t * glm::dot(direction, camera.forward());
-    const double s = header.sampleSpacing;
-    const double margin = 2 * s;
-    return depth < camera.farPlane * 0.98 && hit.x > header.originX + margin && hit.y > header.originY + margin &&
-           hit.x < header.originX + (header.validWidth - 1) * s - margin &&
-           hit.y < header.originY + (header.validHeight - 1) * s - margin;
-}
 
 /// Checks every frame of the flight in `frames` for holes; returns the pixels checked.
 int expectNoHoles(const std::filesystem::path& frames, const MapHeader& header, double zMin, const CameraPath& path,

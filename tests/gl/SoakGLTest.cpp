@@ -8,6 +8,7 @@
 // times has as many dive cycles as fit, so a shorter run still has every kind of motion. TERRAIN_SOAK_KEEP,
 // when set, names a directory the run's soak.path and frames.csv are copied to (to plot memory and cache
 // over the run, or to fly the path in tengine).
+#include "GlTestSupport.h"
 #include "TestSupport.h"
 
 #include "heightfield/HeightFieldIo.h"
@@ -36,6 +37,8 @@
 
 namespace terrain {
 namespace {
+
+using test::readCsv;
 
 constexpr int kDefaultFrames = 4800;
 /// Video frames per path second. Low, so that each frame moves far (a frame's cost is mostly drawing, the
@@ -252,30 +255,6 @@ std::string soakPath(const MapFile& map, int cycles, int passes)
         }
     }
     return out.str();
-}
-
-/// Rows of a video's frames.csv as maps from column name to value.
-std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& file)
-{
-    std::ifstream in(file);
-    std::string line;
-    std::getline(in, line);
-    std::vector<std::string> names;
-    for (std::stringstream header(line); std::getline(header, line, ',');) {
-        names.push_back(line);
-    }
-    std::vector<std::map<std::string, double>> rows;
-    while (std::getline(in, line)) {
-        std::stringstream fields(line);
-        std::map<std::string, double> row;
-        for (const auto& name : names) {
-            std::string value;
-            std::getline(fields, value, ',');
-            row[name] = std::stod(value);
-        }
-        rows.push_back(std::move(row));
-    }
-    return rows;
 }
 
 double maxOf(const std::vector<std::map<std::string, double>>& rows, std::size_t begin, std::size_t end,

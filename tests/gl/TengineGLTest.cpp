@@ -1,4 +1,5 @@
 // The viewer end to end under Xvfb + Mesa llvmpipe: frames are checked, not just exit codes.
+#include "GlTestSupport.h"
 #include "TestSupport.h"
 
 #include "core/Camera.h"
@@ -21,7 +22,10 @@
 namespace terrain {
 namespace {
 
-constexpr std::uint8_t kHole[3] = {255, 0, 255};  // a clear colour the scene never produces
+using test::isHole;
+using test::mustHitTerrain;
+using test::readCsv;
+
 
 /// The bundled terrain as a map, built once for all tests.
 class TengineGLTest : public ::testing::Test {
@@ -115,8 +119,6 @@ protected:
 
 test::ScratchDir* TengineGLTest::sDir = nullptr;
 
-bool isHole(const std::uint8_t* p) { return p[0] == kHole[0] && p[1] == kHole[1] && p[2] == kHole[2]; }
-
 TEST_F(TengineGLTest, TerrainIsThereAndTheSkyAboveIt)
 {
     test::ScratchDir frames;
@@ -135,30 +137,6 @@ TEST_F(TengineGLTest, TerrainIsThereAndTheSkyAboveIt)
     }
     EXPECT_GT(ground, image.width * 9 / 10);
     EXPECT_GT(sky, image.width * 9 / 10);
-}
-
-/// Whether the view ray through pixel (px, py) must hit the terrain: it goes down and reaches the lowest
-/// terrain height inside the input's area and before the far plane. The terrain lies at or above that
-/// height everywhere there, so such a ray crosses the surface first.
-bool mustHitTerrain(const Camera& camera, const MapHeader& header, double zMin, int px, int py)
-{
-    const double ndcX = (px + 0.5) / camera.viewportWidth * 2 - 1;
-    const double ndcY = 1 - (py + 0.5) / camera.viewportHeight * 2;
-    const double tanHalf = std::tan(camera.verticalFov / 2);
-    const glm::dvec3 direction = glm::normalize(camera.forward() + camera.right() * (ndcX * tanHalf * camera.aspect()) +
-                                                camera.up() * (ndcY * tanHalf));
-    if (direction.z >= -1e-6) {
-        return false;
-    }
-    const double t = (zMin - camera.position.z) / direction.z;
-    const glm::dvec3 hit = camera.position + t * direction;
-    // Depth along the view axis must be inside the far plane, with a margin for the rasteriser's edges.
-    const double depth = t * glm::dot(direction, camera.forward());
-    const double s = header.sampleSpacing;
-    const double margin = 2 * s;
-    return depth < camera.farPlane * 0.98 && hit.x > header.originX + margin &&
-           hit.y > header.originY + margin && hit.x < header.originX + (header.validWidth - 1) * s - margin &&
-           hit.y < header.originY + (header.validHeight - 1) * s - margin;
 }
 
 TEST_F(TengineGLTest, NoHolesAlongTheFlight)
@@ -332,30 +310,6 @@ TEST_F(TengineGLTest, GeomorphingHidesTheSwitchBetweenDetailLevels)
     EXPECT_LT(smooth, 0.5);
     RecordProperty("mean_difference_morphed", std::to_string(smooth));
     RecordProperty("mean_difference_popping", std::to_string(pop));
-}
-
-/// Rows of a video's frames.csv as maps from column name to value.
-std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& file)
-{
-    std::ifstream in(file);
-    std::string line;
-    std::getline(in, line);
-    std::vector<std::string> names;
-    for (std::stringstream header(line); std::getline(header, line, ',');) {
-        names.push_back(line);
-    }
-    std::vector<std::map<std::string, double>> rows;
-    while (std::getline(in, line)) {
-        std::stringstream fields(line);
-        std::map<std::string, double> row;
-        for (const auto& name : names) {
-            std::string value;
-            std::getline(fields, value, ',');
-            row[name] = std::stod(value);
-        }
-        rows.push_back(std::move(row));
-    }
-    return rows;
 }
 
 TEST_F(TengineGLTest, DetailFlightHasDynamicNodesAndNoHoles)

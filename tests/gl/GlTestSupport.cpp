@@ -1,0 +1,54 @@
+#include "GlTestSupport.h"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace terrain::test {
+
+bool mustHitTerrain(const Camera& camera, const MapHeader& header, double zMin, int px, int py)
+{
+    const double ndcX = (px + 0.5) / camera.viewportWidth * 2 - 1;
+    const double ndcY = 1 - (py + 0.5) / camera.viewportHeight * 2;
+    const double tanHalf = std::tan(camera.verticalFov / 2);
+    const glm::dvec3 direction = glm::normalize(camera.forward() + camera.right() * (ndcX * tanHalf * camera.aspect()) +
+                                                camera.up() * (ndcY * tanHalf));
+    if (direction.z >= -1e-6) {
+        return false;
+    }
+    const double t = (zMin - camera.position.z) / direction.z;
+    const glm::dvec3 hit = camera.position + t * direction;
+    const double depth = t * glm::dot(direction, camera.forward());
+    const double s = header.sampleSpacing;
+    const double margin = 2 * s;
+    return depth < camera.farPlane * 0.98 && hit.x > header.originX + margin && hit.y > header.originY + margin &&
+           hit.x < header.originX + (header.validWidth - 1) * s - margin &&
+           hit.y < header.originY + (header.validHeight - 1) * s - margin;
+}
+
+std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& file)
+{
+    std::ifstream in(file);
+    std::string line;
+    std::getline(in, line);
+    std::vector<std::string> names;
+    for (std::stringstream header(line); std::getline(header, line, ',');) {
+        names.push_back(line);
+    }
+    std::vector<std::map<std::string, double>> rows;
+    while (std::getline(in, line)) {
+        std::stringstream fields(line);
+        std::map<std::string, double> row;
+        for (const auto& name : names) {
+            std::string value;
+            std::getline(fields, value, ',');
+            row[name] = std::stod(value);
+        }
+        rows.push_back(std::move(row));
+    }
+    return rows;
+}
+
+}  // namespace terrain::test

@@ -1,0 +1,31 @@
+// Helpers shared by the GL tests (tests/gl/*GLTest.cpp): the hole check of the viewer's frames and the
+// video mode's frames.csv.
+#pragma once
+
+#include "core/Camera.h"
+#include "quadtree/MapFormat.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace terrain::test {
+
+/// The clear colour the hole checks set (clear_color=1,0,1): a colour the scene never produces.
+inline constexpr std::uint8_t kHole[3] = {255, 0, 255};
+
+/// Whether an RGB pixel is the clear colour kHole.
+inline bool isHole(const std::uint8_t* p) { return p[0] == kHole[0] && p[1] == kHole[1] && p[2] == kHole[2]; }
+
+/// Whether the view ray through pixel (px, py) must hit the terrain: it goes down and reaches `zMin`, the
+/// lowest terrain height, inside the input's area (2 samples in from its edges) and before the far plane
+/// (with a margin for the rasteriser's edges). The terrain lies at or above zMin everywhere there, so such
+/// a ray crosses the surface first, and a clear-colour pixel there is a hole.
+bool mustHitTerrain(const Camera& camera, const MapHeader& header, double zMin, int px, int py);
+
+/// Rows of a video's frames.csv as maps from column name to value.
+std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& file);
+
+}  // namespace terrain::test
