@@ -3,10 +3,10 @@
 // locks and no state outside its registers.
 #include "core/MappedCopy.h"
 
+#include <atomic>
 #include <csetjmp>
 #include <csignal>
 #include <cstdint>
-#include <atomic>
 #include <cstring>
 #include <mutex>
 

@@ -10,14 +10,14 @@
 #include "quadtree/MapVerifier.h"
 #include "synthesis/Material.h"
 
+#include <sys/mman.h>
+#include <unistd.h>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
-#include <sys/mman.h>
-#include <unistd.h>
 #include <vector>
 
 namespace terrain::fuzz {
@@ -253,9 +253,14 @@ void fuzzCameraPath(std::span<const std::uint8_t> data)
 std::span<const Target> targets()
 {
     static constexpr Target kTargets[] = {
-        {"map", fuzzMap},       {"png", fuzzPng},       {"bt", fuzzBt},
-        {"ter", fuzzTer},       {"raw", fuzzRaw},       {"config", fuzzConfig},
-        {"material", fuzzMaterial}, {"camera_path", fuzzCameraPath},
+        {"map", fuzzMap},
+        {"png", fuzzPng},
+        {"bt", fuzzBt},
+        {"ter", fuzzTer},
+        {"raw", fuzzRaw},
+        {"config", fuzzConfig},
+        {"material", fuzzMaterial},
+        {"camera_path", fuzzCameraPath},
     };
     return kTargets;
 }

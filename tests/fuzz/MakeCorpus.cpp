@@ -126,7 +126,8 @@ int main(int argc, char** argv)
     for (int minor = 0; minor <= 3 && status.ok(); ++minor) {
         for (auto [type, name] : {std::pair{BtSampleType::Int16, "int16"}, std::pair{BtSampleType::Int32, "int32"},
                                   std::pair{BtSampleType::Float32, "float32"}}) {
-            status = writeBtHeightField(out / "bt" / ("v1" + std::to_string(minor) + "-" + name + ".bt"), voids, type, minor);
+            status = writeBtHeightField(out / "bt" / ("v1" + std::to_string(minor) + "-" + name + ".bt"), voids, type,
+                                        minor);
             if (!status.ok()) {
                 break;
             }

@@ -15,12 +15,12 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <numbers>
-#include <sys/wait.h>
 #include <thread>
 
 namespace terrain {
@@ -139,8 +139,9 @@ int expectNoHoles(const std::filesystem::path& frames, const MapHeader& header, 
                 }
             }
         }
-        EXPECT_EQ(holes, 0) << "frame " << f << ": " << holes << " pixels show the clear colour below the horizon, first at ("
-                            << firstX << ", " << firstY << ")";
+        EXPECT_EQ(holes, 0) << "frame " << f << ": " << holes
+                            << " pixels show the clear colour below the horizon, first at (" << firstX << ", " << firstY
+                            << ")";
     }
     return pixelsChecked;
 }

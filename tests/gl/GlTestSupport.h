@@ -17,7 +17,10 @@ namespace terrain::test {
 inline constexpr std::uint8_t kHole[3] = {255, 0, 255};
 
 /// Whether an RGB pixel is the clear colour kHole.
-inline bool isHole(const std::uint8_t* p) { return p[0] == kHole[0] && p[1] == kHole[1] && p[2] == kHole[2]; }
+inline bool isHole(const std::uint8_t* p)
+{
+    return p[0] == kHole[0] && p[1] == kHole[1] && p[2] == kHole[2];
+}
 
 /// Whether the view ray through pixel (px, py) must hit the terrain: it goes down and reaches `zMin`, the
 /// lowest terrain height, inside the input's area (2 samples in from its edges) and before the far plane

@@ -11,19 +11,19 @@
 #include "lod/TerrainStreamer.h"
 #include "quadtree/MapVerifier.h"
 
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/mman.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
-#include <fcntl.h>
-#include <gtest/gtest.h>
 #include <numbers>
 #include <random>
 #include <set>
 #include <sstream>
-#include <sys/mman.h>
-#include <sys/wait.h>
 #include <thread>
-#include <unistd.h>
 
 namespace terrain {
 namespace {
@@ -31,9 +31,15 @@ namespace {
 using test::Bytes;
 
 constexpr ReaderKind kReaders[] = {ReaderKind::Stream, ReaderKind::MemoryMapped};
-const char* readerName(ReaderKind kind) { return kind == ReaderKind::Stream ? "stream" : "memory_mapped"; }
+const char* readerName(ReaderKind kind)
+{
+    return kind == ReaderKind::Stream ? "stream" : "memory_mapped";
+}
 
-bool mentions(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
+bool mentions(const std::string& text, const std::string& what)
+{
+    return text.find(what) != std::string::npos;
+}
 
 /// The Jacksboro DEM (403 x 344 samples, 30 m) as a map of 17-sample chunks: 6 levels, grid 513^2.
 class MapFaultTest : public ::testing::Test {
@@ -78,7 +84,8 @@ protected:
     }
 
     /// A copy of the map in `dir` with bits `bits` (offsets from the start of `id`'s payload) flipped.
-    static std::filesystem::path damagedCopy(const test::ScratchDir& dir, const NodeId& id, const std::vector<std::uint64_t>& bits)
+    static std::filesystem::path damagedCopy(const test::ScratchDir& dir, const NodeId& id,
+                                             const std::vector<std::uint64_t>& bits)
     {
         Bytes bytes = *sBytes;
         const DirectoryEntry& entry = entryOf(id);
@@ -205,8 +212,8 @@ TEST_F(MapFaultTest, FlippedBitsInANodeAreAChecksumErrorNamingIt)
                 ASSERT_TRUE(map) << "damage to a payload must not stop the map from opening";
                 auto node = map->loadNode(victim, parentHeightsOf(victim));
                 ASSERT_FALSE(node.ok()) << "the damaged node decoded";
-                EXPECT_TRUE(mentions(node.error().message, path.string() + ": node " + victim.toString() +
-                                                                ": checksum mismatch"))
+                EXPECT_TRUE(mentions(node.error().message,
+                                     path.string() + ": node " + victim.toString() + ": checksum mismatch"))
                     << node.error().message;
                 // Its parent, siblings and children (decoded from the undamaged heights) are untouched.
                 std::vector<NodeId> neighbours;
@@ -226,7 +233,8 @@ TEST_F(MapFaultTest, FlippedBitsInANodeAreAChecksumErrorNamingIt)
                         continue;
                     }
                     auto loaded = map->loadNode(other, parentHeightsOf(other));
-                    ASSERT_TRUE(loaded.ok()) << "damage spread to " << other.toString() << ": " << loaded.error().message;
+                    ASSERT_TRUE(loaded.ok())
+                        << "damage spread to " << other.toString() << ": " << loaded.error().message;
                     EXPECT_EQ(loaded->heights, sTree->find(other)->heights) << other.toString();
                 }
             }
@@ -268,7 +276,8 @@ TEST_F(MapFaultTest, StreamerReportsACorruptNodeOnceAndKeepsDrawingItsParent)
         ASSERT_TRUE(streamer.ok());
         fly(**streamer, camera, kTau, 12);
         const auto& nodes = (*streamer)->selection().nodes;
-        ASSERT_TRUE(std::any_of(nodes.begin(), nodes.end(), [&](const SelectedNode& n) { return isWithin(n.id, victim); }))
+        ASSERT_TRUE(
+            std::any_of(nodes.begin(), nodes.end(), [&](const SelectedNode& n) { return isWithin(n.id, victim); }))
             << "the camera should want node " << victim.toString();
     }
     test::ScratchDir dir;
@@ -293,10 +302,12 @@ TEST_F(MapFaultTest, StreamerReportsACorruptNodeOnceAndKeepsDrawingItsParent)
                 }
                 for (int q = 0; q < 4; ++q) {
                     ASSERT_EQ((*streamer)->node(parent.child(q)), nullptr)
-                        << "frame " << frame << ": " << parent.child(q).toString() << " of the failed group is resident";
+                        << "frame " << frame << ": " << parent.child(q).toString()
+                        << " of the failed group is resident";
                 }
                 for (const auto& selected : (*streamer)->selection().nodes) {
-                    ASSERT_FALSE(isWithin(selected.id, victim)) << "frame " << frame << " drew " << selected.id.toString();
+                    ASSERT_FALSE(isWithin(selected.id, victim))
+                        << "frame " << frame << " drew " << selected.id.toString();
                     parentDrawn = parentDrawn || selected.id == parent;
                 }
             }
@@ -311,8 +322,9 @@ TEST_F(MapFaultTest, StreamerReportsACorruptNodeOnceAndKeepsDrawingItsParent)
             EXPECT_TRUE(parentDrawn);
         }
     }
-    RecordProperty("checked", "node 3/2/3 with a flipped bit: both readers, inline and 2 workers, 30 frames: one "
-                              "report naming the file and node, its group never resident, parent 2/1/1 drawn");
+    RecordProperty("checked",
+                   "node 3/2/3 with a flipped bit: both readers, inline and 2 workers, 30 frames: one "
+                   "report naming the file and node, its group never resident, parent 2/1/1 drawn");
 }
 
 // ---- Truncated while open ----
@@ -338,8 +350,8 @@ TEST_F(MapFaultTest, FileTruncatedWhileOpenIsAnErrorNamingTheNode)
                 ++whole;
             } else {
                 ASSERT_FALSE(node.ok()) << entry.id.toString() << " lies past the cut but loaded";
-                EXPECT_TRUE(mentions(node.error().message, path.string() + ": node " + entry.id.toString() +
-                                                                ": file is truncated"))
+                EXPECT_TRUE(mentions(node.error().message,
+                                     path.string() + ": node " + entry.id.toString() + ": file is truncated"))
                     << node.error().message;
                 ++lost;
             }
@@ -394,10 +406,13 @@ TEST_F(MapFaultTest, StreamerKeepsTheParentsOfNodesLostToATruncation)
             const auto ids = namedNodes(report);
             ASSERT_EQ(ids.size(), 1u) << report;
             const NodeId lost = ids.front();
-            EXPECT_TRUE(failed.insert(lost.parent().key()).second) << "group of " << lost.toString() << " reported twice";
-            EXPECT_GT(entryOf(lost).offset + entryOf(lost).payloadBytes(), cut) << lost.toString() << " lies before the cut";
+            EXPECT_TRUE(failed.insert(lost.parent().key()).second)
+                << "group of " << lost.toString() << " reported twice";
+            EXPECT_GT(entryOf(lost).offset + entryOf(lost).payloadBytes(), cut)
+                << lost.toString() << " lies before the cut";
             EXPECT_EQ((*streamer)->node(lost), nullptr) << lost.toString() << " is resident";
-            EXPECT_NE((*streamer)->node(lost.parent()), nullptr) << "parent of " << lost.toString() << " is not resident";
+            EXPECT_NE((*streamer)->node(lost.parent()), nullptr)
+                << "parent of " << lost.toString() << " is not resident";
             for (const auto& selected : selection.nodes) {
                 EXPECT_FALSE(isWithin(selected.id, lost.parent()) && selected.id != lost.parent())
                     << selected.id.toString() << " is drawn below the failed group of " << lost.toString();
@@ -504,7 +519,7 @@ TEST(MappedCopyTest, APagePastTheEndOfATruncatedFileIsAnErrorNotSigbus)
     ASSERT_TRUE(copyFromMapping(out.data(), file.at(0), out.size()).ok());
     EXPECT_EQ(out[page + 5], static_cast<std::uint8_t>((page + 5) * 7 + 1));
 
-    std::filesystem::resize_file(file.path, page + 100);  // the third page is gone, the second partly
+    std::filesystem::resize_file(file.path, page + 100);                 // the third page is gone, the second partly
     auto past = copyFromMapping(out.data(), file.at(page), out.size());  // second and third pages
     ASSERT_FALSE(past.ok()) << "a copy over a page past the end succeeded";
     EXPECT_TRUE(mentions(past.error().message, "at byte " + std::to_string(page) + " of this")) << past.error().message;

@@ -5,19 +5,19 @@
 // error that names the output and says what is wrong.
 #include "MapTestSupport.h"
 
-#include <chrono>
-#include <csignal>
-#include <cstdlib>
 #include <dirent.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
-#include <random>
 #include <sched.h>
-#include <sstream>
 #include <sys/mount.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <random>
+#include <sstream>
 
 namespace terrain {
 namespace {
@@ -25,7 +25,10 @@ namespace {
 const std::string kPrep = TERRAIN_PREP_EXE;
 const std::string kTool = TERRAIN_TENGINE_TOOL_EXE;
 
-bool mentions(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
+bool mentions(const std::string& text, const std::string& what)
+{
+    return text.find(what) != std::string::npos;
+}
 
 /// prep on `input` with one thread (so a run takes a few tenths of a second) into `output`.
 std::vector<std::string> prepArgs(const std::filesystem::path& input, const std::filesystem::path& output,
@@ -36,8 +39,14 @@ std::vector<std::string> prepArgs(const std::filesystem::path& input, const std:
     return args;
 }
 
-std::filesystem::path trinidad() { return test::demoDataPath("trinidad_co_srtm3_crop_1025.png"); }
-std::filesystem::path jacksboro() { return test::testDataPath("jacksboro_fault_dem_403x344.png"); }
+std::filesystem::path trinidad()
+{
+    return test::demoDataPath("trinidad_co_srtm3_crop_1025.png");
+}
+std::filesystem::path jacksboro()
+{
+    return test::testDataPath("jacksboro_fault_dem_403x344.png");
+}
 
 /// Whether process `pid` has a file in `dir` open (its output: an O_TMPFILE shows as "dir/#inode (deleted)").
 bool hasFileOpenIn(pid_t pid, const std::filesystem::path& dir)
@@ -56,7 +65,10 @@ bool hasFileOpenIn(pid_t pid, const std::filesystem::path& dir)
 
 /// A uniform double in [0, 1) from the generator's standardised output (not from a <random> distribution,
 /// whose results differ between standard libraries): the same seed gives the same delays everywhere.
-double unitInterval(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+double unitInterval(std::mt19937_64& rng)
+{
+    return static_cast<double>(rng() >> 11) * 0x1.0p-53;
+}
 
 std::uint64_t faultSeed()
 {
@@ -104,7 +116,8 @@ TEST(PrepFaultTest, StoppedAtRandomMomentsKeepsThePreviousMapWhole)
         delays[static_cast<std::size_t>(r)] = 1.3 * runSeconds * (r + unitInterval(rng)) / kRounds;
     }
     for (int r = kRounds - 1; r > 0; --r) {
-        std::swap(delays[static_cast<std::size_t>(r)], delays[static_cast<std::size_t>(rng() % static_cast<std::uint64_t>(r + 1))]);
+        std::swap(delays[static_cast<std::size_t>(r)],
+                  delays[static_cast<std::size_t>(rng() % static_cast<std::uint64_t>(r + 1))]);
     }
     const int signals[] = {SIGINT, SIGTERM, SIGKILL};
     std::ostringstream log;
@@ -195,14 +208,16 @@ TEST(PrepFaultTest, FileSizeLimitIsAClearErrorAndKeepsThePreviousMap)
         ASSERT_TRUE(status) << "prep did not finish within 60 s";
         const std::string printed = test::readTextFile(logs / "prep.txt");
         EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 1)
-            << test::describeWaitStatus(*status) << ", expected exit code 1\n" << printed;
+            << test::describeWaitStatus(*status) << ", expected exit code 1\n"
+            << printed;
         EXPECT_TRUE(mentions(printed, output.string() + ": write failed: File too large")) << printed;
         EXPECT_TRUE(mentions(printed, "ulimit -f")) << printed;
         EXPECT_EQ(work.list(), std::vector<std::string>{"terrain.map"});
         EXPECT_TRUE(test::readFileBytes(output) == previous) << "the previous map was changed";
     }
-    ::testing::Test::RecordProperty("checked", "prep over a 256 KiB file size limit exits 1 naming the output, "
-                                               "'File too large', previous map intact, no other file");
+    ::testing::Test::RecordProperty("checked",
+                                    "prep over a 256 KiB file size limit exits 1 naming the output, "
+                                    "'File too large', previous map intact, no other file");
 }
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
@@ -232,7 +247,8 @@ TEST(PrepFaultTest, OversizedRawSizeIsRefusedBeforeAllocating)
         const auto status = test::waitForProgram(child, 60);
         ASSERT_TRUE(status);
         const std::string printed = test::readTextFile(dir / "prep.txt");
-        EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 1) << test::describeWaitStatus(*status) << "\n" << printed;
+        EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 1) << test::describeWaitStatus(*status) << "\n"
+                                                                     << printed;
         EXPECT_TRUE(mentions(printed, (dir / "tiny.raw").string() + ": a " + size + " raw 16-bit file has exactly"))
             << printed;
         EXPECT_FALSE(std::filesystem::exists(dir / "out.map"));
