@@ -1,5 +1,6 @@
 // prep: height field -> .map (paper 4.4.1). Argument parsing and reporting only; the work is buildMap().
 #include "core/Memory.h"
+#include "core/OutputGuard.h"
 #include "core/Parse.h"
 #include "core/ParallelFor.h"
 #include "heightfield/HeightFieldIo.h"
@@ -243,6 +244,18 @@ int main(int argc, char** argv)
         std::fprintf(stderr, "prep: %s\n", args.error().message.c_str());
         return 2;
     }
+    const std::filesystem::path output =
+        args->output ? *args->output : std::filesystem::path(args->input).replace_extension(".map");
+    std::vector<InputFile> inputs = {{"height field", args->input},
+                                     {"texture (-t)", args->build.texture.value_or(std::filesystem::path())},
+                                     {"weight map (-w)", args->build.weights.value_or(std::filesystem::path())}};
+    for (const auto& material : args->materials) {
+        inputs.push_back({"material", material});
+    }
+    if (auto refused = refuseInputAsOutput("map", output, inputs); !refused.ok()) {
+        std::fprintf(stderr, "prep: %s\n", refused.error().message.c_str());
+        return 2;
+    }
     std::vector<std::string> warnings = args->warnings;
     auto synthesizer = makeSynthesizer(*args, warnings);
     for (const auto& warning : warnings) {
@@ -260,7 +273,6 @@ int main(int argc, char** argv)
         std::fprintf(stderr, "prep: %s\n", field.error().message.c_str());
         return 1;
     }
-    std::filesystem::path output = args->output ? *args->output : std::filesystem::path(args->input).replace_extension(".map");
 
     ProgressBar bar(::isatty(STDERR_FILENO) != 0);
     args->build.progress = [&](double fraction, std::string_view stage) { bar.update(fraction, stage); };

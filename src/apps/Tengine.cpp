@@ -3,11 +3,15 @@
 // and video_mode (camera_path once at a fixed time step, every frame (or every video_save_every-th) saved
 // as a PNG, plus a CSV of per-frame statistics and, when ffmpeg is installed, an MP4).
 #include "DetailSetup.h"
+#include "FrameRateMeter.h"
 #include "TengineOptions.h"
+#include "VideoRecorder.h"
 
 #include "core/AtomicFile.h"
 #include "core/Memory.h"
+#include "core/StopSignals.h"
 #include "lod/CameraPath.h"
+#include "lod/HeightQuery.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "render/FrameCapture.h"
@@ -21,12 +25,18 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
-#include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <functional>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <unistd.h>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -71,7 +81,36 @@ SceneStyle styleFrom(const TengineOptions& o)
     return style;
 }
 
-/// Mouse look and w/s/a/d/q/z movement (paper 4.4.2); 1/2 faster/slower; l wireframe; k records a keyframe.
+/// Key presses as events (GLFW's key callback), so a tap shorter than a frame is never lost however slow
+/// the frame; held keys are still read with glfwGetKey for smooth movement.
+class KeyPresses {
+public:
+    explicit KeyPresses(GLFWwindow* window) : mWindow(window)
+    {
+        glfwSetWindowUserPointer(window, this);
+        glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int) {
+            if (action == GLFW_PRESS) {
+                static_cast<KeyPresses*>(glfwGetWindowUserPointer(w))->mPressed.push_back(key);
+            }
+        });
+    }
+    ~KeyPresses()
+    {
+        glfwSetKeyCallback(mWindow, nullptr);
+        glfwSetWindowUserPointer(mWindow, nullptr);
+    }
+    KeyPresses(const KeyPresses&) = delete;
+    KeyPresses& operator=(const KeyPresses&) = delete;
+
+    /// The keys pressed since the last call, in order (call after pollEvents).
+    std::vector<int> take() { return std::exchange(mPressed, {}); }
+
+private:
+    GLFWwindow* mWindow;
+    std::vector<int> mPressed;
+};
+
+/// Mouse look and w/s/a/d/q/z movement (paper 4.4.2), kept camera_min_clearance above the drawn surface.
 class FreeFlight {
 public:
     FreeFlight(GLFWwindow* window, double speed) : mWindow(window), mSpeed(speed)
@@ -80,7 +119,9 @@ public:
         glfwGetCursorPos(window, &mLastX, &mLastY);
     }
 
-    void update(Camera& camera, double dt)
+    /// Moves the camera by the mouse and the held keys over `dt` seconds; then lifts it to `floor` metres
+    /// when it is below (the drawn surface plus the clearance; empty where nothing is drawn).
+    void update(Camera& camera, double dt, const std::function<std::optional<double>(double, double)>& floor)
     {
         double x = 0, y = 0;
         glfwGetCursorPos(mWindow, &x, &y);
@@ -94,14 +135,9 @@ public:
                                 camera.right() * (down(GLFW_KEY_D) - down(GLFW_KEY_A)) +
                                 camera.up() * (down(GLFW_KEY_Q) - down(GLFW_KEY_Z));
         camera.position += move * (mSpeed * dt);
-    }
-    /// Keys with an effect per press rather than while held.
-    bool pressed(int key)
-    {
-        const bool now = glfwGetKey(mWindow, key) == GLFW_PRESS;
-        const bool was = mHeld[key];
-        mHeld[key] = now;
-        return now && !was;
+        if (const auto lowest = floor(camera.position.x, camera.position.y); lowest && camera.position.z < *lowest) {
+            camera.position.z = *lowest;
+        }
     }
     double& speed() { return mSpeed; }
 
@@ -109,7 +145,6 @@ private:
     GLFWwindow* mWindow;
     double mSpeed;
     double mLastX = 0, mLastY = 0;
-    bool mHeld[GLFW_KEY_LAST + 1] = {};
 };
 
 /// Video mode's frames.csv columns. Per frame: cache_hits, cache_misses, requests_made, requests_completed
@@ -117,20 +152,211 @@ private:
 /// loading), resident_bytes (the process's resident set) and deepest_level (of the nodes drawn; below the
 /// map's levels - 1 they are dynamic); since the start: requests_pending_peak (the most queued plus loading
 /// at once, NodeServerStats::peakPending). New columns go at the end: readers cut columns by position.
-std::string csvHeader()
+constexpr const char* kCsvHeader =
+    "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
+    "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,resident_bytes,"
+    "deepest_level";
+
+/// Everything the viewer draws with, opened from the options in dependency order. Not movable: the source
+/// refers to the map and the synthesizer, the streamer to the source.
+struct Scene {
+    std::unique_ptr<MapFile> map;
+    std::unique_ptr<const DetailSynthesizer> synthesizer;
+    std::optional<CameraPath> path;
+    std::unique_ptr<GlWindow> window;
+    std::unique_ptr<TerrainRenderer> renderer;
+    std::unique_ptr<TextOverlay> overlay;
+    std::unique_ptr<TerrainNodeSource> source;
+    std::unique_ptr<TerrainStreamer> streamer;
+
+    const MapHeader& header() const { return map->header(); }
+};
+
+/// Opens the map, the materials, the camera path, the window, the renderer and the streamer; errors are
+/// logged and end the program with status 1.
+std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
 {
-    return "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
-           "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,resident_bytes,"
-           "deepest_level\n";
+    const TengineOptions& o = parsed.options;
+    auto scene = std::make_unique<Scene>();
+    auto fail = [&](const std::string& message) {
+        log(message);
+        return nullptr;
+    };
+    auto map = MapFile::open(o.mapFile, o.reader);
+    if (!map.ok()) {
+        return fail(map.error().message);
+    }
+    scene->map = std::move(map).value();
+    const MapHeader& header = scene->header();
+
+    // Detail synthesis (3.4): the synthesizer dynamic nodes are made with, null when it is off.
+    std::vector<std::string> materialWarnings;
+    auto synthesizer = makeDetailSynthesizer(o, static_cast<int>(header.chunkSize), TERRAIN_MATERIALS_DIR, materialWarnings);
+    for (const auto& warning : materialWarnings) {
+        log("warning: " + warning);
+    }
+    if (!synthesizer.ok()) {
+        return fail(synthesizer.error().message);
+    }
+    scene->synthesizer = std::move(synthesizer).value();
+    if (scene->synthesizer && !header.hasDetailErrors()) {
+        log("warning: " + scene->map->name() +
+            " has no estimates of the detail error below its leaves (made by an older prep): no dynamic nodes; "
+            "run prep again to get them");
+    }
+    const MaterialSet* materials = scene->synthesizer ? scene->synthesizer->settings().materials.get() : nullptr;
+
+    if (!o.cameraPath.empty()) {
+        auto loaded = CameraPath::load(o.cameraPath);
+        if (!loaded.ok()) {
+            return fail(loaded.error().message);
+        }
+        scene->path = std::move(loaded.value());
+    }
+
+    WindowOptions windowOptions;
+    windowOptions.width = o.windowWidth;
+    windowOptions.height = o.windowHeight;
+    windowOptions.visible = !(o.videoMode && !o.demoMode);
+    windowOptions.title = "tengine - " + o.mapFile.filename().string();
+    auto window = GlWindow::create(windowOptions);
+    if (!window.ok()) {
+        return fail(window.error().message);
+    }
+    scene->window = std::move(window).value();
+    log(scene->window->description());
+    const std::filesystem::path shaders = o.shaderPath.empty() ? std::filesystem::path(TERRAIN_SHADER_DIR) : o.shaderPath;
+    auto renderer = TerrainRenderer::create(shaders, header, o.vertexCacheSize, materials);
+    if (!renderer.ok()) {
+        return fail(renderer.error().message);
+    }
+    scene->renderer = std::move(renderer).value();
+    auto overlay = TextOverlay::create(shaders);
+    if (!overlay.ok()) {
+        return fail(overlay.error().message);
+    }
+    scene->overlay = std::move(overlay).value();
+
+    scene->source = std::make_unique<TerrainNodeSource>(
+        *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing});
+    StreamerOptions streamerOptions;
+    streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);
+    streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
+    streamerOptions.workers = o.workerThreads;
+    streamerOptions.velocityLimit = o.detailVelocityLimit;
+    auto streamer = TerrainStreamer::create(*scene->source, extentOf(header), streamerOptions);
+    if (!streamer.ok()) {
+        return fail(streamer.error().message);
+    }
+    scene->streamer = std::move(streamer).value();
+    scene->streamer->onLoadError([&log](const std::string& message) { log(message); });
+    return scene;
 }
 
-bool commandExists(const char* name)
+/// Demo and video mode fly the path as given; where it passes below the finest static surface the frames
+/// show the terrain from below, so say once where (sampled every 0.1 s).
+void warnWherePathIsBelowGround(const Scene& scene, const std::filesystem::path& pathFile, Log& log)
 {
-    std::string command = std::string("command -v ") + name + " >/dev/null 2>&1";
-    return std::system(command.c_str()) == 0;
+    constexpr double kStepSeconds = 0.1;
+    const auto spans = findPathBelowGround(
+        *scene.path,
+        [&](double x, double y) -> std::optional<double> {
+            auto sample = staticHeightAt(*scene.map, x, y);
+            return sample.ok() ? std::optional<double>(sample->height) : std::nullopt;
+        },
+        kStepSeconds);
+    if (!spans.empty()) {
+        log("warning: " + pathFile.string() + " passes below the terrain at " + formatTimeSpans(spans) +
+            ": the camera is flown there as given and shows the terrain from below");
+    }
 }
 
-int run(const ParsedCommandLine& parsed)
+Camera initialCamera(const TengineOptions& o, const Scene& scene)
+{
+    const MapHeader& header = scene.header();
+    Camera camera;
+    camera.viewportWidth = scene.window->width();
+    camera.viewportHeight = scene.window->height();
+    camera.verticalFov = o.cameraFov * kDegrees;
+    camera.nearPlane = o.cameraZNear;
+    camera.farPlane = o.cameraZFar;
+    const double extent = header.nodeSizeAt(0);
+    if (o.cameraPosition) {
+        camera.position = *o.cameraPosition;
+    } else {
+        const double top = header.heightOf(scene.map->directory().front().maxCode);
+        camera.position = {header.originX + extent / 2, header.originY + extent / 2 - extent * 0.6, top + extent * 0.25};
+    }
+    camera.yaw = o.cameraYaw * kDegrees;
+    camera.pitch = o.cameraPitch * kDegrees;
+    return camera;
+}
+
+/// The overlay's lines: rate (measured) or frame and time (video), triangles, nodes, cache, camera.
+std::vector<std::string> overlayLines(bool video, std::size_t frame, double time, std::optional<double> fps,
+                                      const RenderStats& render, const Scene& scene, const Camera& camera,
+                                      double tau, bool wireframe)
+{
+    char line[160];
+    std::vector<std::string> lines;
+    const double mtriangles = static_cast<double>(render.triangles) / 1e6;
+    if (video) {  // wall-clock rates mean nothing in frames rendered at a fixed time step
+        std::snprintf(line, sizeof line, "frame %zu  t %.2f s  %.2f Mtriangles", frame, time, mtriangles);
+    } else if (fps) {
+        std::snprintf(line, sizeof line, "%.1f fps  %.2f Mtriangles", *fps, mtriangles);
+    } else {
+        std::snprintf(line, sizeof line, "-- fps  %.2f Mtriangles", mtriangles);
+    }
+    lines.emplace_back(line);
+    std::snprintf(line, sizeof line, "nodes %zu static, %zu dynamic", render.staticNodes, render.dynamicNodes);
+    lines.emplace_back(line);
+    const auto server = scene.streamer->serverStats();
+    std::snprintf(line, sizeof line, "cache %zu / %zu nodes, requests pending %zu", scene.streamer->cache().size(),
+                  scene.streamer->cache().capacity(), server.queued + server.inFlight);
+    lines.emplace_back(line);
+    std::snprintf(line, sizeof line, "camera %.0f %.0f %.0f m  tau %.1f px%s", camera.position.x, camera.position.y,
+                  camera.position.z, tau, wireframe ? "  wireframe" : "");
+    lines.emplace_back(line);
+    return lines;
+}
+
+/// Per-frame counters as differences of the streamer's running totals.
+class FrameCounters {
+public:
+    /// The frames.csv row of this frame (kCsvHeader's columns), then remembers the totals.
+    std::string row(std::size_t frame, double time, double milliseconds, const RenderStats& render, const Scene& scene)
+    {
+        const auto server = scene.streamer->serverStats();
+        const auto& cache = scene.streamer->cache();
+        int deepestLevel = 0;
+        for (const SelectedNode& node : scene.streamer->selection().nodes) {
+            deepestLevel = std::max(deepestLevel, node.id.level);
+        }
+        std::ostringstream row;
+        row << frame << ',' << time << ',' << milliseconds << ',' << render.triangles << ',' << render.staticNodes
+            << ',' << render.dynamicNodes << ',' << cache.size() << ',' << cache.hits() - mHits << ','
+            << cache.misses() - mMisses << ',' << server.requested - mRequested << ','
+            << server.completed - mCompleted << ',' << server.queued + server.inFlight << ','
+            << server.failed - mFailed << ',' << server.peakPending << ',' << currentResidentBytes() << ','
+            << deepestLevel;
+        remember(scene);
+        return row.str();
+    }
+    void remember(const Scene& scene)
+    {
+        const auto server = scene.streamer->serverStats();
+        mHits = scene.streamer->cache().hits();
+        mMisses = scene.streamer->cache().misses();
+        mRequested = server.requested;
+        mCompleted = server.completed;
+        mFailed = server.failed;
+    }
+
+private:
+    std::uint64_t mHits = 0, mMisses = 0, mRequested = 0, mCompleted = 0, mFailed = 0;
+};
+
+int run(const ParsedCommandLine& parsed, const StopSignals& stop)
 {
     const TengineOptions& o = parsed.options;
     Log log(o.logFile);
@@ -145,130 +371,92 @@ int run(const ParsedCommandLine& parsed)
         log("no map: give a .map file on the command line or map_file in a config (see tengine --help)");
         return 2;
     }
-    auto map = MapFile::open(o.mapFile, o.reader);
-    if (!map.ok()) {
-        log(map.error().message);
+    if (auto refused = checkOutputsAreNotInputs(parsed, o.detailCreateNewNodes && o.detailAddMaterial
+                                                            ? detailMaterialFiles(o, TERRAIN_MATERIALS_DIR)
+                                                            : std::vector<std::filesystem::path>{});
+        !refused.ok()) {
+        log(refused.error().message);
+        return 2;
+    }
+    const auto scene = openScene(parsed, log);
+    if (!scene) {
         return 1;
     }
-    const MapHeader& header = (*map)->header();
-
-    // Detail synthesis (3.4): the synthesizer dynamic nodes are made with, null when it is off.
-    std::vector<std::string> materialWarnings;
-    auto synthesizer = makeDetailSynthesizer(o, static_cast<int>(header.chunkSize), TERRAIN_MATERIALS_DIR, materialWarnings);
-    for (const auto& warning : materialWarnings) {
-        log("warning: " + warning);
-    }
-    if (!synthesizer.ok()) {
-        log(synthesizer.error().message);
-        return 1;
-    }
-    if (*synthesizer && !header.hasDetailErrors()) {
-        log("warning: " + (*map)->name() +
-            " has no estimates of the detail error below its leaves (made by an older prep): no dynamic nodes; "
-            "run prep again to get them");
-    }
-    const MaterialSet* materials = *synthesizer ? (*synthesizer)->settings().materials.get() : nullptr;
-
+    const MapHeader& header = scene->header();
     const bool demo = o.demoMode;
     const bool video = o.videoMode && !demo;
-    std::optional<CameraPath> path;
-    if (!o.cameraPath.empty()) {
-        auto loaded = CameraPath::load(o.cameraPath);
-        if (!loaded.ok()) {
-            log(loaded.error().message);
-            return 1;
-        }
-        path = std::move(loaded.value());
+    if (scene->path && (demo || video)) {
+        warnWherePathIsBelowGround(*scene, o.cameraPath, log);
     }
+    Camera camera = initialCamera(o, *scene);
+    SceneStyle style = styleFrom(o);
 
-    WindowOptions windowOptions;
-    windowOptions.width = o.windowWidth;
-    windowOptions.height = o.windowHeight;
-    windowOptions.visible = !video;
-    windowOptions.title = "tengine - " + o.mapFile.filename().string();
-    auto window = GlWindow::create(windowOptions);
-    if (!window.ok()) {
-        log(window.error().message);
-        return 1;
-    }
-    log((*window)->description());
-    const std::filesystem::path shaders = o.shaderPath.empty() ? std::filesystem::path(TERRAIN_SHADER_DIR) : o.shaderPath;
-    auto renderer = TerrainRenderer::create(shaders, header, o.vertexCacheSize, materials);
-    if (!renderer.ok()) {
-        log(renderer.error().message);
-        return 1;
-    }
-    auto overlay = TextOverlay::create(shaders);
-    if (!overlay.ok()) {
-        log(overlay.error().message);
-        return 1;
-    }
-
-    TerrainNodeSource source(**map, {synthesizer->get(), o.lodMinimumSpacing});
-    StreamerOptions streamerOptions;
-    streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);
-    streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
-    streamerOptions.workers = o.workerThreads;
-    streamerOptions.velocityLimit = o.detailVelocityLimit;
-    auto streamer = TerrainStreamer::create(source, extentOf(header), streamerOptions);
-    if (!streamer.ok()) {
-        log(streamer.error().message);
-        return 1;
-    }
-    (*streamer)->onLoadError([&](const std::string& message) { log(message); });
-
-    Camera camera;
-    camera.viewportWidth = (*window)->width();
-    camera.viewportHeight = (*window)->height();
-    camera.verticalFov = o.cameraFov * kDegrees;
-    camera.nearPlane = o.cameraZNear;
-    camera.farPlane = o.cameraZFar;
-    const double extent = header.nodeSizeAt(0);
-    if (o.cameraPosition) {
-        camera.position = *o.cameraPosition;
-    } else {
-        const double top = header.heightOf((*map)->directory().front().maxCode);
-        camera.position = {header.originX + extent / 2, header.originY + extent / 2 - extent * 0.6, top + extent * 0.25};
-    }
-    camera.yaw = o.cameraYaw * kDegrees;
-    camera.pitch = o.cameraPitch * kDegrees;
-    const SceneStyle baseStyle = styleFrom(o);
-    SceneStyle style = baseStyle;
-
-    std::ofstream csv;
-    std::string csvText;
-    if (video) {
-        std::error_code ec;
-        std::filesystem::create_directories(o.imagePath, ec);
-        if (ec) {
-            log(o.imagePath.string() + ": cannot create the image directory: " + ec.message());
-            return 1;
-        }
-        csvText = csvHeader();
-    }
+    KeyPresses keys(scene->window->handle());
     std::unique_ptr<FreeFlight> flight;
     if (!demo && !video) {
-        flight = std::make_unique<FreeFlight>((*window)->handle(), std::max(20.0, header.sampleSpacing * 2));
+        flight = std::make_unique<FreeFlight>(scene->window->handle(), std::max(20.0, header.sampleSpacing * 2));
     }
-
     const std::size_t lastVideoFrame =
-        path ? static_cast<std::size_t>(std::floor(path->duration() * o.framesPerSecond + 1e-9)) : 0;
+        scene->path ? static_cast<std::size_t>(std::floor(scene->path->duration() * o.framesPerSecond + 1e-9)) : 0;
     const std::size_t videoFrames = o.videoFrames > 0 ? std::min<std::size_t>(static_cast<std::size_t>(o.videoFrames), lastVideoFrame + 1)
                                                       : lastVideoFrame + 1;
+    std::unique_ptr<VideoRecorder> recorder;
+    if (video) {
+        VideoRecorderOptions recording;
+        recording.directory = o.imagePath;
+        recording.frames = videoFrames;
+        recording.framesPerSecond = o.framesPerSecond;
+        recording.saveEvery = o.videoSaveEvery;
+        recording.ffmpeg = o.videoFfmpeg;
+        recording.csvHeader = kCsvHeader;
+        recording.progressInPlace = ::isatty(STDERR_FILENO) != 0;
+        recording.log = [&log](const std::string& message) { log(message); };
+        auto created = VideoRecorder::create(std::move(recording));
+        if (!created.ok()) {
+            log(created.error().message);
+            return 1;
+        }
+        recorder = std::move(created).value();
+    }
+
     const auto start = std::chrono::steady_clock::now();
     auto previous = start;
-    double fps = 0.0;
-    std::uint64_t hitsBefore = 0, missesBefore = 0, requestedBefore = 0, completedBefore = 0, failedBefore = 0;
+    FrameRateMeter rate;
+    FrameCounters counters;
+    bool windowClosed = false;
     std::size_t frame = 0;
     glm::dvec3 previousPosition = camera.position;
-    std::string recordPath = o.cameraPath.empty() ? "recorded.path" : o.cameraPath.string() + ".recorded";
+    const std::filesystem::path recordPath = recordedCameraPathFile(o);
     for (;; ++frame) {
         const auto now = std::chrono::steady_clock::now();
         const double dt = std::chrono::duration<double>(now - previous).count();
         previous = now;
-        fps = fps == 0.0 ? 1.0 / std::max(dt, 1e-6) : 0.9 * fps + 0.1 / std::max(dt, 1e-6);
-        (*window)->pollEvents();
-        if ((*window)->shouldClose() || glfwGetKey((*window)->handle(), GLFW_KEY_ESCAPE) == GLFW_PRESS) {
+        scene->window->pollEvents();
+        bool quit = false;
+        for (int key : keys.take()) {
+            quit = quit || key == GLFW_KEY_ESCAPE;
+            if (!flight) {
+                continue;
+            }
+            if (key == GLFW_KEY_1) {
+                flight->speed() *= 2.0;
+            } else if (key == GLFW_KEY_2) {
+                flight->speed() /= 2.0;
+            } else if (key == GLFW_KEY_L) {
+                style.wireframe = !style.wireframe;
+                log(style.wireframe ? "wireframe on" : "wireframe off");
+            } else if (key == GLFW_KEY_K) {
+                CameraKeyframe keyframe{std::chrono::duration<double>(now - start).count(), camera.position, camera.yaw,
+                                        camera.pitch};
+                auto appended = appendKeyframe(recordPath, keyframe);
+                log(appended.ok() ? "camera keyframe appended to " + recordPath.string() : appended.error().message);
+            }
+        }
+        if (scene->window->shouldClose() || quit) {
+            windowClosed = true;
+            break;
+        }
+        if (stop.received() != 0) {
             break;
         }
         double time = 0.0;
@@ -276,28 +464,16 @@ int run(const ParsedCommandLine& parsed)
             if (frame >= videoFrames) {
                 break;
             }
-            time = path->startTime() + static_cast<double>(frame) / o.framesPerSecond;
-            path->evaluate(time).applyTo(camera);
+            time = scene->path->startTime() + static_cast<double>(frame) / o.framesPerSecond;
+            scene->path->evaluate(time).applyTo(camera);
         } else if (demo) {
-            time = path->startTime() + std::chrono::duration<double>(now - start).count();
-            path->evaluateLooping(time).applyTo(camera);
+            time = scene->path->startTime() + std::chrono::duration<double>(now - start).count();
+            scene->path->evaluateLooping(time).applyTo(camera);
         } else {
-            flight->update(camera, std::min(dt, 0.25));
-            if (flight->pressed(GLFW_KEY_1)) {
-                flight->speed() *= 2.0;
-            }
-            if (flight->pressed(GLFW_KEY_2)) {
-                flight->speed() /= 2.0;
-            }
-            if (flight->pressed(GLFW_KEY_L)) {
-                style.wireframe = !style.wireframe;
-            }
-            if (flight->pressed(GLFW_KEY_K)) {
-                CameraKeyframe key{std::chrono::duration<double>(now - start).count(), camera.position, camera.yaw,
-                                   camera.pitch};
-                auto appended = appendKeyframe(recordPath, key);
-                log(appended.ok() ? "camera keyframe appended to " + recordPath : appended.error().message);
-            }
+            flight->update(camera, std::min(dt, 0.25), [&](double x, double y) -> std::optional<double> {
+                const auto ground = drawnHeightAt(*scene->streamer, header, x, y);
+                return ground ? std::optional<double>(*ground + o.cameraMinClearance) : std::nullopt;
+            });
         }
 
         // The camera's speed for the velocity limit (3.4.4): over the fixed time step in video mode, so a
@@ -306,121 +482,69 @@ int run(const ParsedCommandLine& parsed)
         const double speed = frame == 0 || step <= 0.0 ? 0.0 : glm::length(camera.position - previousPosition) / step;
         previousPosition = camera.position;
         const auto frameStart = std::chrono::steady_clock::now();
-        FrameStats frameStats = (*streamer)->update(camera, o.lodError, speed);
+        FrameStats frameStats = scene->streamer->update(camera, o.lodError, speed);
         if (video) {
             // A recording shows every frame complete: load what it wants, select again, until it wants
             // nothing more (or the cache is full). Independent of thread timing: identical runs give
             // identical frames.
             for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred + frameStats.tooFast; ++round) {
-                (*streamer)->drain();
-                frameStats = (*streamer)->update(camera, o.lodError, speed);
+                scene->streamer->drain();
+                frameStats = scene->streamer->update(camera, o.lodError, speed);
             }
         }
-        RenderStats renderStats = (*renderer)->draw(**streamer, camera, style);
-        const auto server = (*streamer)->serverStats();
-        const auto& cache = (*streamer)->cache();
+        const RenderStats renderStats = scene->renderer->draw(*scene->streamer, camera, style);
         if (o.drawUserInterface) {
-            char line[160];
-            std::vector<std::string> lines;
-            if (video) {  // wall-clock rates mean nothing in frames rendered at a fixed time step
-                std::snprintf(line, sizeof line, "frame %zu  t %.2f s  %.2f Mtriangles", frame, time,
-                              static_cast<double>(renderStats.triangles) / 1e6);
-            } else {
-                std::snprintf(line, sizeof line, "%.1f fps  %.2f Mtriangles", fps,
-                              static_cast<double>(renderStats.triangles) / 1e6);
-            }
-            lines.emplace_back(line);
-            std::snprintf(line, sizeof line, "nodes %zu static, %zu dynamic", renderStats.staticNodes, renderStats.dynamicNodes);
-            lines.emplace_back(line);
-            std::snprintf(line, sizeof line, "cache %zu / %zu nodes, requests pending %zu", cache.size(), cache.capacity(),
-                          server.queued + server.inFlight);
-            lines.emplace_back(line);
-            std::snprintf(line, sizeof line, "camera %.0f %.0f %.0f m  tau %.1f px%s", camera.position.x, camera.position.y,
-                          camera.position.z, o.lodError, style.wireframe ? "  wireframe" : "");
-            lines.emplace_back(line);
-            (*overlay)->draw(lines, camera.viewportWidth, camera.viewportHeight);
+            scene->overlay->draw(overlayLines(video, frame, time, rate.framesPerSecond(), renderStats, *scene, camera,
+                                              o.lodError, style.wireframe),
+                                 camera.viewportWidth, camera.viewportHeight);
         }
-        if (video) {
+        if (recorder) {
             glFinish();
             const double milliseconds =
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frameStart).count();
-            if (o.videoSaveEvery > 0 && frame % static_cast<std::size_t>(o.videoSaveEvery) == 0) {
-                char name[32];
-                std::snprintf(name, sizeof name, "frame_%05zu.png", frame);
-                auto written =
-                    writePngImage(o.imagePath / name, captureFrame(camera.viewportWidth, camera.viewportHeight));
-                if (!written.ok()) {
-                    log(written.error().message);
-                    return 1;
-                }
+            Image pixels;
+            if (recorder->savesImage(frame)) {
+                pixels = captureFrame(camera.viewportWidth, camera.viewportHeight);
             }
-            int deepestLevel = 0;
-            for (const SelectedNode& node : (*streamer)->selection().nodes) {
-                deepestLevel = std::max(deepestLevel, node.id.level);
+            if (auto added = recorder->add(frame, std::move(pixels), counters.row(frame, time, milliseconds, renderStats, *scene));
+                !added.ok()) {
+                log(added.error().message);
+                (void)recorder->finish(true);
+                return 1;
             }
-            std::ostringstream row;
-            row << frame << ',' << time << ',' << milliseconds << ',' << renderStats.triangles << ','
-                << renderStats.staticNodes << ',' << renderStats.dynamicNodes << ',' << cache.size() << ','
-                << cache.hits() - hitsBefore << ',' << cache.misses() - missesBefore << ','
-                << server.requested - requestedBefore << ',' << server.completed - completedBefore << ','
-                << server.queued + server.inFlight << ',' << server.failed - failedBefore << ',' << server.peakPending
-                << ',' << currentResidentBytes() << ',' << deepestLevel << '\n';
-            csvText += row.str();
+        } else {
+            counters.remember(*scene);
         }
-        hitsBefore = cache.hits();
-        missesBefore = cache.misses();
-        requestedBefore = server.requested;
-        completedBefore = server.completed;
-        failedBefore = server.failed;
-        (*window)->swapBuffers();
+        scene->window->swapBuffers();
+        rate.frameEnded(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     }
 
-    if (video) {
-        const auto csvPath = o.imagePath / "frames.csv";
-        auto written = writeFileAtomically(
-            csvPath, std::span(reinterpret_cast<const std::uint8_t*>(csvText.data()), csvText.size()));
-        if (!written.ok()) {
-            log(written.error().message);
+    const bool interrupted = stop.received() != 0 || (video && windowClosed);
+    if (recorder) {
+        if (interrupted) {
+            log(std::string("recording stopped by ") +
+                (stop.received() != 0 ? strsignal(stop.received()) : "closing the window") + " after " +
+                std::to_string(frame) + " of " + std::to_string(videoFrames) + " frames");
+        }
+        auto finished = recorder->finish(interrupted);
+        if (!finished.ok()) {
+            log(finished.error().message);
             return 1;
         }
-        if (o.videoSaveEvery == 1) {
-            std::printf("tengine: %zu frames written to %s (statistics in %s)\n", frame, o.imagePath.c_str(),
-                        csvPath.c_str());
-        } else {
-            const std::size_t every = static_cast<std::size_t>(o.videoSaveEvery);
-            std::printf("tengine: %zu frames rendered, %zu of them written to %s (statistics in %s)\n", frame,
-                        every > 0 ? (frame + every - 1) / every : 0, o.imagePath.c_str(), csvPath.c_str());
-        }
-        if (o.videoFfmpeg && o.videoSaveEvery != 1) {
-            log("no MP4: video_save_every is " + std::to_string(o.videoSaveEvery) + ", not every frame was saved");
-        } else if (o.videoFfmpeg && commandExists("ffmpeg")) {
-            const auto mp4 = o.imagePath / "video.mp4";
-            const auto partial = o.imagePath / "video.partial.mp4";
-            std::string command = "ffmpeg -loglevel error -y -framerate " + std::to_string(o.framesPerSecond) + " -i '" +
-                                  (o.imagePath / "frame_%05d.png").string() +
-                                  "' -c:v libx264 -pix_fmt yuv420p -crf 20 '" + partial.string() + "'";
-            std::error_code ec;  // non-throwing forms: a failed rename is reported, not an uncaught exception
-            if (std::system(command.c_str()) != 0) {
-                std::filesystem::remove(partial, ec);
-                log("ffmpeg failed; the frames are still in " + o.imagePath.string());
-            } else if (std::filesystem::rename(partial, mp4, ec); ec) {
-                const std::string why = ec.message();
-                std::filesystem::remove(partial, ec);
-                log(mp4.string() + ": cannot name the video: " + why + "; the frames are still in " +
-                    o.imagePath.string());
-                return 1;
-            } else {
-                std::printf("tengine: video written to %s\n", mp4.c_str());
-            }
-        }
     }
-    return 0;
+    if (stop.received() != 0) {
+        return stop.exitStatus();
+    }
+    return interrupted ? 128 + SIGINT : 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv)
 {
+    // Before any other thread exists (GLFW, Mesa and the node server start theirs): SIGINT and SIGTERM
+    // then end a recording cleanly instead of killing the process.
+    const StopSignals stop;
     auto parsed = parseTengineCommandLine(argc, argv);
     if (!parsed.ok()) {
         std::fprintf(stderr, "tengine: %s\n", parsed.error().message.c_str());
@@ -434,5 +558,5 @@ int main(int argc, char** argv)
         std::fputs(tengineConfigText(parsed->options).c_str(), stdout);
         return 0;
     }
-    return run(*parsed);
+    return run(*parsed, stop);
 }

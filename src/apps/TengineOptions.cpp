@@ -2,6 +2,9 @@
 // to parse it and how to write it back. Errors, configs/tengine.cfg and --print-config all come from it.
 #include "apps/TengineOptions.h"
 
+#include "apps/VideoRecorder.h"
+#include "core/OutputGuard.h"
+
 #include "core/Check.h"
 #include "core/Parse.h"
 
@@ -374,6 +377,10 @@ std::vector<OptionSpec> makeOptionTable()
     t.push_back(realOption("camera_z_far", kGroupCamera, "Distance to the far clipping plane.", &O::cameraZFar,
                            above(0), "metres"));
     t.back().expected = "a number > camera_z_near (metres)";  // the relation is checked by validate()
+    t.push_back(realOption("camera_min_clearance", kGroupCamera,
+                           "In free flight the camera stays at least this high above the surface being drawn "
+                           "(demo and video mode fly their path as given, with a warning where it goes below).",
+                           &O::cameraMinClearance, atLeast(0), "metres"));
     t.push_back(pathOption("camera_path", kGroupCamera,
                            "Camera path file (lines 'time x y z yaw pitch') flown in demo and video mode. Relative "
                            "paths are taken from this config file's directory.",
@@ -796,6 +803,40 @@ std::string tengineConfigText(const TengineOptions& options)
         writeSetting(out, "# ", key, example);
     }
     return out.str();
+}
+
+std::filesystem::path recordedCameraPathFile(const TengineOptions& options)
+{
+    return options.cameraPath.empty() ? std::filesystem::path("recorded.path")
+                                      : std::filesystem::path(options.cameraPath.string() + ".recorded");
+}
+
+Status checkOutputsAreNotInputs(const ParsedCommandLine& parsed,
+                                const std::vector<std::filesystem::path>& materialFiles)
+{
+    const TengineOptions& o = parsed.options;
+    std::vector<InputFile> inputs = {{"map", o.mapFile}, {"camera path", o.cameraPath}};
+    for (const auto& config : parsed.configFiles) {
+        inputs.push_back({"config file", config});
+    }
+    for (const auto& material : materialFiles) {
+        inputs.push_back({"material", material});
+    }
+    if (!o.logFile.empty()) {
+        TERRAIN_TRY(refuseInputAsOutput("log (log_file)", o.logFile, inputs));
+    }
+    TERRAIN_TRY(refuseInputAsOutput("recorded camera keyframes", recordedCameraPathFile(o), inputs));
+    if (o.videoMode && !o.demoMode) {
+        TERRAIN_TRY(refuseInputAsOutput("video frames (image_path)", o.imagePath, inputs));
+        // An input inside image_path under one of the names a recording writes would be replaced.
+        for (const InputFile& input : inputs) {
+            const std::string name = input.path.filename().string();
+            if (!input.path.empty() && VideoRecorder::isRecorderFileName(name)) {
+                TERRAIN_TRY(refuseInputAsOutput("video mode's " + name, o.imagePath / name, std::span(&input, 1)));
+            }
+        }
+    }
+    return {};
 }
 
 }  // namespace terrain

@@ -53,6 +53,7 @@ struct TengineOptions {
     double cameraFov = 60.0;                   ///< camera_fov: vertical, degrees, in (1, 179)
     double cameraZNear = 1.0;                  ///< camera_z_near: metres, > 0
     double cameraZFar = 200000.0;              ///< camera_z_far: metres, > camera_z_near
+    double cameraMinClearance = 2.0;           ///< camera_min_clearance: metres, >= 0; free flight only
     std::filesystem::path cameraPath;          ///< camera_path: empty = none
     std::optional<glm::dvec3> cameraPosition;  ///< camera_position: metres; unset = above the map's centre
     double cameraYaw = 0.0;                    ///< camera_yaw: degrees, 0 = north, positive turns east
@@ -114,6 +115,16 @@ struct ParsedCommandLine {
 Expected<ParsedCommandLine> parseTengineCommandLine(const std::vector<std::string>& arguments);
 /// The same for main()'s arguments (argv[0] is skipped).
 Expected<ParsedCommandLine> parseTengineCommandLine(int argc, char** argv);
+
+/// The file free flight appends recorded camera keyframes to (key k): camera_path + ".recorded", or
+/// "recorded.path" in the working directory when no path is set.
+std::filesystem::path recordedCameraPathFile(const TengineOptions& options);
+
+/// Refuses outputs that would overwrite an input (nothing is lost): log_file, the recorded camera
+/// keyframes and, in video mode, image_path and the files a recording writes there may not be the map, a
+/// config file, the camera path or one of `materialFiles`, through any path or link. The error names both.
+Status checkOutputsAreNotInputs(const ParsedCommandLine& parsed,
+                                const std::vector<std::filesystem::path>& materialFiles);
 
 /// The --help text.
 std::string tengineUsage();

@@ -275,4 +275,43 @@ Status appendKeyframe(const std::filesystem::path& path, const CameraKeyframe& k
     return {};
 }
 
+std::vector<TimeSpan> findPathBelowGround(const CameraPath& path,
+                                          const std::function<std::optional<double>(double, double)>& groundAt,
+                                          double step, double clearance)
+{
+    TERRAIN_EXPECTS(step > 0.0, "findPathBelowGround: step must be positive");
+    std::vector<TimeSpan> spans;
+    bool inside = false;
+    const auto samples = static_cast<std::size_t>(std::ceil(path.duration() / step));
+    for (std::size_t i = 0; i <= samples; ++i) {
+        const double time = std::min(path.startTime() + static_cast<double>(i) * step, path.endTime());
+        const CameraPose pose = path.evaluate(time);
+        const std::optional<double> ground = groundAt(pose.position.x, pose.position.y);
+        const bool below = ground && pose.position.z < *ground + clearance;
+        if (below && !inside) {
+            spans.push_back({time, time});
+        } else if (below) {
+            spans.back().end = time;
+        }
+        inside = below;
+    }
+    return spans;
+}
+
+std::string formatTimeSpans(const std::vector<TimeSpan>& spans, std::size_t most)
+{
+    std::string text;
+    for (std::size_t i = 0; i < spans.size() && i < most; ++i) {
+        text += (i ? ", " : "") + formatNumber(std::round(spans[i].begin * 100) / 100);
+        if (spans[i].end > spans[i].begin) {
+            text += "-" + formatNumber(std::round(spans[i].end * 100) / 100);
+        }
+        text += " s";
+    }
+    if (spans.size() > most) {
+        text += " ... (" + std::to_string(spans.size() - most) + " more)";
+    }
+    return text;
+}
+
 }  // namespace terrain

@@ -14,6 +14,8 @@
 #include "core/Expected.h"
 
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -80,5 +82,22 @@ std::string formatKeyframe(const CameraKeyframe& key);
 /// not exist (the viewer's "record camera" key). The caller keeps times increasing (e.g. the time since
 /// recording started); parse() rejects a file where they are not.
 Status appendKeyframe(const std::filesystem::path& path, const CameraKeyframe& key);
+
+/// A span of a camera path's time, seconds.
+struct TimeSpan {
+    double begin = 0.0;
+    double end = 0.0;
+};
+
+/// Where `path` passes below the ground: the spans of time, sampled every `step` seconds (> 0) from the
+/// start to the end, where the camera's height is less than `clearance` metres above `groundAt(x, y)`
+/// (which returns empty outside the terrain: not counted). A span is reported from its first to its last
+/// sample below.
+std::vector<TimeSpan> findPathBelowGround(const CameraPath& path,
+                                          const std::function<std::optional<double>(double, double)>& groundAt,
+                                          double step, double clearance = 0.0);
+
+/// "12.3-14.1 s, 20 s": spans for a message, at most `most` of them and "... (N more)".
+std::string formatTimeSpans(const std::vector<TimeSpan>& spans, std::size_t most = 6);
 
 }  // namespace terrain

@@ -1,5 +1,6 @@
 #include "lod/HeightQuery.h"
 
+#include "lod/TerrainStreamer.h"
 #include "quadtree/TemplateTriangulation.h"
 
 #include <algorithm>
@@ -109,6 +110,53 @@ Expected<HeightSample> surfaceHeightAt(const MapFile& map, TerrainNodeSource& so
     };
     const double z = interpolateQuad(at(ix, iy), at(ix + 1, iy), at(ix, iy + 1), at(ix + 1, iy + 1), lx - ix, ly - iy);
     return HeightSample{h.heightOffset + z, node->id};
+}
+
+namespace {
+
+/// The node's surface at world (x, y), interpolated along the template triangulation (metres above the
+/// map's height offset); the point is clamped into the node's square.
+double nodeSurfaceAt(const NodeData& node, const QuadtreeExtent& extent, int chunkSize, double x, double y)
+{
+    const double size = extent.nodeSize(node.id.level);
+    const double n1 = chunkSize - 1.0;
+    const double lx = std::clamp((x - extent.originX - node.id.x * size) / size * n1, 0.0, n1);
+    const double ly = std::clamp((y - extent.originY - node.id.y * size) / size * n1, 0.0, n1);
+    const int ix = std::min(static_cast<int>(lx), static_cast<int>(n1) - 1);
+    const int iy = std::min(static_cast<int>(ly), static_cast<int>(n1) - 1);
+    const int w = node.heights.size;
+    auto at = [&](int i, int j) -> double {
+        return node.heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
+    };
+    return interpolateQuad(at(ix, iy), at(ix + 1, iy), at(ix, iy + 1), at(ix + 1, iy + 1), lx - ix, ly - iy);
+}
+
+}  // namespace
+
+std::optional<double> drawnHeightAt(const TerrainStreamer& streamer, const MapHeader& header, double x, double y)
+{
+    const QuadtreeExtent extent = extentOf(header);
+    for (const SelectedNode& selected : streamer.selection().nodes) {
+        const double size = extent.nodeSize(selected.id.level);
+        const double x0 = extent.originX + selected.id.x * size, y0 = extent.originY + selected.id.y * size;
+        if (x < x0 || x > x0 + size || y < y0 || y > y0 + size) {
+            continue;
+        }
+        const NodePtr node = streamer.node(selected.id);
+        if (!node || node->heights.size == 0) {
+            return std::nullopt;
+        }
+        const int n = static_cast<int>(header.chunkSize);
+        double z = nodeSurfaceAt(*node, extent, n, x, y);
+        if (selected.morph < 1.0f && !selected.id.isRoot()) {
+            if (const NodePtr parent = streamer.node(selected.id.parent()); parent && parent->heights.size != 0) {
+                const double f = selected.morph;
+                z = f * z + (1.0 - f) * nodeSurfaceAt(*parent, extent, n, x, y);
+            }
+        }
+        return header.heightOffset + z;
+    }
+    return std::nullopt;
 }
 
 }  // namespace terrain

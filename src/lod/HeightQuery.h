@@ -5,6 +5,8 @@
 #include "lod/TerrainNodeSource.h"
 #include "quadtree/MapFile.h"
 
+#include <optional>
+
 namespace terrain {
 
 /// A height and where it came from.
@@ -24,5 +26,13 @@ Expected<HeightSample> staticHeightAt(const MapFile& map, double x, double y);
 /// Nodes come from `source` (its detail policy decides what is synthesized), so the query and the viewer
 /// share one code path. Fails outside the input's valid region and when a node cannot be read.
 Expected<HeightSample> surfaceHeightAt(const MapFile& map, TerrainNodeSource& source, double x, double y, int depth);
+
+class TerrainStreamer;
+
+/// Height of the surface the viewer draws this frame at world (x, y) metres: the selected node containing
+/// the point, its own surface blended with its parent's by its morph factor (eq. 3.4), both interpolated
+/// along the template triangulation. Empty where no selected node covers the point or its data is not
+/// resident. Needs no loading: for per-frame use (the free-flight camera's clearance).
+std::optional<double> drawnHeightAt(const TerrainStreamer& streamer, const MapHeader& header, double x, double y);
 
 }  // namespace terrain

@@ -1,4 +1,5 @@
 #include "lod/CameraPath.h"
+#include "core/Parse.h"
 
 #include "TestSupport.h"
 
@@ -217,6 +218,56 @@ TEST(CameraPathTest, FromKeyframesChecksTheRules)
         const CameraPose pose = edge->evaluate(t);
         EXPECT_TRUE(std::isfinite(pose.position.x + pose.position.y + pose.position.z + pose.yaw + pose.pitch)) << t;
     }
+}
+
+}  // namespace
+}  // namespace terrain
+
+namespace terrain {
+namespace {
+
+TEST(CameraPathTest, FindsWhereThePathPassesBelowTheGround)
+{
+    // A straight flight east at 100 m over a hill of height 150 m - |x - 500| / 2 (above 100 m for
+    // x in (400, 600)): at 10 m/s it is below from t = 40 s to 60 s. Brute force over the same samples.
+    auto path = CameraPath::parse("0 0 0 100 90 0\n100 1000 0 100 90 0\n", "hill.path");
+    ASSERT_TRUE(path.ok()) << path.error().message;
+    auto ground = [](double x, double) -> std::optional<double> {
+        if (x > 900) {
+            return std::nullopt;  // outside the terrain
+        }
+        return 150.0 - std::abs(x - 500.0) / 2.0;
+    };
+    const auto spans = findPathBelowGround(*path, ground, 0.5);
+    ASSERT_EQ(spans.size(), 1u);
+    double first = -1, last = -1;
+    for (int i = 0; i <= 200; ++i) {
+        const CameraPose pose = path->evaluate(i * 0.5);
+        const auto g = ground(pose.position.x, pose.position.y);
+        if (g && pose.position.z < *g) {
+            first = first < 0 ? i * 0.5 : first;
+            last = i * 0.5;
+        }
+    }
+    EXPECT_DOUBLE_EQ(spans[0].begin, first);
+    EXPECT_DOUBLE_EQ(spans[0].end, last);
+    EXPECT_NEAR(spans[0].begin, 40.0, 1.0);
+    EXPECT_NEAR(spans[0].end, 60.0, 1.0);
+    EXPECT_EQ(formatTimeSpans(spans), formatNumber(first) + "-" + formatNumber(last) + " s");
+
+    // A clearance lifts the ground: the span grows; a path above it all has none.
+    EXPECT_GT(findPathBelowGround(*path, ground, 0.5, 20.0)[0].end - findPathBelowGround(*path, ground, 0.5, 20.0)[0].begin,
+              spans[0].end - spans[0].begin);
+    auto high = CameraPath::parse("0 0 0 500 90 0\n100 1000 0 500 90 0\n", "high.path");
+    ASSERT_TRUE(high.ok());
+    EXPECT_TRUE(findPathBelowGround(*high, ground, 0.5).empty());
+}
+
+TEST(CameraPathTest, TimeSpansFormatShortly)
+{
+    EXPECT_EQ(formatTimeSpans({}), "");
+    EXPECT_EQ(formatTimeSpans({{1.0, 1.0}, {2.5, 3.25}}), "1 s, 2.5-3.25 s");
+    EXPECT_EQ(formatTimeSpans({{1, 2}, {3, 4}, {5, 6}}, 2), "1-2 s, 3-4 s ... (1 more)");
 }
 
 }  // namespace

@@ -370,6 +370,59 @@ TEST(PrepCliTest, DefaultOutputIsTheInputWithExtensionMap)
     EXPECT_EQ(dir.list(), (std::vector<std::string>{"custom.map", "terrain.heights.map", "terrain.heights.png"}));
 }
 
+TEST(PrepCliTest, RefusesToWriteTheMapOverAnyOfItsInputs)
+{
+    // `prep terrain.png -o terrain.png` once replaced the height field with the map. Every input named as
+    // the output, directly, through another spelling, a symbolic link or a hard link, is refused before
+    // anything is written, naming both; the inputs stay byte-identical.
+    test::ScratchDir dir;
+    writeSmallPng(dir, "terrain.png");
+    writeSmallPng(dir, "colour.png");
+    writeSmallPng(dir, "weights.png");
+    std::filesystem::create_directory(dir / "sub");
+    std::filesystem::create_symlink(dir / "terrain.png", dir / "link.png");
+    std::filesystem::create_hard_link(dir / "colour.png", dir / "hard.png");
+    const auto before = std::make_pair(test::readFileBytes(dir / "terrain.png"), test::readFileBytes(dir / "colour.png"));
+    const auto weightsBefore = test::readFileBytes(dir / "weights.png");
+    const std::string terrain = (dir / "terrain.png").string();
+    struct Case {
+        const char* what;
+        std::vector<std::string> extra;
+        std::string output;
+        std::string inputNamed;  ///< the input the message must name
+    };
+    const std::vector<Case> cases = {
+        {"the height field itself", {}, terrain, "height field"},
+        {"the height field by another spelling", {}, (dir / "sub" / ".." / "terrain.png").string(), "height field"},
+        {"a symbolic link to the height field", {}, (dir / "link.png").string(), "height field"},
+        {"the texture", {"-t", (dir / "colour.png").string()}, (dir / "colour.png").string(), "texture"},
+        {"a hard link to the texture", {"-t", (dir / "colour.png").string()}, (dir / "hard.png").string(), "texture"},
+        {"the weight map", {"-w", (dir / "weights.png").string()}, (dir / "weights.png").string(), "weight map"},
+    };
+    for (const Case& c : cases) {
+        std::vector<std::string> args = {terrain, "--chunk", "9", "-h", "10", "-o", c.output};
+        args.insert(args.end(), c.extra.begin(), c.extra.end());
+        auto result = test::runProgram(kPrep, args);
+        EXPECT_EQ(result.exitCode, 2) << c.what << ": " << result.output;
+        EXPECT_TRUE(mentions(result.output, "refusing")) << c.what << ": " << result.output;
+        EXPECT_TRUE(mentions(result.output, c.output)) << c.what << ": " << result.output;
+        EXPECT_TRUE(mentions(result.output, c.inputNamed)) << c.what << ": " << result.output;
+        EXPECT_EQ(test::readFileBytes(dir / "terrain.png"), before.first) << c.what;
+        EXPECT_EQ(test::readFileBytes(dir / "colour.png"), before.second) << c.what;
+        EXPECT_EQ(test::readFileBytes(dir / "weights.png"), weightsBefore) << c.what;
+        EXPECT_TRUE(std::filesystem::is_symlink(dir / "link.png")) << c.what;
+        EXPECT_EQ(dir.list(), (std::vector<std::string>{"colour.png", "hard.png", "link.png", "sub", "terrain.png",
+                                                        "weights.png"}))
+            << c.what;
+    }
+    // A map named after the input with its extension replaced is fine; so is `prep x.map` refused.
+    auto fine = test::runProgram(kPrep, {terrain, "--chunk", "9", "-h", "10"});
+    EXPECT_EQ(fine.exitCode, 0) << fine.output;
+    auto self = test::runProgram(kPrep, {(dir / "terrain.map").string(), "--chunk", "9"});
+    EXPECT_EQ(self.exitCode, 2) << self.output;
+    EXPECT_TRUE(mentions(self.output, "refusing")) << self.output;
+}
+
 TEST(PrepCliTest, FailedWritesLeaveNoMapAndNoTemporary)
 {
     test::ScratchDir dir;

@@ -132,6 +132,7 @@ const std::vector<ValidCase>& validCases()
         {"camera_fov=1.5", [](const O& o) { return o.cameraFov == 1.5; }},
         {"camera_fov=178.9", [](const O& o) { return o.cameraFov == 178.9; }},
         {"camera_z_near=0.1", [](const O& o) { return o.cameraZNear == 0.1; }},
+        {"camera_min_clearance=0.5", [](const O& o) { return o.cameraMinClearance == 0.5; }},
         {"camera_z_far=5000", [](const O& o) { return o.cameraZFar == 5000.0; }},
         {"camera_path=demos/flight.path", [](const O& o) { return o.cameraPath == "demos/flight.path"; }},
         {"camera_position=100, -2.5,3e3",
@@ -275,6 +276,7 @@ TEST(TengineOptions, InvalidValuesAreErrorsSayingWhatIsExpected)
         {"camera_fov=1", "a number in (1, 179) (degrees)"},
         {"camera_fov=179", "a number in (1, 179) (degrees)"},
         {"camera_z_near=0", "a number > 0 (metres)"},
+        {"camera_min_clearance=-1", "a number >= 0 (metres)"},
         {"camera_z_far=-5", "a number > camera_z_near (metres)"},
         {"camera_position=1, 2", "empty or three numbers 'x, y, z' (metres)"},
         {"camera_position=1, 2, 3, 4", "empty or three numbers 'x, y, z' (metres)"},
@@ -639,6 +641,70 @@ TEST_F(TengineOptionsCommandLine, ArgcArgvSkipsTheProgramName)
     ASSERT_TRUE(parsed.ok()) << parsed.error().message;
     EXPECT_EQ(parsed->options.lodError, 3.0);
     EXPECT_EQ(parsed->options.mapFile, "terrain.map");
+}
+
+}  // namespace
+}  // namespace terrain
+
+namespace terrain {
+namespace {
+
+// ---- Outputs never overwrite inputs ----
+
+TEST(TengineOutputsTest, AnOutputNamingAnInputIsRefusedNamingBoth)
+{
+    test::ScratchDir dir;
+    for (const char* name : {"terrain.map", "demo.cfg", "demo.path", "grass.mat"}) {
+        std::ofstream(dir / name) << "x\n";
+    }
+    std::filesystem::create_symlink(dir / "demo.cfg", dir / "link.cfg");
+    std::filesystem::create_directory(dir / "frames");
+    std::ofstream(dir / "frames" / "frames.csv") << "x\n";
+    ParsedCommandLine parsed;
+    parsed.options.mapFile = dir / "terrain.map";
+    parsed.options.cameraPath = dir / "demo.path";
+    parsed.configFiles = {dir / "demo.cfg", dir / "frames" / "frames.csv"};
+    const std::vector<std::filesystem::path> materials = {dir / "grass.mat"};
+    ASSERT_TRUE(checkOutputsAreNotInputs(parsed, materials).ok()) << "nothing clashes yet";
+    EXPECT_EQ(recordedCameraPathFile(parsed.options), dir / "demo.path.recorded");
+
+    struct Case {
+        const char* what;
+        std::function<void(TengineOptions&)> set;
+        std::string named;  ///< the input the message must name
+    };
+    const std::vector<Case> cases = {
+        {"log_file = the map", [&](TengineOptions& o) { o.logFile = dir / "terrain.map"; }, "map"},
+        {"log_file = a config through a link", [&](TengineOptions& o) { o.logFile = dir / "link.cfg"; }, "config file"},
+        {"log_file = a material", [&](TengineOptions& o) { o.logFile = dir / "grass.mat"; }, "material"},
+        {"log_file = the camera path", [&](TengineOptions& o) { o.logFile = dir / "demo.path"; }, "camera path"},
+        {"image_path = the map", [&](TengineOptions& o) {
+             o.videoMode = true;
+             o.imagePath = dir / "terrain.map";
+         }, "map"},
+        {"a config where video mode writes frames.csv", [&](TengineOptions& o) {
+             o.videoMode = true;
+             o.imagePath = dir / "frames";
+         }, "config file"},
+        {"recorded keyframes = a config", [&](TengineOptions& o) { o.cameraPath = dir / "demo"; }, ""},
+    };
+    for (const Case& c : cases) {
+        ParsedCommandLine p = parsed;
+        c.set(p.options);
+        if (std::string(c.what).starts_with("recorded")) {
+            // camera_path "demo" would record into "demo.recorded": make that a config file.
+            std::ofstream(dir / "demo.recorded") << "x\n";
+            p.configFiles.push_back(dir / "demo.recorded");
+        }
+        const Status status = checkOutputsAreNotInputs(p, materials);
+        ASSERT_FALSE(status.ok()) << c.what;
+        EXPECT_TRUE(contains(status.error().message, "refusing")) << c.what << ": " << status.error().message;
+        EXPECT_TRUE(contains(status.error().message, c.named)) << c.what << ": " << status.error().message;
+    }
+    // The same image_path outside video mode writes nothing there.
+    ParsedCommandLine free = parsed;
+    free.options.imagePath = dir / "terrain.map";
+    EXPECT_TRUE(checkOutputsAreNotInputs(free, materials).ok());
 }
 
 }  // namespace
