@@ -125,9 +125,14 @@ public:
     {
         double x = 0, y = 0;
         glfwGetCursorPos(mWindow, &x, &y);
-        constexpr double kRadiansPerPixel = 0.0025;
-        camera.yaw += (x - mLastX) * kRadiansPerPixel;
-        camera.pitch = std::clamp(camera.pitch - (y - mLastY) * kRadiansPerPixel, -1.55, 1.55);
+        // The first position after disabling the cursor is where GLFW centred it, not a mouse movement:
+        // turning by it would throw away camera_yaw and camera_pitch.
+        if (mLooking) {
+            constexpr double kRadiansPerPixel = 0.0025;
+            camera.yaw += (x - mLastX) * kRadiansPerPixel;
+            camera.pitch = std::clamp(camera.pitch - (y - mLastY) * kRadiansPerPixel, -1.55, 1.55);
+        }
+        mLooking = true;
         mLastX = x;
         mLastY = y;
         auto down = [&](int key) { return glfwGetKey(mWindow, key) == GLFW_PRESS ? 1.0 : 0.0; };
@@ -145,6 +150,7 @@ private:
     GLFWwindow* mWindow;
     double mSpeed;
     double mLastX = 0, mLastY = 0;
+    bool mLooking = false;
 };
 
 /// Video mode's frames.csv columns. Per frame: cache_hits, cache_misses, requests_made, requests_completed
@@ -519,6 +525,13 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         rate.frameEnded(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     }
 
+    if (!video && frame > 1) {
+        const double seconds = std::chrono::duration<double>(previous - start).count();
+        char line[96];
+        std::snprintf(line, sizeof line, "%zu frames drawn in %.1f s, mean frame time %.1f ms", frame, seconds,
+                      1000.0 * seconds / static_cast<double>(frame));
+        log(line);
+    }
     const bool interrupted = stop.received() != 0 || (video && windowClosed);
     if (recorder) {
         if (interrupted) {
