@@ -1,5 +1,8 @@
 #include "apps/DetailSetup.h"
 
+#include "core/Parse.h"
+#include "synthesis/DetailRecipeSetup.h"
+
 namespace terrain {
 
 std::vector<std::filesystem::path> detailMaterialFiles(const TengineOptions& options,
@@ -23,20 +26,48 @@ Expected<std::unique_ptr<const DetailSynthesizer>> makeDetailSynthesizer(const T
     settings.scheme = options.detailSubdivisionScheme;
     settings.omega = options.detailSubdivisionFactor;
     if (options.detailAddMaterial) {
-        const auto files = detailMaterialFiles(options, builtInDirectory);
-        auto set = MaterialSet::load(files, warnings);
-        TERRAIN_TRY(set);
-        if (files.size() == 1) {
-            // One material is the ground everywhere (as in the paper): its placement rules have nothing to
-            // blend with.
-            std::vector<Material> materials = set->materials();
-            materials.front().placement = MaterialPlacement{};
-            settings.materials = std::make_shared<const MaterialSet>(std::move(materials));
-        } else {
-            settings.materials = std::make_shared<const MaterialSet>(std::move(set).value());
-        }
+        auto materials = loadDetailMaterials(detailMaterialFiles(options, builtInDirectory), warnings);
+        TERRAIN_TRY(materials);
+        settings.materials = std::move(materials).value();
     }
     return DetailSynthesizer::create(chunkSize, std::move(settings));
+}
+
+Expected<DetailRecipe> viewerDetailRecipe(const TengineOptions& options, const DetailSynthesizer& synthesizer,
+                                          const std::filesystem::path& builtInDirectory)
+{
+    const bool materials = synthesizer.settings().materials != nullptr;
+    return makeDetailRecipe(synthesizer.settings(), materials ? detailMaterialFiles(options, builtInDirectory)
+                                                              : std::vector<std::filesystem::path>{});
+}
+
+std::optional<std::string> detailRecipeMismatch(const MapHeader& header, const std::string& mapName,
+                                                const DetailRecipe& viewer,
+                                                const std::vector<std::filesystem::path>& viewerFiles)
+{
+    if (header.detailRecipe && header.detailRecipe->sameSynthesis(viewer)) {
+        return std::nullopt;
+    }
+    std::string command = "prep HEIGHTFIELD -h " + formatNumber(header.sampleSpacing);
+    if (header.chunkSize != 65) {
+        command += " --chunk " + std::to_string(header.chunkSize);
+    }
+    for (const auto& file : viewerFiles) {
+        command += " --material " + file.string();
+    }
+    if (viewerFiles.empty()) {
+        command += " --no-material";
+    }
+    if (viewer.scheme != "kobbelt") {
+        command += " --detail-scheme " + viewer.scheme;
+    } else if (viewer.omega != 1.0) {
+        command += " --detail-factor " + formatNumber(viewer.omega);
+    }
+    command += " -o " + mapName;
+    const std::string assumed = header.detailRecipe ? "were estimated for " + header.detailRecipe->describe()
+                                                    : "do not say what synthesis they assume (made by an older prep)";
+    return mapName + ": the detail errors below its leaves " + assumed + ", but the viewer synthesizes " +
+           viewer.describe() + ": the level of detail may not hold tau below the data; to match, run: " + command;
 }
 
 }  // namespace terrain

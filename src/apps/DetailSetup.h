@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,5 +25,17 @@ std::vector<std::filesystem::path> detailMaterialFiles(const TengineOptions& opt
 Expected<std::unique_ptr<const DetailSynthesizer>> makeDetailSynthesizer(const TengineOptions& options, int chunkSize,
                                                                          const std::filesystem::path& builtInDirectory,
                                                                          std::vector<std::string>& warnings);
+
+/// The recipe of what the viewer synthesizes (3.4.1): scheme, omega and the materials detailMaterialFiles()
+/// names (none with detail_add_material off). Errors name an unreadable material file.
+Expected<DetailRecipe> viewerDetailRecipe(const TengineOptions& options, const DetailSynthesizer& synthesizer,
+                                          const std::filesystem::path& builtInDirectory);
+
+/// The one warning the viewer gives when the map's detail errors were estimated for other settings than
+/// its own (or the map does not say what for): both recipes and the prep command that would match.
+/// Empty when they agree. `mapName` names the map in the message.
+std::optional<std::string> detailRecipeMismatch(const MapHeader& header, const std::string& mapName,
+                                                const DetailRecipe& viewer,
+                                                const std::vector<std::filesystem::path>& viewerFiles);
 
 }  // namespace terrain

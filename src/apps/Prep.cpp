@@ -7,6 +7,7 @@
 #include "lod/TerrainNodeSource.h"
 #include "synthesis/LeafErrorEstimator.h"
 #include "quadtree/QuadtreeBuilder.h"
+#include "synthesis/DetailRecipeSetup.h"
 #include "synthesis/DetailSynthesizer.h"
 
 #include <csignal>
@@ -44,14 +45,18 @@ Builds a terrain map (.map) from a height field: PNG (8/16-bit gray), VTP .bt, T
   --raw-big-endian     raw samples are big-endian (default little-endian)
   --nodata V           treat the file value V as no-data (filled from neighbours)
   --material FILE.mat  material the viewer's detail synthesis adds below the static leaves; repeat for a
-                       set, the first is the ground (default: none, subdivision only)
+                       set, the first is the ground (default: the viewer's default, the built-in
+                       grass.mat alone)
+  --no-material        no material: the detail below the leaves is subdivision only (the viewer's
+                       detail_add_material = false)
   --detail-scheme S    subdivision of the synthesized detail: kobbelt, bilinear or catmull-clark
                        (default kobbelt)
   --detail-factor W    Kobbelt's omega in [0, 2]: 0 linear, 1 Kobbelt (default 1)
   --help               this text
 
 The map stores the estimated error of the detail synthesized below its static leaves (paper 3.4.1), so
-the viewer refines past them: give the materials, scheme and factor the viewer uses (detail_* options).
+the viewer refines past them, and what it was estimated for (materials, scheme, factor): the viewer warns
+when its own detail_* options differ. The defaults are the viewer's defaults.
 )";
 
 struct Arguments {
@@ -62,7 +67,8 @@ struct Arguments {
     DetailSettings detail;
     bool detailFactorGiven = false;
     std::vector<std::string> warnings;  ///< about options that have no effect
-    std::vector<std::filesystem::path> materials;
+    std::vector<std::filesystem::path> materials;  ///< empty: the viewer's default (built-in grass.mat)
+    bool noMaterial = false;                       ///< --no-material
 };
 
 Expected<Arguments> parseArguments(int argc, char** argv)
@@ -157,6 +163,8 @@ Expected<Arguments> parseArguments(int argc, char** argv)
             }
             args.read.rawWidth = static_cast<int>(*w);
             args.read.rawHeight = static_cast<int>(*h);
+        } else if (arg == "--no-material") {
+            args.noMaterial = true;
         } else if (arg == "--raw-signed") {
             args.read.rawSigned = true;
         } else if (arg == "--raw-big-endian") {
@@ -172,6 +180,13 @@ Expected<Arguments> parseArguments(int argc, char** argv)
                          " (see prep --help)");
     }
     args.input = positional.front();
+    if (args.noMaterial && !args.materials.empty()) {
+        return makeError("--no-material and --material exclude each other");
+    }
+    if (args.materials.empty() && !args.noMaterial) {
+        // The viewer's defaults (detail_material_type = 0, material_path empty): grass.mat alone.
+        args.materials.push_back(std::filesystem::path(TERRAIN_MATERIALS_DIR) / "grass.mat");
+    }
     if (args.detailFactorGiven && args.detail.scheme != "kobbelt") {
         args.warnings.push_back("--detail-factor has no effect with --detail-scheme " + args.detail.scheme +
                                 " (Kobbelt's scheme only)");
@@ -179,17 +194,20 @@ Expected<Arguments> parseArguments(int argc, char** argv)
     return args;
 }
 
-/// The synthesizer the viewer will use below the static leaves, with the materials loaded (errors name the
-/// file and line; warnings go to `warnings`). Null when the chunk size is not 2^k + 1 (buildMap reports it).
-Expected<std::unique_ptr<const DetailSynthesizer>> makeSynthesizer(const Arguments& args,
-                                                                   std::vector<std::string>& warnings)
+/// The synthesizer the viewer will use below the static leaves, with the materials loaded as the viewer
+/// loads them (errors name the file and line; warnings go to `warnings`), and its recipe for the map. Null
+/// when the chunk size is not 2^k + 1 (buildMap reports it).
+Expected<std::unique_ptr<const DetailSynthesizer>> makeSynthesizer(Arguments& args, std::vector<std::string>& warnings)
 {
     DetailSettings settings = args.detail;
     if (!args.materials.empty()) {
-        auto set = MaterialSet::load(args.materials, warnings);
+        auto set = loadDetailMaterials(args.materials, warnings);
         TERRAIN_TRY(set);
-        settings.materials = std::make_shared<const MaterialSet>(std::move(set).value());
+        settings.materials = std::move(set).value();
     }
+    auto recipe = makeDetailRecipe(settings, args.materials);
+    TERRAIN_TRY(recipe);
+    args.build.detailRecipe = std::move(recipe).value();
     if (!isValidChunkSize(args.build.chunkSize)) {
         return std::unique_ptr<const DetailSynthesizer>();
     }
@@ -309,23 +327,12 @@ int main(int argc, char** argv)
                 8.0 * static_cast<double>(report->heightBytes) / static_cast<double>(report->storedSamples));
     std::printf("            textures %s (%.2f bits per input sample)\n", formatBytes(report->textureBytes).c_str(),
                 8.0 * static_cast<double>(report->textureBytes) / inputSamples);
-    std::string materials = "no materials (subdivision only)";
-    if (!args->materials.empty() && *synthesizer) {
-        materials = "materials";
-        for (const Material& m : (*synthesizer)->settings().materials->materials()) {
-            materials += " " + m.name;
-        }
-    }
-    std::string scheme = args->detail.scheme;
-    if (scheme == "kobbelt") {
-        scheme += " omega " + formatNumber(args->detail.omega);
-    }
     std::printf("  detail    leaf error max %.3f m, mean %.3f m over %llu leaves (3.4.1; per leaf %d descents of %d "
                 "synthesized levels)\n",
                 static_cast<double>(report->maxLeafDetailError), report->meanLeafDetailError,
                 static_cast<unsigned long long>(report->leaves), kLeafErrorDescents, kLeafErrorDepth);
-    std::printf("            %s, %s; %.2f s estimating (summed over threads)\n", materials.c_str(), scheme.c_str(),
-                report->leafDetailSeconds);
+    std::printf("            for %s; %.2f s estimating (summed over threads)\n",
+                h.detailRecipe ? h.detailRecipe->describe().c_str() : "no recipe", report->leafDetailSeconds);
     std::printf("  time      %.2f s, %.1f million input samples per second (%d threads)\n", report->seconds,
                 inputSamples / report->seconds / 1e6, args->build.threads);
     return 0;

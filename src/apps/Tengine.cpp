@@ -210,6 +210,17 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
             " has no estimates of the detail error below its leaves (made by an older prep): no dynamic nodes; "
             "run prep again to get them");
     }
+    if (scene->synthesizer && header.hasDetailErrors()) {
+        auto recipe = viewerDetailRecipe(o, *scene->synthesizer, TERRAIN_MATERIALS_DIR);
+        if (!recipe.ok()) {
+            return fail(recipe.error().message);
+        }
+        const auto files = scene->synthesizer->settings().materials ? detailMaterialFiles(o, TERRAIN_MATERIALS_DIR)
+                                                                    : std::vector<std::filesystem::path>{};
+        if (auto mismatch = detailRecipeMismatch(header, scene->map->name(), *recipe, files)) {
+            log("warning: " + *mismatch);
+        }
+    }
     const MaterialSet* materials = scene->synthesizer ? scene->synthesizer->settings().materials.get() : nullptr;
 
     if (!o.cameraPath.empty()) {

@@ -70,6 +70,10 @@ int info(const MapFile& map)
     std::printf("heights    metres = %.9g + %.9g * code; %s\n", h.heightOffset, h.heightStep,
                 h.maxErrorBound == 0 ? "lossless" : ("max error " + std::to_string(h.maxErrorBound) + " m").c_str());
     std::printf("levels     %u\n", h.levels);
+    // What detail_delta_c was estimated for (version 3): the viewer warns when its settings differ.
+    std::printf("detail     %s\n", h.detailRecipe ? ("errors estimated for " + h.detailRecipe->describe()).c_str()
+                                   : h.hasDetailErrors() ? "errors below the leaves, settings not recorded"
+                                                         : "no errors below the leaves (version 1)");
 
     struct LevelStats {
         std::uint64_t nodes = 0, heightBytes = 0, textureBytes = 0;

@@ -158,6 +158,14 @@ Expected<std::unique_ptr<MapFile>> MapFile::open(const std::filesystem::path& pa
     TERRAIN_TRY(preadAll(fd.get(), 0, headerBytes.size(), headerBytes.data(), name));
     auto header = decodeHeader(headerBytes, name);
     TERRAIN_TRY(header);
+    if (header->detailRecipeBytes > 0) {
+        if (fileSize < header->nodeAreaOffset()) {
+            return makeError(name, ": file is ", fileSize, " bytes, shorter than its header and detail recipe");
+        }
+        std::vector<std::uint8_t> recipeBytes(header->detailRecipeBytes);
+        TERRAIN_TRY(preadAll(fd.get(), kHeaderBytes, recipeBytes.size(), recipeBytes.data(), name));
+        TERRAIN_TRY(decodeDetailRecipe(recipeBytes, *header, name));
+    }
     if (header->directoryOffset + header->directoryBytes != fileSize) {
         return makeError(name, ": file is ", fileSize, " bytes but its directory of ", header->nodeCount,
                          " nodes ends at byte ", header->directoryOffset + header->directoryBytes,

@@ -1,10 +1,13 @@
 #include "quadtree/MapFormat.h"
 
 #include "core/ByteIo.h"
+#include "core/Check.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <sstream>
 #include <zlib.h>
 
 namespace terrain {
@@ -33,6 +36,100 @@ std::uint32_t crc32Of(std::span<const std::uint8_t> bytes)
 double MapHeader::spacingAt(int level) const
 {
     return sampleSpacing * std::ldexp(1.0, static_cast<int>(levels) - 1 - level);
+}
+
+bool DetailRecipe::sameSynthesis(const DetailRecipe& other) const
+{
+    return scheme == other.scheme && materials == other.materials && (scheme != "kobbelt" || omega == other.omega);
+}
+
+std::string DetailRecipe::describe() const
+{
+    std::ostringstream s;
+    s << scheme;
+    if (scheme == "kobbelt") {
+        s << " omega " << omega;
+    }
+    if (materials.empty()) {
+        s << ", no materials (subdivision only)";
+    }
+    for (std::size_t i = 0; i < materials.size(); ++i) {
+        char hash[24];
+        std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(materials[i].hash));
+        s << (i == 0 ? ", materials " : ", ") << materials[i].name << " (hash " << hash << ")";
+    }
+    return s.str();
+}
+
+std::vector<std::uint8_t> encodeDetailRecipe(const DetailRecipe& recipe)
+{
+    TERRAIN_EXPECTS(recipe.scheme.size() <= 32 && recipe.materials.size() <= kMaxRecipeMaterials,
+                    "encodeDetailRecipe: scheme of at most 32 bytes, at most kMaxRecipeMaterials materials");
+    std::vector<std::uint8_t> bytes;
+    ByteWriter w(bytes);
+    w.put(static_cast<std::uint8_t>(recipe.scheme.size()));
+    w.putBytes(reinterpret_cast<const std::uint8_t*>(recipe.scheme.data()), recipe.scheme.size());
+    w.put(recipe.omega);
+    w.put(static_cast<std::uint32_t>(recipe.materials.size()));
+    for (const auto& m : recipe.materials) {
+        const std::size_t length = std::min(m.name.size(), kMaxRecipeNameBytes);
+        w.put(static_cast<std::uint8_t>(length));
+        w.putBytes(reinterpret_cast<const std::uint8_t*>(m.name.data()), length);
+        w.put(m.hash);
+    }
+    return bytes;
+}
+
+void setDetailRecipe(MapHeader& header, std::optional<DetailRecipe> recipe)
+{
+    header.detailRecipe = std::move(recipe);
+    header.detailRecipeBytes = 0;
+    header.detailRecipeCrc = 0;
+    if (header.detailRecipe) {
+        const auto bytes = encodeDetailRecipe(*header.detailRecipe);
+        header.detailRecipeBytes = static_cast<std::uint32_t>(bytes.size());
+        header.detailRecipeCrc = crc32Of(bytes);
+    }
+}
+
+Status decodeDetailRecipe(std::span<const std::uint8_t> bytes, MapHeader& header, const std::string& name)
+{
+    auto bad = [&](auto&&... what) { return makeError(name, ": invalid detail recipe: ", what...); };
+    if (bytes.size() != header.detailRecipeBytes) {
+        return bad(bytes.size(), " bytes, the header says ", header.detailRecipeBytes);
+    }
+    if (crc32Of(bytes) != header.detailRecipeCrc) {
+        return makeError(name, ": detail recipe checksum mismatch (file is corrupt)");
+    }
+    ByteReader r(bytes);
+    auto text = [&](std::size_t length) {
+        std::string t;
+        for (std::size_t i = 0; i < length && !r.failed(); ++i) {
+            t.push_back(static_cast<char>(r.get<std::uint8_t>()));
+        }
+        return t;
+    };
+    DetailRecipe recipe;
+    recipe.scheme = text(r.get<std::uint8_t>());
+    recipe.omega = r.get<double>();
+    const auto count = r.get<std::uint32_t>();
+    if (count > kMaxRecipeMaterials) {
+        return bad(count, " materials, at most ", kMaxRecipeMaterials);
+    }
+    for (std::uint32_t i = 0; i < count && !r.failed(); ++i) {
+        DetailRecipe::Material m;
+        m.name = text(r.get<std::uint8_t>());
+        m.hash = r.get<std::uint64_t>();
+        recipe.materials.push_back(std::move(m));
+    }
+    if (r.failed() || r.position() != bytes.size()) {
+        return bad("its fields do not fill its ", bytes.size(), " bytes");
+    }
+    if (recipe.scheme.empty() || !std::isfinite(recipe.omega)) {
+        return bad("empty scheme or omega not finite");
+    }
+    header.detailRecipe = std::move(recipe);
+    return {};
 }
 
 std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& h)
@@ -67,6 +164,10 @@ std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& h)
     w.put(h.directoryCrc);
     w.putFixedString(h.source, kSourceBytes - 1);
     w.put(std::uint8_t{0});
+    if (h.version >= 3) {
+        w.put(h.detailRecipeBytes);
+        w.put(h.detailRecipeCrc);
+    }
     w.padTo(kHeaderBytes - 4);
     w.put(crc32Of(bytes));
     std::array<std::uint8_t, kHeaderBytes> out{};
@@ -120,6 +221,10 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
     h.directoryBytes = r.get<std::uint64_t>();
     h.directoryCrc = r.get<std::uint32_t>();
     h.source = r.getFixedString(kSourceBytes);
+    if (h.version >= 3) {
+        h.detailRecipeBytes = r.get<std::uint32_t>();
+        h.detailRecipeCrc = r.get<std::uint32_t>();
+    }
 
     auto bad = [&](auto&&... what) { return makeError(name, ": invalid header: ", what...); };
     if (headerBytes != kHeaderBytes) {
@@ -156,8 +261,11 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
     }
     // The offset is checked against wrapping too: offset + bytes must be the file's size, and a sum that
     // wraps past 2^64 could match a small file while claiming a directory of hundreds of gigabytes.
+    if (h.detailRecipeBytes > kMaxRecipeBytes) {
+        return bad("detail recipe of ", h.detailRecipeBytes, " bytes, at most ", kMaxRecipeBytes);
+    }
     if (h.nodeCount < 1 || h.directoryBytes != std::uint64_t{h.nodeCount} * kDirectoryEntryBytes ||
-        h.directoryOffset < kHeaderBytes || h.directoryOffset > UINT64_MAX - h.directoryBytes) {
+        h.directoryOffset < h.nodeAreaOffset() || h.directoryOffset > UINT64_MAX - h.directoryBytes) {
         return bad("directory of ", h.nodeCount, " nodes at offset ", h.directoryOffset, " with ",
                    h.directoryBytes, " bytes is inconsistent");
     }
@@ -236,7 +344,7 @@ Expected<std::vector<DirectoryEntry>> decodeDirectory(std::span<const std::uint8
         if (e.id.x >= side || e.id.y >= side) {
             return bad("position outside its level");
         }
-        if (e.offset < kHeaderBytes || e.offset > header.directoryOffset ||
+        if (e.offset < header.nodeAreaOffset() || e.offset > header.directoryOffset ||
             e.payloadBytes() > header.directoryOffset - e.offset || e.heightBytes == 0 ||
             e.textureBytes == 0) {
             return bad("payload at ", e.offset, " with ", e.payloadBytes(), " bytes lies outside the node area");

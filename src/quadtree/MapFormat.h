@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -19,8 +20,9 @@
 namespace terrain {
 
 inline constexpr std::array<std::uint8_t, 8> kMapMagic = {0x89, 'T', 'M', 'A', 'P', '\r', '\n', 0x1a};
-/// Version written. 2 added detail_delta_c to the directory entries (3.4.1); version 1 files are still read.
-inline constexpr std::uint32_t kMapVersion = 2;
+/// Version written. 2 added detail_delta_c to the directory entries (3.4.1); 3 the detail recipe block
+/// after the header (what those errors were estimated for). Versions 1 and 2 are still read.
+inline constexpr std::uint32_t kMapVersion = 3;
 /// Oldest version read.
 inline constexpr std::uint32_t kMinMapVersion = 1;
 inline constexpr std::size_t kHeaderBytes = 256;
@@ -34,6 +36,31 @@ inline constexpr int kBorder = 2;
 inline constexpr std::uint32_t kHeightCodingKobbeltResidual = 1;
 /// Texture coding: RGB8 planes, LOCO-I median predictor, residual bytes, zlib.
 inline constexpr std::uint32_t kTextureCodingMedRgb8 = 1;
+
+/// What the detail errors below the static leaves (detail_delta_c, 3.4.1) were estimated for: the
+/// viewer's synthesis must be the same for them to bound what it draws. Stored from version 3.
+struct DetailRecipe {
+    /// A material by its name and a hash of its file's bytes (FNV-1a, 64 bits).
+    struct Material {
+        std::string name;
+        std::uint64_t hash = 0;
+        bool operator==(const Material&) const = default;
+    };
+    std::string scheme = "kobbelt";   ///< detail_subdivision_scheme (at most 32 bytes)
+    double omega = 1.0;               ///< detail_subdivision_factor; means something for kobbelt only
+    std::vector<Material> materials;  ///< in order, the first the ground; empty: subdivision only
+
+    bool operator==(const DetailRecipe&) const = default;
+    /// Whether the synthesis is the same: scheme, materials and, for kobbelt, omega.
+    bool sameSynthesis(const DetailRecipe& other) const;
+    /// "kobbelt omega 1, materials grass (hash 0123456789abcdef), rock (hash ...)".
+    std::string describe() const;
+};
+
+/// Limits of a stored recipe (the reader refuses more).
+inline constexpr std::size_t kMaxRecipeMaterials = 64;
+inline constexpr std::size_t kMaxRecipeNameBytes = 255;
+inline constexpr std::size_t kMaxRecipeBytes = 1 << 16;
 
 /// Everything needed to interpret a map: geometry of the grid and of the chunks, height quantization.
 struct MapHeader {
@@ -60,6 +87,11 @@ struct MapHeader {
     std::uint64_t directoryBytes = 0;
     std::uint32_t directoryCrc = 0;
     std::string source;  ///< what prep read, e.g. "PNG 16-bit gray 1025x1025" (at most 95 bytes)
+    /// Version 3: what the detail errors assume; empty when the writer did not say (or versions 1, 2).
+    /// Set it with setDetailRecipe(), which also sets the two fields below.
+    std::optional<DetailRecipe> detailRecipe;
+    std::uint32_t detailRecipeBytes = 0;  ///< size of the recipe block at offset kHeaderBytes; 0 = none
+    std::uint32_t detailRecipeCrc = 0;    ///< its CRC32
 
     /// Samples per side of the whole padded grid at the finest level: (N - 1) * 2^(levels-1) + 1.
     std::uint64_t gridSize() const { return std::uint64_t{chunkSize - 1} * (std::uint64_t{1} << (levels - 1)) + 1; }
@@ -74,6 +106,8 @@ struct MapHeader {
     double heightOf(std::uint16_t code) const { return heightOffset + heightStep * code; }
     /// Whether directory entries carry detailDeltaC (version 2 and later).
     bool hasDetailErrors() const { return version >= 2; }
+    /// Where node payloads may start: after the header and the recipe block.
+    std::uint64_t nodeAreaOffset() const { return kHeaderBytes + detailRecipeBytes; }
 };
 
 /// One directory entry: where a node's payload is and what the LOD selection needs without loading it.
@@ -95,6 +129,15 @@ struct DirectoryEntry {
 
     std::uint64_t payloadBytes() const { return std::uint64_t{heightBytes} + textureBytes; }
 };
+
+/// The recipe block's bytes: scheme (u8 length + bytes), omega (f64), material count (u32), per material
+/// its name (u8 length + bytes) and hash (u64).
+std::vector<std::uint8_t> encodeDetailRecipe(const DetailRecipe& recipe);
+/// Sets header.detailRecipe and the block's size and CRC (empty: no block).
+void setDetailRecipe(MapHeader& header, std::optional<DetailRecipe> recipe);
+/// Parses the recipe block (header.detailRecipeBytes bytes read at kHeaderBytes) into header.detailRecipe,
+/// checking its CRC and limits; `name` is used in messages.
+Status decodeDetailRecipe(std::span<const std::uint8_t> bytes, MapHeader& header, const std::string& name);
 
 /// Serializes the header into kHeaderBytes bytes, including its CRC.
 std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& header);

@@ -367,6 +367,7 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     header.validHeight = static_cast<std::uint32_t>(field.height);
     header.noDataFilled = filled;
     header.source = field.description;
+    setDetailRecipe(header, options.detailRecipe);
 
     auto quantization = chooseQuantization(field, scale, field.verticalOffset + options.offset, options.maxError);
     TERRAIN_TRY(quantization);
@@ -423,6 +424,9 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     auto file = AtomicFile::create(output);
     TERRAIN_TRY(file);
     file->write(encodeHeader(header).data(), kHeaderBytes);  // patched at the end
+    if (header.detailRecipe) {
+        file->write(encodeDetailRecipe(*header.detailRecipe));
+    }
 
     std::atomic<std::uint64_t> done{0};
     std::atomic<std::int64_t> detailNanoseconds{0};

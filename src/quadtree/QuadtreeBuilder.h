@@ -32,6 +32,9 @@ struct BuildOptions {
     /// the map not to depend on the thread count. The builder nests the results into detailDeltaC (eq. 3.1).
     /// Unset: no detail below the leaves, detailDeltaC = deltaC.
     std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailError;
+    /// What leafDetailError estimates for (the synthesis settings and materials), stored in the map so the
+    /// viewer can tell whether its own settings match. Empty: the map says nothing about it.
+    std::optional<DetailRecipe> detailRecipe;
     /// Called now and then with the fraction done (0..1) and the current stage.
     std::function<void(double, std::string_view)> progress;
     /// Called for each warning (an option that had no effect, a default that was assumed).

@@ -11,6 +11,8 @@
 #include "lod/HeightQuery.h"
 #include "quadtree/MapFile.h"
 #include "quadtree/QuadtreeBuilder.h"
+#include "synthesis/DetailRecipeSetup.h"
+#include "lod/TerrainNodeSource.h"
 
 #include <gtest/gtest.h>
 
@@ -122,6 +124,20 @@ protected:
         options.threads = 2;
         auto built = buildMap(std::move(field.value()), options, *sDir / "trinidad.map");
         ASSERT_TRUE(built.ok()) << built.error().message;
+        // The same terrain with detail errors estimated for grass.mat alone, and the recipe saying so.
+        auto grass = loadDetailMaterials({std::filesystem::path(TERRAIN_MATERIALS_DIR) / "grass.mat"}, sWarnings);
+        ASSERT_TRUE(grass.ok()) << grass.error().message;
+        DetailSettings settings{"kobbelt", 1.0, *grass};
+        auto synthesizer = DetailSynthesizer::create(65, settings);
+        ASSERT_TRUE(synthesizer.ok()) << synthesizer.error().message;
+        auto recipe = makeDetailRecipe(settings, {std::filesystem::path(TERRAIN_MATERIALS_DIR) / "grass.mat"});
+        ASSERT_TRUE(recipe.ok()) << recipe.error().message;
+        BuildOptions detail = options;
+        detail.leafDetailError = leafDetailErrorFunction(**synthesizer);
+        detail.detailRecipe = *recipe;
+        auto again = readHeightField(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
+        ASSERT_TRUE(again.ok());
+        ASSERT_TRUE(buildMap(std::move(again.value()), detail, *sDir / "grass.map").ok());
         std::ofstream path(*sDir / "flight.path");
         path << "0 15000 12000 2496 47.7 -8\n"
                 "8 36000 33000 2700 41.6 -10\n";
@@ -145,9 +161,11 @@ protected:
     }
 
     static test::ScratchDir* sDir;
+    static std::vector<std::string> sWarnings;
 };
 
 test::ScratchDir* InteractionGLTest::sDir = nullptr;
+std::vector<std::string> InteractionGLTest::sWarnings;
 
 TEST_F(InteractionGLTest, RecordingStoppedBySignalKeepsEveryFrameItMade)
 {
@@ -285,6 +303,30 @@ TEST_F(InteractionGLTest, APathThroughAHillIsReportedOnceWithItsTimes)
                                             "image_path=" + (out / "demo").string()}));
     ASSERT_EQ(demo.exitCode, 0) << demo.output;
     EXPECT_FALSE(contains(demo.output, "passes below")) << demo.output;
+}
+
+TEST_F(InteractionGLTest, DetailSettingsUnlikeTheMapsGiveExactlyOneWarning)
+{
+    auto run = [&](const std::vector<std::string>& settings) {
+        test::ScratchDir out;
+        std::vector<std::string> all = settings;
+        all.insert(all.end(), {"camera_path=" + (*sDir / "flight.path").string(), "video_mode=true", "video_frames=3",
+                               "video_ffmpeg=false", "image_path=" + (out / "frames").string()});
+        auto args = arguments(all);
+        args[0] = (*sDir / "grass.map").string();
+        return test::runProgram(TERRAIN_TENGINE_EXE, args);
+    };
+    auto same = run({});  // the viewer's defaults: grass.mat alone, Kobbelt, omega 1
+    ASSERT_EQ(same.exitCode, 0) << same.output;
+    EXPECT_EQ(countOf(same.output, "warning"), 0u) << same.output;
+    for (const std::string& setting : {std::string("detail_material_type=1"), std::string("detail_subdivision_factor=0.5"),
+                                       std::string("detail_add_material=false")}) {
+        auto other = run({setting});
+        ASSERT_EQ(other.exitCode, 0) << setting << ": " << other.output;
+        EXPECT_EQ(countOf(other.output, "warning"), 1u) << setting << ": " << other.output;
+        EXPECT_TRUE(contains(other.output, "estimated for kobbelt omega 1, materials grass")) << other.output;
+        EXPECT_TRUE(contains(other.output, "to match, run: prep HEIGHTFIELD -h 90")) << other.output;
+    }
 }
 
 }  // namespace

@@ -171,7 +171,7 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     auto f32 = [&](std::size_t offset) { return std::bit_cast<float>(u32(offset)); };
     const Bytes magic = {0x89, 'T', 'M', 'A', 'P', 0x0d, 0x0a, 0x1a};
     EXPECT_TRUE(std::equal(magic.begin(), magic.end(), bytes.begin()));
-    EXPECT_EQ(u32(8), 2u);
+    EXPECT_EQ(u32(8), 3u);
     EXPECT_EQ(u32(12), 256u);
     EXPECT_EQ(u32(16), 17u);
     EXPECT_EQ(u32(20), 2u);
@@ -192,6 +192,8 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     EXPECT_EQ(directoryOffset + u64(128), bytes.size());
     EXPECT_EQ(u32(136), zlibCrc(std::span(bytes).subspan(directoryOffset)));
     EXPECT_EQ(std::string(reinterpret_cast<const char*>(&bytes[140])), "generated 65x65");
+    EXPECT_EQ(u32(236), 0u) << "built without a detail recipe: no block";
+    EXPECT_EQ(u32(240), 0u);
     EXPECT_EQ(u32(252), zlibCrc(std::span(bytes).first(252)));
 
     // Directory: sorted by key, each CRC over its payload; the payloads tile the node area, siblings
@@ -547,7 +549,9 @@ TEST(MapFileTest, BadHeaderFieldsAreErrors)
     const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
     const Case cases[] = {
         {"magic", 1, 1, 'X', false, "not a terrain map"},
-        {"version 3", 8, 4, 3, true, "version 3"},
+        {"version 4", 8, 4, 4, true, "version 4"},
+        {"detail recipe over 64 KiB", 236, 4, 70000, true, "detail recipe of 70000 bytes"},
+        {"detail recipe that is not there", 236, 4, 40, true, "detail recipe"},
         {"version 0", 8, 4, 0, true, "version 0"},
         {"header checksum", 150, 1, 'x', false, "checksum"},
         {"header size", 12, 4, 255, true, "header size 255"},
@@ -864,6 +868,85 @@ TEST(MapFileTest, VerifyCatchesWrongDetailErrors)
     ASSERT_TRUE(map);
     auto problems = verifyMap(*map);
     EXPECT_TRUE(problems.empty()) << problems.front();
+}
+
+}  // namespace
+}  // namespace terrain
+
+namespace terrain {
+namespace {
+
+// ---- The detail recipe (version 3) ----
+
+TEST(MapFileTest, DetailRecipeRoundTripsAndIsChecked)
+{
+    test::ScratchDir dir;
+    DetailRecipe recipe;
+    recipe.scheme = "catmull-clark";
+    recipe.omega = 0.75;
+    recipe.materials = {{"grass", 0x0123456789abcdefull}, {"rock", 0xfedcba9876543210ull}, {"", 7}};
+    BuildOptions options = test::testOptions(17);
+    options.leafDetailError = test::fakeLeafDetailError;
+    options.detailRecipe = recipe;
+    ASSERT_TRUE(buildMap(test::hillyField(65, 65, 41), options, dir / "recipe.map").ok());
+    for (ReaderKind kind : kReaders) {
+        auto map = test::openMap(dir / "recipe.map", kind);
+        ASSERT_TRUE(map) << readerName(kind);
+        EXPECT_EQ(map->header().version, 3u);
+        ASSERT_TRUE(map->header().detailRecipe.has_value());
+        EXPECT_EQ(*map->header().detailRecipe, recipe) << readerName(kind);
+        EXPECT_TRUE(verifyMap(*map).empty());
+        EXPECT_TRUE(test::decodeTree(*map).ok()) << "payloads start after the recipe block";
+    }
+    // Written from the format description: the block's size and CRC at 236 and 240, the block at 256.
+    Bytes bytes = test::readFileBytes(dir / "recipe.map");
+    const std::uint64_t size = test::readLe(bytes, 236, 4);
+    ASSERT_EQ(size, 1 + 13 + 8 + 4 + (1 + 5 + 8) + (1 + 4 + 8) + (1 + 0 + 8));
+    EXPECT_EQ(test::readLe(bytes, 240, 4), zlibCrc(std::span(bytes).subspan(256, size)));
+    EXPECT_EQ(std::string(bytes.begin() + 257, bytes.begin() + 270), "catmull-clark");
+
+    // A flipped bit in the block, or a size that does not fit the fields, is refused naming the file.
+    Bytes flipped = bytes;
+    flipped[256 + 20] ^= 1;
+    test::writeFileBytes(dir / "flipped.map", flipped);
+    Bytes resized = bytes;
+    test::writeLe(resized, 236, size - 1, 4);
+    test::writeLe(resized, 240, zlibCrc(std::span(resized).subspan(256, size - 1)), 4);
+    test::writeLe(resized, 252, zlibCrc(std::span(resized).first(252)), 4);
+    test::writeFileBytes(dir / "resized.map", resized);
+    for (const char* name : {"flipped.map", "resized.map"}) {
+        auto map = MapFile::open(dir / name, ReaderKind::Stream);
+        ASSERT_FALSE(map.ok()) << name;
+        EXPECT_TRUE(mentions(map.error().message, name)) << map.error().message;
+        EXPECT_TRUE(mentions(map.error().message, "detail recipe")) << map.error().message;
+    }
+
+    // Version 2 (no recipe fields: bytes 236..243 zero) still opens, without a recipe.
+    const auto plain = buildSmallMap(dir, "plain.map", 0.0, true);
+    Bytes v2 = test::readFileBytes(plain);
+    ASSERT_EQ(test::readLe(v2, 236, 4), 0u) << "a map built without a recipe has no block";
+    test::writeLe(v2, 8, 2, 4);
+    test::writeLe(v2, 252, zlibCrc(std::span(v2).first(252)), 4);
+    test::writeFileBytes(dir / "v2.map", v2);
+    auto old = test::openMap(dir / "v2.map");
+    ASSERT_TRUE(old);
+    EXPECT_EQ(old->header().version, 2u);
+    EXPECT_TRUE(old->header().hasDetailErrors());
+    EXPECT_FALSE(old->header().detailRecipe.has_value());
+}
+
+TEST(MapFileTest, DetailRecipesCompareBySynthesis)
+{
+    DetailRecipe a{"kobbelt", 1.0, {{"grass", 1}}};
+    EXPECT_TRUE(a.sameSynthesis(a));
+    EXPECT_FALSE(a.sameSynthesis({"kobbelt", 0.5, {{"grass", 1}}})) << "omega matters for kobbelt";
+    EXPECT_FALSE(a.sameSynthesis({"kobbelt", 1.0, {{"grass", 2}}})) << "an edited material file";
+    EXPECT_FALSE(a.sameSynthesis({"kobbelt", 1.0, {}}));
+    EXPECT_FALSE(a.sameSynthesis({"bilinear", 1.0, {{"grass", 1}}}));
+    DetailRecipe b{"bilinear", 1.0, {{"rock", 3}, {"grass", 1}}};
+    EXPECT_TRUE(b.sameSynthesis({"bilinear", 0.25, {{"rock", 3}, {"grass", 1}}})) << "omega is not bilinear's";
+    EXPECT_FALSE(b.sameSynthesis({"bilinear", 1.0, {{"grass", 1}, {"rock", 3}}})) << "order: the first is the ground";
+    EXPECT_EQ(a.describe(), "kobbelt omega 1, materials grass (hash 0000000000000001)");
 }
 
 }  // namespace

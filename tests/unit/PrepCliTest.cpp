@@ -3,7 +3,9 @@
 // sample), clear errors for bad arguments and inputs, no output left behind by a failed write, and
 // tengine-tool's exit codes.
 #include "MapTestSupport.h"
+#include "apps/DetailSetup.h"
 #include "heightfield/HeightFieldIo.h"
+#include "synthesis/DetailRecipeSetup.h"
 #include "heightfield/Image.h"
 
 #include <csignal>
@@ -423,6 +425,66 @@ TEST(PrepCliTest, RefusesToWriteTheMapOverAnyOfItsInputs)
     EXPECT_TRUE(mentions(self.output, "refusing")) << self.output;
 }
 
+TEST(PrepCliTest, TheMapRecordsWhatItsDetailErrorsAssumeAndDefaultsMatchTheViewer)
+{
+    test::ScratchDir dir;
+    const auto input = writeSmallPng(dir, "terrain.png");
+    const std::filesystem::path materials = TERRAIN_MATERIALS_DIR;
+    // prep's defaults: what the viewer's defaults synthesize (grass.mat alone, Kobbelt, omega 1).
+    auto made = test::runProgram(kPrep, {input.string(), "--chunk", "9", "-h", "10", "-o", (dir / "default.map").string()});
+    ASSERT_EQ(made.exitCode, 0) << made.output;
+    auto map = MapFile::open(dir / "default.map", ReaderKind::Stream);
+    ASSERT_TRUE(map.ok()) << map.error().message;
+    const MapHeader& header = (*map)->header();
+    ASSERT_TRUE(header.detailRecipe.has_value());
+    EXPECT_EQ(header.detailRecipe->scheme, "kobbelt");
+    EXPECT_EQ(header.detailRecipe->omega, 1.0);
+    ASSERT_EQ(header.detailRecipe->materials.size(), 1u);
+    EXPECT_EQ(header.detailRecipe->materials[0].name, "grass");
+    EXPECT_EQ(header.detailRecipe->materials[0].hash, hashFileContent(materials / "grass.mat").value());
+
+    const TengineOptions viewer;  // the viewer's defaults
+    std::vector<std::string> warnings;
+    auto synthesizer = makeDetailSynthesizer(viewer, 9, materials, warnings);
+    ASSERT_TRUE(synthesizer.ok() && *synthesizer);
+    auto recipe = viewerDetailRecipe(viewer, **synthesizer, materials);
+    ASSERT_TRUE(recipe.ok()) << recipe.error().message;
+    EXPECT_EQ(detailRecipeMismatch(header, "default.map", *recipe, detailMaterialFiles(viewer, materials)), std::nullopt)
+        << "prep x.png then tengine x.map agree";
+
+    // Other settings: recorded as given, and the viewer's defaults now differ, in one message naming both
+    // and the prep command that would match.
+    made = test::runProgram(kPrep, {input.string(), "--chunk", "9", "-h", "10", "--material",
+                                    (materials / "rock.mat").string(), "--material", (materials / "grass.mat").string(),
+                                    "--detail-factor", "0.5", "-o", (dir / "other.map").string()});
+    ASSERT_EQ(made.exitCode, 0) << made.output;
+    auto other = MapFile::open(dir / "other.map", ReaderKind::Stream);
+    ASSERT_TRUE(other.ok());
+    const DetailRecipe expected{"kobbelt", 0.5,
+                                {{"rock", hashFileContent(materials / "rock.mat").value()},
+                                 {"grass", hashFileContent(materials / "grass.mat").value()}}};
+    EXPECT_EQ((*other)->header().detailRecipe, expected);
+    auto mismatch = detailRecipeMismatch((*other)->header(), "other.map", *recipe, detailMaterialFiles(viewer, materials));
+    ASSERT_TRUE(mismatch.has_value());
+    EXPECT_TRUE(mentions(*mismatch, expected.describe())) << *mismatch;
+    EXPECT_TRUE(mentions(*mismatch, recipe->describe())) << *mismatch;
+    EXPECT_TRUE(mentions(*mismatch, "prep HEIGHTFIELD -h 10 --chunk 9 --material " + (materials / "grass.mat").string() +
+                                        " -o other.map"))
+        << *mismatch;
+    // tengine-tool info prints the recipe.
+    auto info = test::runProgram(kTool, {"info", (dir / "other.map").string()});
+    ASSERT_EQ(info.exitCode, 0) << info.output;
+    EXPECT_TRUE(mentions(info.output, "errors estimated for " + expected.describe())) << info.output;
+    // Subdivision only, and a contradiction.
+    made = test::runProgram(kPrep, {input.string(), "--chunk", "9", "--no-material", "-o", (dir / "none.map").string()});
+    ASSERT_EQ(made.exitCode, 0) << made.output;
+    auto none = MapFile::open(dir / "none.map", ReaderKind::Stream);
+    ASSERT_TRUE(none.ok() && (*none)->header().detailRecipe);
+    EXPECT_TRUE((*none)->header().detailRecipe->materials.empty());
+    made = test::runProgram(kPrep, {input.string(), "--no-material", "--material", (materials / "rock.mat").string()});
+    EXPECT_EQ(made.exitCode, 2) << made.output;
+}
+
 TEST(PrepCliTest, FailedWritesLeaveNoMapAndNoTemporary)
 {
     test::ScratchDir dir;
@@ -530,15 +592,17 @@ TEST(PrepCliTest, MaterialsGiveLeafDetailErrorsIndependentOfThreads)
     ASSERT_EQ(one.exitCode, 0) << one.output;
     const RunResult two = prep("two.map", twoThreads);
     ASSERT_EQ(two.exitCode, 0) << two.output;
-    const RunResult plain = prep("plain.map", {"--threads", "2"});
+    const RunResult plain = prep("plain.map", {"--threads", "2", "--no-material"});
     ASSERT_EQ(plain.exitCode, 0) << plain.output;
-    const RunResult bilinear = prep("bilinear.map", {"--detail-scheme", "bilinear", "--detail-factor", "0"});
+    const RunResult bilinear =
+        prep("bilinear.map", {"--detail-scheme", "bilinear", "--detail-factor", "0", "--no-material"});
     ASSERT_EQ(bilinear.exitCode, 0) << bilinear.output;
     EXPECT_TRUE(mentions(one.output, "leaf error max")) << one.output;
-    EXPECT_TRUE(mentions(one.output, "materials grass rock, kobbelt omega 1;")) << one.output;
+    EXPECT_TRUE(mentions(one.output, "for kobbelt omega 1, materials grass (hash ")) << one.output;
+    EXPECT_TRUE(mentions(one.output, "), rock (hash ")) << one.output;
     EXPECT_TRUE(mentions(one.output, "estimating")) << one.output;
-    EXPECT_TRUE(mentions(plain.output, "subdivision only")) << plain.output;
-    EXPECT_TRUE(mentions(bilinear.output, "bilinear;")) << bilinear.output;
+    EXPECT_TRUE(mentions(plain.output, "for kobbelt omega 1, no materials (subdivision only)")) << plain.output;
+    EXPECT_TRUE(mentions(bilinear.output, "for bilinear, no materials")) << bilinear.output;
     EXPECT_TRUE(mentions(bilinear.output, "warning: --detail-factor has no effect")) << bilinear.output;
 
     const test::Bytes bytesOne = test::readFileBytes(dir / "one.map");
@@ -552,11 +616,13 @@ TEST(PrepCliTest, MaterialsGiveLeafDetailErrorsIndependentOfThreads)
     auto without = test::openMap(dir / "plain.map");
     ASSERT_TRUE(map && without);
     EXPECT_TRUE(map->header().hasDetailErrors());
-    // Only the directory differs: heights and textures are the same.
+    // Only the directory and the recipe differ: heights and textures are the same.
     const test::Bytes bytesPlain = test::readFileBytes(dir / "plain.map");
-    ASSERT_EQ(map->header().directoryOffset, without->header().directoryOffset);
+    const auto nodesOne = static_cast<std::ptrdiff_t>(map->header().nodeAreaOffset());
+    const auto nodesPlain = static_cast<std::ptrdiff_t>(without->header().nodeAreaOffset());
+    ASSERT_EQ(map->header().directoryOffset - nodesOne, without->header().directoryOffset - nodesPlain);
     const auto nodesEnd = static_cast<std::ptrdiff_t>(map->header().directoryOffset);
-    EXPECT_TRUE(std::equal(bytesOne.begin() + 256, bytesOne.begin() + nodesEnd, bytesPlain.begin() + 256));
+    EXPECT_TRUE(std::equal(bytesOne.begin() + nodesOne, bytesOne.begin() + nodesEnd, bytesPlain.begin() + nodesPlain));
     float largest = 0.0f;
     int leaves = 0, grew = 0;
     for (std::size_t k = 0; k < map->directory().size(); ++k) {
