@@ -150,7 +150,7 @@ void VideoRecorder::writerLoop()
         }
         Status status;
         if (!job.pixels.pixels.empty()) {
-            status = writePngImage(mOptions.directory / frameFileName(job.index), job.pixels);
+            status = writePngImage(mOptions.directory / frameFileName(job.index), job.pixels, PngCompression::Fast);
         }
         if (status.ok()) {
             std::fprintf(mCsv, "%s\n", job.row.c_str());

@@ -17,7 +17,7 @@ Expected<Image> readPngImage(const std::filesystem::path& path, int channels)
     return image;
 }
 
-Status writePngImage(const std::filesystem::path& path, const Image& image)
+Status writePngImage(const std::filesystem::path& path, const Image& image, PngCompression compression)
 {
     if (image.channels != 1 && image.channels != 3 && image.channels != 4) {
         return makeError(path.string(), ": cannot write an image with ", image.channels,
@@ -30,7 +30,7 @@ Status writePngImage(const std::filesystem::path& path, const Image& image)
                          " image with ", image.pixels.size(), " bytes of pixels (need width, height >= 1 and ",
                          "width * height * channels bytes)");
     }
-    return detail::encodePng(path, image.width, image.height, image.channels, 8, image.pixels.data());
+    return detail::encodePng(path, image.width, image.height, image.channels, 8, image.pixels.data(), compression);
 }
 
 }  // namespace terrain

@@ -26,7 +26,12 @@ struct Image {
 /// Reads any PNG and converts it to `channels` channels (1: luminance; 3: RGB; 4: RGBA), 16-bit reduced to 8.
 Expected<Image> readPngImage(const std::filesystem::path& path, int channels);
 
+/// How hard PNG writers compress: Small for files kept (height fields, textures), Fast for many large
+/// images written as they are made (video frames).
+enum class PngCompression { Small, Fast };
+
 /// Writes an 8-bit PNG (gray, RGB or RGBA by image.channels) to a temporary name and renames it.
-Status writePngImage(const std::filesystem::path& path, const Image& image);
+Status writePngImage(const std::filesystem::path& path, const Image& image,
+                     PngCompression compression = PngCompression::Small);
 
 }  // namespace terrain

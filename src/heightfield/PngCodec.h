@@ -4,6 +4,7 @@
 #pragma once
 
 #include "core/Expected.h"
+#include "heightfield/Image.h"
 
 #include <cstdint>
 #include <filesystem>
@@ -40,7 +41,7 @@ Expected<DecodedPng> decodePng(const std::filesystem::path& path, PngReadMode mo
 /// Writes a non-interlaced PNG through AtomicFile. `pixels` holds rows top to bottom; 16-bit samples are
 /// big-endian. channels 1 (gray), 2 (gray+alpha), 3 (RGB) or 4 (RGBA); bitDepth 8 or 16.
 Status encodePng(const std::filesystem::path& path, int width, int height, int channels, int bitDepth,
-                 const std::uint8_t* pixels);
+                 const std::uint8_t* pixels, PngCompression compression = PngCompression::Small);
 
 /// "gray", "RGB", "RGBA", "gray+alpha", "palette".
 std::string pngColorTypeName(int colorType);
