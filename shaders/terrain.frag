@@ -27,24 +27,25 @@ uniform int uWireframe;
 // array, mean 0.5, multiplied over the node's colour, weighted by the vertex's material weights.
 const int kMaxLayers = 8;
 const float kDetailContrast = 0.6;
+// LAYER_COUNT (1..kMaxLayers) is defined by the renderer: a loop of constant length, unrolled. With
+// DETAIL_TINT_ONLY (nodes beyond every layer's fade) the layers are left out and only the tint applies.
 uniform sampler2DArray uDetail;
-uniform int uLayerCount;
 uniform vec4 uLayerMaterialMask[kMaxLayers];  // which material a layer belongs to, as a one-hot vec4
 uniform float uLayerScale[kMaxLayers];   // 1 / metres per repeat
 uniform vec2 uLayerOrigin[kMaxLayers];   // the node's corner in repeats, fractional part (per node)
 uniform vec4 uMaterialTintColumns[3];    // r, g, b of the 4 materials' tints, brightness-preserving and applied at
                                          // kTintStrength (TerrainRenderer.cpp): the map's colours stay the base
 
-uniform int uDetailActive;               // 0: the whole node is too far for any layer (per node)
 
 vec3 detailFactor()
 {
     // Per material: the product of its layers (1 where faded out). No branch per fragment, no indexing by
-    // a varying; the loop is skipped for whole nodes beyond the fade (a uniform branch). The tint applies
-    // at every distance, so the skip leaves no seam.
+    // a varying; whole nodes beyond the fade use the DETAIL_TINT_ONLY variant. The tint applies at every
+    // distance, so the switch leaves no seam.
     vec4 layers = vec4(1.0);
+#ifndef DETAIL_TINT_ONLY
     float distance = length(vRelative);
-    for (int k = 0; k < uLayerCount * uDetailActive; ++k) {
+    for (int k = 0; k < LAYER_COUNT; ++k) {
         // Gray 0.5 is neutral; kDetailContrast scales the rest, so the tile modulates the node's colour
         // rather than replacing it. Faded out between 10 and 40 repeats away: farther, the repetition of
         // the tile would show as a regular pattern, and the node's own texture carries what matters there.
@@ -53,6 +54,7 @@ vec3 detailFactor()
         float amount = kDetailContrast * (1.0 - smoothstep(10.0, 40.0, distance * scale));
         layers *= vec4(1.0) + uLayerMaterialMask[k] * (amount * g);
     }
+#endif
     float total = dot(vMaterials, vec4(1.0));
     vec4 weighted = vMaterials * layers;
     vec3 sum = vec3(dot(weighted, uMaterialTintColumns[0]), dot(weighted, uMaterialTintColumns[1]),

@@ -70,10 +70,19 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     }
     if (!layers.empty()) {
         defines.emplace_back("DETAIL");
+        defines.emplace_back("LAYER_COUNT " + std::to_string(layers.size()));
     }
     auto terrain = ShaderProgram::load(shaderDirectory, "terrain", defines);
     TERRAIN_TRY(terrain);
-    r->mTerrain = std::move(terrain.value());
+    r->mPrograms.push_back(std::move(terrain.value()));
+    if (!layers.empty()) {
+        // Nodes beyond every layer's fade get the variant without the detail texture loop: on llvmpipe
+        // the loop cost a 1280 x 720 frame of the demo about 180 ms even where it ran no iteration.
+        defines.emplace_back("DETAIL_TINT_ONLY");
+        auto far = ShaderProgram::load(shaderDirectory, "terrain", defines);
+        TERRAIN_TRY(far);
+        r->mPrograms.push_back(std::move(far.value()));
+    }
     if (!layers.empty()) {
         const int w = layers.front().image.width, h = layers.front().image.height;
         r->mDetail = gl::Texture::create();
@@ -90,32 +99,35 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
         glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_REPEAT);
         glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_REPEAT);
-        r->mTerrain.use();
-        glUniform1i(r->mTerrain.uniform("uDetail"), 2);
-        glUniform1i(r->mTerrain.uniform("uLayerCount"), static_cast<GLint>(layers.size()));
-        for (std::size_t k = 0; k < layers.size(); ++k) {
-            const std::string index = "[" + std::to_string(k) + "]";
-            glm::vec4 mask(0.0f);
-            mask[layers[k].material] = 1.0f;
-            glUniform4fv(r->mTerrain.uniform(("uLayerMaterialMask" + index).c_str()), 1, glm::value_ptr(mask));
-            glUniform1f(r->mTerrain.uniform(("uLayerScale" + index).c_str()), static_cast<float>(1.0 / layers[k].size));
-            r->mLayerSize.push_back(layers[k].size);
+        for (const DetailLayer& layer : layers) {
+            r->mLayerSize.push_back(layer.size);
         }
-        glm::vec4 tintColumns[3] = {glm::vec4(1.0f), glm::vec4(1.0f), glm::vec4(1.0f)};
-        for (std::size_t m = 0; m < materials->materials().size(); ++m) {
-            const auto& t = materials->materials()[m].tint;
-            glm::vec3 tint(t[0], t[1], t[2]);
-            const float luminance = glm::dot(tint, glm::vec3(0.2126f, 0.7152f, 0.0722f));
-            tint = luminance > 0.0f ? tint / luminance : glm::vec3(1.0f);
-            // A third of the tint: the map's colours (from -t or prep's height colouring) stay the base and
-            // the material only shifts them, so a grass tint does not paint a dry valley green.
-            constexpr float kTintStrength = 0.35f;
-            tint = glm::mix(glm::vec3(1.0f), tint, kTintStrength);
-            for (int c = 0; c < 3; ++c) {
-                tintColumns[c][static_cast<int>(m)] = tint[c];
+        for (ShaderProgram& terrainProgram : r->mPrograms) {
+            terrainProgram.use();
+            glUniform1i(terrainProgram.uniform("uDetail"), 2);
+            for (std::size_t k = 0; k < layers.size(); ++k) {
+                const std::string index = "[" + std::to_string(k) + "]";
+                glm::vec4 mask(0.0f);
+                mask[layers[k].material] = 1.0f;
+                glUniform4fv(terrainProgram.uniform(("uLayerMaterialMask" + index).c_str()), 1, glm::value_ptr(mask));
+                glUniform1f(terrainProgram.uniform(("uLayerScale" + index).c_str()), static_cast<float>(1.0 / layers[k].size));
             }
+            glm::vec4 tintColumns[3] = {glm::vec4(1.0f), glm::vec4(1.0f), glm::vec4(1.0f)};
+            for (std::size_t m = 0; m < materials->materials().size(); ++m) {
+                const auto& t = materials->materials()[m].tint;
+                glm::vec3 tint(t[0], t[1], t[2]);
+                const float luminance = glm::dot(tint, glm::vec3(0.2126f, 0.7152f, 0.0722f));
+                tint = luminance > 0.0f ? tint / luminance : glm::vec3(1.0f);
+                // A third of the tint: the map's colours (from -t or prep's height colouring) stay the base and
+                // the material only shifts them, so a grass tint does not paint a dry valley green.
+                constexpr float kTintStrength = 0.35f;
+                tint = glm::mix(glm::vec3(1.0f), tint, kTintStrength);
+                for (int c = 0; c < 3; ++c) {
+                    tintColumns[c][static_cast<int>(m)] = tint[c];
+                }
+            }
+            glUniform4fv(terrainProgram.uniform("uMaterialTintColumns"), 3, glm::value_ptr(tintColumns[0]));
         }
-        glUniform4fv(r->mTerrain.uniform("uMaterialTintColumns"), 3, glm::value_ptr(tintColumns[0]));
     }
     auto sky = ShaderProgram::load(shaderDirectory, "sky");
     TERRAIN_TRY(sky);
@@ -240,46 +252,54 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
     glFrontFace(GL_CCW);
     glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
 
-    mTerrain.use();
     const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
-    glUniformMatrix4fv(mTerrain.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
-    glUniform1i(mTerrain.uniform("uColour"), 0);
-    glUniform1i(mTerrain.uniform("uParentColour"), 1);
-    glUniform1f(mTerrain.uniform("uHeightBase"), static_cast<float>(mHeader.heightOffset - camera.position.z));
-    glUniform1f(mTerrain.uniform("uInverseCells"), 1.0f / static_cast<float>(mHeader.chunkSize - 1));
-    glUniform1f(mTerrain.uniform("uTexels"), static_cast<float>(mHeader.textureSize));
     if (!mLayerSize.empty()) {
         glActiveTexture(GL_TEXTURE2);
         glBindTexture(GL_TEXTURE_2D_ARRAY, mDetail.name());
-        mDetailActive = mTerrain.uniform("uDetailActive");
-        mLayerOrigin.resize(mLayerSize.size());
-        for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
-            mLayerOrigin[k] = mTerrain.uniform(("uLayerOrigin[" + std::to_string(k) + "]").c_str());
-        }
     }
-    const glm::vec3 sun = glm::normalize(style.sunDirection);
-    glUniform3fv(mTerrain.uniform("uSunDirection"), 1, glm::value_ptr(sun));
-    glUniform3fv(mTerrain.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
-    glUniform3fv(mTerrain.uniform("uAmbient"), 1, glm::value_ptr(style.ambient));
-    glUniform3fv(mTerrain.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
-    glUniform1f(mTerrain.uniform("uHazeDistance"), style.hazeDistance);
-    glUniform1i(mTerrain.uniform("uWireframe"), style.wireframe ? 1 : 0);
-    // The input's samples, camera-relative (prep's padding is left out).
-    const double s = mHeader.sampleSpacing;
-    const glm::dvec4 valid{mHeader.originX + mHeader.validX0 * s - camera.position.x,
-                           mHeader.originY + mHeader.validY0 * s - camera.position.y,
-                           mHeader.originX + (mHeader.validX0 + mHeader.validWidth - 1.0) * s - camera.position.x,
-                           mHeader.originY + (mHeader.validY0 + mHeader.validHeight - 1.0) * s - camera.position.y};
-    const double slack = 1e-3 * s;  // keep fragments exactly on the last sample
-    glUniform4f(mTerrain.uniform("uValidRect"), static_cast<float>(valid.x - slack), static_cast<float>(valid.y - slack),
-                static_cast<float>(valid.z + slack), static_cast<float>(valid.w + slack));
+    for (ShaderProgram& program : mPrograms) {
+        program.use();
+        glUniformMatrix4fv(program.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
+        glUniform1i(program.uniform("uColour"), 0);
+        glUniform1i(program.uniform("uParentColour"), 1);
+        glUniform1f(program.uniform("uHeightBase"), static_cast<float>(mHeader.heightOffset - camera.position.z));
+        glUniform1f(program.uniform("uInverseCells"), 1.0f / static_cast<float>(mHeader.chunkSize - 1));
+        glUniform1f(program.uniform("uTexels"), static_cast<float>(mHeader.textureSize));
+        const glm::vec3 sun = glm::normalize(style.sunDirection);
+        glUniform3fv(program.uniform("uSunDirection"), 1, glm::value_ptr(sun));
+        glUniform3fv(program.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
+        glUniform3fv(program.uniform("uAmbient"), 1, glm::value_ptr(style.ambient));
+        glUniform3fv(program.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
+        glUniform1f(program.uniform("uHazeDistance"), style.hazeDistance);
+        glUniform1i(program.uniform("uWireframe"), style.wireframe ? 1 : 0);
+        // The input's samples, camera-relative (prep's padding is left out).
+        const double s = mHeader.sampleSpacing;
+        const glm::dvec4 valid{mHeader.originX + mHeader.validX0 * s - camera.position.x,
+                               mHeader.originY + mHeader.validY0 * s - camera.position.y,
+                               mHeader.originX + (mHeader.validX0 + mHeader.validWidth - 1.0) * s - camera.position.x,
+                               mHeader.originY + (mHeader.validY0 + mHeader.validHeight - 1.0) * s - camera.position.y};
+        const double slack = 1e-3 * s;  // keep fragments exactly on the last sample
+        glUniform4f(program.uniform("uValidRect"), static_cast<float>(valid.x - slack), static_cast<float>(valid.y - slack),
+                    static_cast<float>(valid.z + slack), static_cast<float>(valid.w + slack));
 
+    }
     glBindVertexArray(mTemplateVao.name());
-    const GLint originLocation = mTerrain.uniform("uOrigin");
-    const GLint spacingLocation = mTerrain.uniform("uSpacing");
-    const GLint morphLocation = mTerrain.uniform("uMorph");
-    const GLint skirtLocation = mTerrain.uniform("uSkirtDepth");
-    const GLint parentOffsetLocation = mTerrain.uniform("uParentOffset");
+    // Per-node uniform locations of each program variant (kNear, kFar).
+    struct Locations {
+        GLint origin, spacing, morph, skirt, parentOffset;
+        std::vector<GLint> layerOrigin;
+    };
+    std::vector<Locations> locations;
+    for (ShaderProgram& program : mPrograms) {
+        Locations l{program.uniform("uOrigin"), program.uniform("uSpacing"), program.uniform("uMorph"),
+                    program.uniform("uSkirtDepth"), program.uniform("uParentOffset"), {}};
+        for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
+            l.layerOrigin.push_back(program.uniform(("uLayerOrigin[" + std::to_string(k) + "]").c_str()));
+        }
+        locations.push_back(std::move(l));
+    }
+    const double coarsestLayer = mLayerSize.empty() ? 0.0 : *std::max_element(mLayerSize.begin(), mLayerSize.end());
+    std::size_t current = mPrograms.size();
     for (const SelectedNode& selected : streamer.selection().nodes) {
         NodePtr node = streamer.node(selected.id);
         if (!node) {
@@ -300,30 +320,35 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
                               reinterpret_cast<const void*>(offsetof(NodeVertex, ownNormal)));
         glVertexAttribPointer(4, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(NodeVertex),
                               reinterpret_cast<const void*>(offsetof(NodeVertex, materialWeights)));
-        if (!mLayerSize.empty()) {
-            // The fragment shader fades each layer out by 40 repeats away (shaders/terrain.frag): a node
-            // wholly beyond that for every layer (the coarsest fades last) skips the detail textures.
-            const double coarsest = *std::max_element(mLayerSize.begin(), mLayerSize.end());
-            glUniform1i(mDetailActive, selected.distance < kDetailFadeRepeats * coarsest ? 1 : 0);
+        // The fragment shader fades each layer out by 40 repeats away (shaders/terrain.frag): a node wholly
+        // beyond that for every layer (the coarsest fades last) is drawn by the variant without the layers.
+        const std::size_t variant =
+            mPrograms.size() > 1 && selected.distance >= kDetailFadeRepeats * coarsestLayer ? kFar : kNear;
+        if (variant != current) {
+            mPrograms[variant].use();
+            current = variant;
+        }
+        const Locations& at = locations[variant];
+        if (variant == kNear && !mLayerSize.empty()) {
             // The node's corner in repeats of each layer, reduced to [0, 1) in double: texture coordinates
             // stay small and exact however far from the origin the node is.
             const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(camera.position);
             for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
                 const glm::dvec2 repeats = corner / mLayerSize[k];
                 const glm::dvec2 fraction = repeats - glm::floor(repeats);
-                glUniform2f(mLayerOrigin[k], static_cast<float>(fraction.x), static_cast<float>(fraction.y));
+                glUniform2f(at.layerOrigin[k], static_cast<float>(fraction.x), static_cast<float>(fraction.y));
             }
         }
 
-        glUniform2f(originLocation, static_cast<float>(selected.cameraRelativeOrigin.x),
+        glUniform2f(at.origin, static_cast<float>(selected.cameraRelativeOrigin.x),
                     static_cast<float>(selected.cameraRelativeOrigin.y));
-        glUniform1f(spacingLocation, static_cast<float>(selected.size / (mHeader.chunkSize - 1)));
-        glUniform1f(morphLocation, selected.id.isRoot() || !style.geomorph ? 1.0f : selected.morph);
+        glUniform1f(at.spacing, static_cast<float>(selected.size / (mHeader.chunkSize - 1)));
+        glUniform1f(at.morph, selected.id.isRoot() || !style.geomorph ? 1.0f : selected.morph);
         // Skirts hang the parent's delta_c deep: a leaf's own delta_c is zero, yet it can meet a coarser
         // neighbour whose edge lies up to that far away (3.2.6).
         const float skirt = parent ? std::max(parent->deltaC, node->deltaC) : node->deltaC;
-        glUniform1f(skirtLocation, skirt + static_cast<float>(mHeader.heightStep));
-        glUniform2f(parentOffsetLocation, (selected.id.x & 1) ? 0.5f : 0.0f, (selected.id.y & 1) ? 0.5f : 0.0f);
+        glUniform1f(at.skirt, skirt + static_cast<float>(mHeader.heightStep));
+        glUniform2f(at.parentOffset, (selected.id.x & 1) ? 0.5f : 0.0f, (selected.id.y & 1) ? 0.5f : 0.0f);
         glDrawElements(GL_TRIANGLES, mIndexCount, mIndexType, nullptr);
 
         ++stats.nodes;

@@ -76,7 +76,11 @@ private:
 
     MapHeader mHeader;
     TemplateMesh mMesh;
-    ShaderProgram mTerrain;
+    /// The terrain program: [kNear] with the materials' detail layers (or the only one without materials),
+    /// [kFar] the same without the layers, for nodes beyond every layer's fade.
+    std::vector<ShaderProgram> mPrograms;
+    static constexpr std::size_t kNear = 0;
+    static constexpr std::size_t kFar = 1;
     ShaderProgram mSky;
     gl::VertexArray mTemplateVao;
     gl::Buffer mTemplateVertices;
@@ -87,8 +91,6 @@ private:
     gl::VertexArray mEmptyVao;  ///< the sky's full-screen triangle needs no attributes
     gl::Texture mDetail;        ///< GL_TEXTURE_2D_ARRAY of the detail layers, or none
     std::vector<double> mLayerSize;  ///< metres per repeat of each detail layer
-    std::vector<GLint> mLayerOrigin; ///< uniform locations of uLayerOrigin[k]
-    GLint mDetailActive = -1;        ///< uniform location of uDetailActive
     /// Repeats of a detail layer beyond which the fragment shader has faded it out (terrain.frag).
     static constexpr double kDetailFadeRepeats = 40.0;
     std::unordered_map<std::uint64_t, GpuNode> mGpuNodes;
