@@ -7,6 +7,7 @@
 
 #include "core/Check.h"
 #include "core/Parse.h"
+#include "quadtree/ChunkGeometry.h"
 
 #include <algorithm>
 #include <charconv>
@@ -262,7 +263,7 @@ std::vector<OptionSpec> makeOptionTable()
                  "a power of two or a power of two plus one, in [16, 4096] (texels)",
                  [](std::string_view value, const SetContext&, O& o) {
                      auto v = parseInt(value, 16, 4096);
-                     if (!v || !(isPowerOfTwo(*v) || isPowerOfTwo(*v - 1))) {
+                     if (!v || !(isPowerOfTwo(*v) || isPowerOfTwoPlusOne(*v))) {
                          return false;
                      }
                      o.dynamicTextureSize = *v;

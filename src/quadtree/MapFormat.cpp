@@ -14,10 +14,6 @@ namespace terrain {
 
 namespace {
 constexpr std::size_t kSourceBytes = 96;
-constexpr std::uint32_t kMaxChunkSize = 1025;
-constexpr std::uint32_t kMaxTextureSize = 4097;
-
-bool isPowerOfTwoPlusOne(std::uint32_t n) { return n >= 3 && ((n - 1) & (n - 2)) == 0; }
 }  // namespace
 
 std::uint32_t crc32Of(std::span<const std::uint8_t> bytes)
@@ -233,13 +229,13 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
     if (border != kBorder) {
         return bad("node border ", border, ", expected ", kBorder);
     }
-    if (!isPowerOfTwoPlusOne(h.chunkSize) || h.chunkSize > kMaxChunkSize) {
+    if (!isValidChunkSize(h.chunkSize)) {
         return bad("chunk size ", h.chunkSize, " is not 2^k+1 in [3, ", kMaxChunkSize, "]");
     }
     if (h.levels < 1 || h.levels > 24) {
         return bad("level count ", h.levels, " outside [1, 24]");
     }
-    if (!isPowerOfTwoPlusOne(h.textureSize) || h.textureSize > kMaxTextureSize) {
+    if (!isPowerOfTwoPlusOne(h.textureSize) || h.textureSize > std::uint32_t{kMaxTextureSize}) {
         return bad("texture size ", h.textureSize, " is not 2^k+1 in [3, ", kMaxTextureSize, "]");
     }
     if (h.heightCoding != kHeightCodingKobbeltResidual || h.textureCoding != kTextureCodingMedRgb8) {

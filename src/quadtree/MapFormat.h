@@ -8,6 +8,7 @@
 #pragma once
 
 #include "core/Expected.h"
+#include "quadtree/ChunkGeometry.h"
 #include "quadtree/NodeId.h"
 
 #include <array>
@@ -27,9 +28,6 @@ inline constexpr std::uint32_t kMapVersion = 3;
 inline constexpr std::uint32_t kMinMapVersion = 1;
 inline constexpr std::size_t kHeaderBytes = 256;
 inline constexpr std::size_t kDirectoryEntryBytes = 48;
-/// Samples of border kept on every side of a node's heights, used by subdivision (3.4.3 "Borders"):
-/// the 4-point rule needs two parent samples beyond a child's edge to produce the child's own border.
-inline constexpr int kBorder = 2;
 
 /// Height coding of node payloads. The only one so far: Kobbelt 4-point prediction from the parent's
 /// window (root: previous sample), residuals divided by the quantizer bin, zigzag varints, zlib.
@@ -65,7 +63,7 @@ inline constexpr std::size_t kMaxRecipeBytes = 1 << 16;
 /// Everything needed to interpret a map: geometry of the grid and of the chunks, height quantization.
 struct MapHeader {
     std::uint32_t version = kMapVersion;
-    std::uint32_t chunkSize = 65;    ///< N: samples per node side, 2^k + 1
+    std::uint32_t chunkSize = 65;    ///< N: samples per node side, isValidChunkSize (quadtree/ChunkGeometry.h)
     std::uint32_t levels = 1;        ///< static levels; leaves of level levels-1 have the input's spacing
     std::uint32_t textureSize = 65;  ///< T: texels per node side, 2^k + 1; corner texels centred on the corners
     std::uint32_t heightCoding = kHeightCodingKobbeltResidual;
@@ -97,8 +95,8 @@ struct MapHeader {
     std::uint64_t gridSize() const { return std::uint64_t{chunkSize - 1} * (std::uint64_t{1} << (levels - 1)) + 1; }
     /// Samples per side of the grid at `level`.
     std::uint64_t levelGridSize(int level) const { return std::uint64_t{chunkSize - 1} * (std::uint64_t{1} << level) + 1; }
-    /// Samples per node side including the border on both sides.
-    int windowSize() const { return static_cast<int>(chunkSize) + 2 * kBorder; }
+    /// Samples per node side including the border on both sides (quadtree/ChunkGeometry.h).
+    int windowSize() const { return terrain::windowSize(static_cast<int>(chunkSize)); }
     /// Metres between samples of a node at `level` (may be deeper than the static levels).
     double spacingAt(int level) const;
     /// Metres covered by one node side at `level`.

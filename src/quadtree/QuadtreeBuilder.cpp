@@ -26,8 +26,6 @@ namespace terrain {
 
 namespace {
 
-bool isPowerOfTwoPlusOne(int n) { return n >= 3 && ((n - 1) & (n - 2)) == 0; }
-
 /// Which static nodes exist: a node at level k < levels-1 has children unless it lies wholly in the padding
 /// or the weight map asks for no more depth there.
 class TreeShape {
@@ -299,12 +297,14 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
             options.progress(fraction, stage);
         }
     };
-    if (!isPowerOfTwoPlusOne(options.chunkSize) || options.chunkSize > 1025) {
-        return makeError("chunk size ", options.chunkSize, " must be 2^k+1 between 3 and 1025 (e.g. 33, 65, 129)");
+    if (!isValidChunkSize(options.chunkSize)) {
+        return makeError("chunk size ", options.chunkSize, " must be 2^k+1 between 3 and ", kMaxChunkSize,
+                         " (e.g. 33, 65, 129)");
     }
     const int textureSize = options.textureSize == 0 ? options.chunkSize : options.textureSize;
-    if (!isPowerOfTwoPlusOne(textureSize) || textureSize > 4097) {
-        return makeError("texture size ", textureSize, " must be 2^k+1 between 3 and 4097 (e.g. 65, 129, 257)");
+    if (!isPowerOfTwoPlusOne(textureSize) || textureSize > kMaxTextureSize) {
+        return makeError("texture size ", textureSize, " must be 2^k+1 between 3 and ", kMaxTextureSize,
+                         " (e.g. 65, 129, 257)");
     }
     if (options.threads < 1) {
         return makeError("thread count ", options.threads, " must be at least 1");

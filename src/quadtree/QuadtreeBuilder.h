@@ -15,12 +15,12 @@
 namespace terrain {
 
 struct BuildOptions {
-    int chunkSize = 65;                      ///< N, 2^k + 1 in [3, 1025]
+    int chunkSize = 65;                      ///< N: isValidChunkSize, 2^k + 1 in [3, kMaxChunkSize = 1025]
     std::optional<double> spacing;           ///< -h: metres between samples, used when the file has none
     std::optional<double> verticalScale;     ///< -v: metres per native unit, used when the file has none
     double offset = 0.0;                     ///< --offset: metres added after scaling
     double maxError = 0.0;                   ///< --max-error: L-infinity bound in metres, 0 = lossless
-    int textureSize = 0;                     ///< --texture-size: 2^k + 1; 0 = the chunk size
+    int textureSize = 0;                     ///< --texture-size: 2^k + 1 up to kMaxTextureSize; 0 = the chunk size
     int threads = 1;
     std::optional<std::filesystem::path> texture;  ///< -t: RGB texture stretched over the input
     std::optional<std::filesystem::path> weights;  ///< -w: gray weight map for pruning (3.2.13)

@@ -2,6 +2,7 @@
 #include "render/NodeVertexData.h"
 
 #include "core/Check.h"
+#include "quadtree/ChunkGeometry.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +10,6 @@
 namespace terrain {
 
 namespace {
-
-constexpr int kBorder = 2;  // samples of border in a node window (quadtree/MapFormat.h)
 
 std::int16_t toSnorm16(double v) { return static_cast<std::int16_t>(std::lround(std::clamp(v, -1.0, 1.0) * 32767.0)); }
 
@@ -20,7 +19,7 @@ std::vector<NodeVertex> buildNodeVertices(const TemplateMesh& mesh, std::span<co
                                           std::span<const std::uint8_t> materialWeights)
 {
     const int n = mesh.chunkSize;
-    const int w = n + 2 * kBorder;
+    const int w = windowSize(n);
     TERRAIN_EXPECTS(window.size() == static_cast<std::size_t>(w) * w, "window must be (N + 4)^2 heights");
     TERRAIN_EXPECTS(materialWeights.empty() || materialWeights.size() == static_cast<std::size_t>(n) * n * 4,
                     "material weights must be N x N x 4 bytes");

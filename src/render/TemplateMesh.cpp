@@ -3,21 +3,13 @@
 
 #include "core/Check.h"
 
-#include <bit>
-
 namespace terrain {
-
-bool isValidTemplateChunkSize(int chunkSize)
-{
-    return chunkSize >= kMinTemplateChunkSize && chunkSize <= kMaxTemplateChunkSize &&
-           std::has_single_bit(static_cast<unsigned>(chunkSize - 1));
-}
 
 namespace {
 
 void expectChunkSize(int chunkSize)
 {
-    TERRAIN_EXPECTS(isValidTemplateChunkSize(chunkSize), "chunk size must be 2^k + 1 in [3, 1025]");
+    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1 in [3, 1025]");
 }
 
 }  // namespace

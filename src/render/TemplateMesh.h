@@ -2,7 +2,11 @@
 // of skirt vertices of 3.2.6. A node contributes only scale, translation and its heights; the vertex
 // program turns grid coordinates into a position and lowers skirt vertices by the node's skirt depth.
 // Pure CPU code: no GL here, the renderer uploads what this builds.
+//
+// Chunk sizes: the template supports every N a map may have, isValidChunkSize (quadtree/ChunkGeometry.h).
 #pragma once
+
+#include "quadtree/ChunkGeometry.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -23,13 +27,6 @@ struct TemplateVertex {
 static_assert(sizeof(TemplateVertex) == 6 && offsetof(TemplateVertex, j) == 2 && offsetof(TemplateVertex, skirt) == 4,
               "the GL side uploads TemplateVertex with these offsets");
 
-/// Chunk sizes the template supports: N = 2^k + 1 in [3, 1025], the same range the map format allows.
-constexpr int kMinTemplateChunkSize = 3;
-constexpr int kMaxTemplateChunkSize = 1025;
-
-/// Whether `chunkSize` is 2^k + 1 in [kMinTemplateChunkSize, kMaxTemplateChunkSize].
-bool isValidTemplateChunkSize(int chunkSize);
-
 /// Grid coordinates of a template vertex.
 struct GridCoord {
     int i = 0;
@@ -48,7 +45,7 @@ struct TemplateMesh {
 };
 
 /// Builds the template mesh for chunks of `chunkSize` samples per side.
-/// Precondition: isValidTemplateChunkSize(chunkSize).
+/// Precondition: isValidChunkSize(chunkSize).
 TemplateMesh buildTemplateMesh(int chunkSize);
 
 /// Index of grid vertex (i, j), i, j in [0, N). Precondition: valid chunk size and coordinates.

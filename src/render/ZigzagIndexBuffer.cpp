@@ -165,7 +165,7 @@ std::vector<std::uint32_t> buildZigzagStrip(int chunkSize, int vertexCacheSize, 
 
 std::vector<std::uint32_t> buildBandedIndices(int chunkSize, int bandWidth, ZigzagPrimitive primitive, bool withSkirts)
 {
-    TERRAIN_EXPECTS(isValidTemplateChunkSize(chunkSize), "chunk size must be 2^k + 1 in [3, 1025]");
+    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1 in [3, 1025]");
     TERRAIN_EXPECTS(bandWidth >= 1, "band width must be at least one quad");
     return primitive == ZigzagPrimitive::kTriangleList ? buildList(chunkSize, bandWidth, withSkirts)
                                                        : buildStrip(chunkSize, bandWidth, withSkirts);

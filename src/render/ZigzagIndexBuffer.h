@@ -60,7 +60,7 @@ enum class ZigzagPrimitive {
 
 /// Indexed triangle list of the template mesh in zigzag order for `vertexCacheSize`, indices into
 /// buildTemplateMesh(chunkSize).vertices: the 2 (N - 1)^2 grid triangles, then with `withSkirts` the
-/// 8 (N - 1) skirt triangles. Preconditions: isValidTemplateChunkSize(chunkSize),
+/// 8 (N - 1) skirt triangles. Preconditions: isValidChunkSize(chunkSize),
 /// vertexCacheSize >= kMinVertexCacheSize.
 std::vector<std::uint32_t> buildZigzagIndices(int chunkSize, int vertexCacheSize, bool withSkirts);
 
@@ -70,7 +70,7 @@ std::vector<std::uint32_t> buildZigzagIndices(int chunkSize, int vertexCacheSize
 std::vector<std::uint32_t> buildZigzagStrip(int chunkSize, int vertexCacheSize, bool withSkirts);
 
 /// The zigzag with an explicit band width in quads (clamped to N - 1), for measurements.
-/// Preconditions: isValidTemplateChunkSize(chunkSize), bandWidth >= 1.
+/// Preconditions: isValidChunkSize(chunkSize), bandWidth >= 1.
 std::vector<std::uint32_t> buildBandedIndices(int chunkSize, int bandWidth, ZigzagPrimitive primitive, bool withSkirts);
 
 /// Index width the renderer should upload.

@@ -11,7 +11,7 @@ namespace terrain {
 
 Expected<std::unique_ptr<const DetailSynthesizer>> DetailSynthesizer::create(int chunkSize, DetailSettings settings)
 {
-    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1, k >= 1");
+    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1 in [3, 1025]");
     if (!(std::isfinite(settings.omega) && settings.omega >= 0.0 && settings.omega <= 2.0)) {
         return makeError("detail_subdivision_factor ", settings.omega, " must be in [0, 2]");
     }
@@ -142,7 +142,7 @@ std::vector<std::uint8_t> DetailSynthesizer::materialWeights(const DualHeightMap
     double weights[kMaxDetailMaterials] = {};
     for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) {
-            const int wi = i + kWindowBorder, wj = j + kWindowBorder;
+            const int wi = i + kBorder, wj = j + kBorder;
             const double height = where.heightOffset + map.base[static_cast<std::size_t>(wj) * w + wi];
             set.weights(slopeDegrees(map, wi, wj, where.spacing), height, weights);
             std::uint8_t* px = out.data() + (static_cast<std::size_t>(j) * n + i) * 4;
@@ -157,7 +157,7 @@ std::vector<std::uint8_t> DetailSynthesizer::materialWeights(const DualHeightMap
 std::vector<std::uint8_t> upsampleTexture(std::span<const std::uint8_t> parent, int textureSize, int quadrant)
 {
     const int t = textureSize;
-    TERRAIN_EXPECTS(isValidChunkSize(t), "texture size must be 2^k + 1");
+    TERRAIN_EXPECTS(isPowerOfTwoPlusOne(t), "texture size must be 2^k + 1");
     TERRAIN_EXPECTS(parent.size() >= static_cast<std::size_t>(t) * t * 3, "the parent texture holds T * T RGB texels");
     const int half = (t - 1) / 2;
     const int px0 = (quadrant & 1) * half, py0 = (quadrant >> 1) * half;

@@ -59,7 +59,7 @@ public:
     static Expected<std::unique_ptr<const DetailSynthesizer>> create(int chunkSize, DetailSettings settings);
 
     int chunkSize() const { return mSubdivider->chunkSize(); }
-    int windowSize() const { return chunkSize() + 2 * kWindowBorder; }
+    int windowSize() const { return terrain::windowSize(chunkSize()); }
     const DetailSettings& settings() const { return mSettings; }
     bool addsDisplacement() const { return mSettings.materials != nullptr; }
 

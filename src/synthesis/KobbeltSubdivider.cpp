@@ -22,7 +22,7 @@ inline double fourPoint(double a0, double a1, double a2, double a3, double w0, d
 /// for a child whose u = 0 sits at parent window index p0.
 inline int parentIndex(int c, int p0)
 {
-    int u = c - kWindowBorder;
+    int u = c - kBorder;
     return (u & 1) == 0 ? p0 + u / 2 : p0 + (u - 1) / 2 - 1;
 }
 
@@ -31,20 +31,20 @@ inline int parentIndex(int c, int p0)
 void subdivideChildWindow(std::span<const float> parent, int chunkSize, int quadrant, double omega,
                           std::span<float> child)
 {
-    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1, k >= 1");
+    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1 in [3, 1025]");
     TERRAIN_EXPECTS(quadrant >= 0 && quadrant <= 3, "quadrant must be 0..3");
     TERRAIN_EXPECTS(std::isfinite(omega), "omega must be finite");
     const int size = windowSize(chunkSize);
     const auto count = static_cast<std::size_t>(size) * size;
     TERRAIN_EXPECTS(parent.size() == count && child.size() == count, "windows must hold W*W samples, W = N + 4");
-    static_assert(kWindowBorder % 2 == 0, "window index parity must equal sample parity");
+    static_assert(kBorder % 2 == 0, "window index parity must equal sample parity");
 
     const double w = omega / 16.0;
     const double w0 = 0.0 - w;  // 0 - w, not -w: omega = 0 then gives +0, never a -0 term
     const double w1 = 0.5 + w;
     const int half = (chunkSize - 1) / 2;
-    const int px0 = kWindowBorder + (quadrant & 1) * half;
-    const int py0 = kWindowBorder + (quadrant >> 1) * half;
+    const int px0 = kBorder + (quadrant & 1) * half;
+    const int py0 = kBorder + (quadrant >> 1) * half;
     // Parent rows the y pass reads: from the first tap of child row 1 to the last tap of child row W - 2.
     const int firstRow = parentIndex(1, py0);
     const int lastRow = parentIndex(size - 2, py0) + 3;
@@ -86,7 +86,7 @@ void subdivideChildWindow(std::span<const float> parent, int chunkSize, int quad
 
 KobbeltSubdivider::KobbeltSubdivider(int chunkSize, double omega) : mChunkSize(chunkSize), mOmega(omega)
 {
-    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1, k >= 1");
+    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1 in [3, 1025]");
     TERRAIN_EXPECTS(std::isfinite(omega), "omega must be finite");
 }
 

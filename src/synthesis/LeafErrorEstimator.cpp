@@ -48,7 +48,7 @@ public:
     {
         const int cx = std::min(static_cast<int>(x), mN - 2);
         const int cy = std::min(static_cast<int>(y), mN - 2);
-        const double* row0 = mHeights.data() + static_cast<std::size_t>(cy + kWindowBorder) * mW + cx + kWindowBorder;
+        const double* row0 = mHeights.data() + static_cast<std::size_t>(cy + kBorder) * mW + cx + kBorder;
         const double* row1 = row0 + mW;
         return interpolateQuad(row0[0], row0[1], row1[0], row1[1], x - cx, y - cy);
     }
@@ -67,7 +67,7 @@ double deviation(const LeafSurface& leaf, const DualHeightMap& node, int chunkSi
     double worst = 0.0;
     for (int j = 0; j < chunkSize; ++j) {
         const double y = y0 + j * step;
-        const std::size_t row = static_cast<std::size_t>(j + kWindowBorder) * w + kWindowBorder;
+        const std::size_t row = static_cast<std::size_t>(j + kBorder) * w + kBorder;
         for (int i = 0; i < chunkSize; ++i) {
             const double d = std::abs(static_cast<double>(node.height(row + i)) - leaf.at(x0 + i * step, y));
             worst = std::max(worst, d);
@@ -85,8 +85,8 @@ WindowPlacement childPlacement(const WindowPlacement& parent, int quadrant, int 
     const std::int64_t cells = chunkSize - 1;
     WindowPlacement child = parent;
     child.spacing = parent.spacing * 0.5;
-    child.gx0 = 2 * (parent.gx0 + kWindowBorder) + (quadrant & 1) * cells - kWindowBorder;
-    child.gy0 = 2 * (parent.gy0 + kWindowBorder) + (quadrant >> 1) * cells - kWindowBorder;
+    child.gx0 = 2 * (parent.gx0 + kBorder) + (quadrant & 1) * cells - kBorder;
+    child.gy0 = 2 * (parent.gy0 + kBorder) + (quadrant >> 1) * cells - kBorder;
     return child;
 }
 

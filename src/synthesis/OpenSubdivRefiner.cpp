@@ -33,7 +33,7 @@ struct HeightPrimvar {
 OpenSubdivRefiner::OpenSubdivRefiner(int chunkSize, OpenSubdivScheme scheme)
     : mChunkSize(chunkSize), mScheme(scheme), mPatchSize((chunkSize + 9) / 2)
 {
-    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1, k >= 1");
+    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1 in [3, 1025]");
     const int m = mPatchSize;
     auto vertex = [m](int x, int y) { return y * m + x; };
 

@@ -12,7 +12,7 @@ namespace terrain {
 
 Expected<std::unique_ptr<Subdivider>> makeSubdivider(std::string_view scheme, int chunkSize, double omega)
 {
-    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1, k >= 1");
+    TERRAIN_EXPECTS(isValidChunkSize(chunkSize), "chunk size must be 2^k + 1 in [3, 1025]");
     TERRAIN_EXPECTS(std::isfinite(omega) && omega >= 0.0 && omega <= 2.0, "omega must be in [0, 2]");
     std::unique_ptr<Subdivider> subdivider;
     if (scheme == "kobbelt") {

@@ -6,35 +6,20 @@
 //   catmull-clark  OpenSubdiv's Catmull-Clark scheme: smoother (C2 in the limit) but approximating, so the
 //                  parent's samples move and a child's even samples are not its parent's.
 //
-// Window geometry (shared/DESIGN.md "Chunks", 3.4.3 "Borders"): a node's heights are W = N + 4 samples per
-// side (N = chunk size 2^k + 1, a border of kWindowBorder = 2 samples on each side), row-major, rows south
+// Window geometry (quadtree/ChunkGeometry.h, 3.4.3 "Borders"): a node's heights are W = N + 4 samples per
+// side (N = chunk size 2^k + 1, a border of kBorder = 2 samples on each side), row-major, rows south
 // to north, x east. Child `quadrant` (bit 0: east half, bit 1: north half) covers a quarter of its parent
 // at twice the density.
 #pragma once
 
 #include "core/Expected.h"
+#include "quadtree/ChunkGeometry.h"
 
 #include <memory>
 #include <span>
 #include <string_view>
 
 namespace terrain {
-
-/// Border samples on each side of a node window; equals quadtree/MapFormat.h's kBorder (the tests check).
-inline constexpr int kWindowBorder = 2;
-
-/// W = N + 2 * kWindowBorder: samples per side of a node window of chunk size N.
-constexpr int windowSize(int chunkSize)
-{
-    return chunkSize + 2 * kWindowBorder;
-}
-
-/// True when `chunkSize` is 2^k + 1 with k >= 1 (3, 5, 9, ..., 65, ...).
-constexpr bool isValidChunkSize(int chunkSize)
-{
-    int cells = chunkSize - 1;
-    return cells >= 2 && cells <= (1 << 20) && (cells & (cells - 1)) == 0;
-}
 
 /// Computes a child's base height window from its parent's. Implementations are immutable after
 /// construction: one instance per (chunk size, scheme) is shared by all worker threads, and the same

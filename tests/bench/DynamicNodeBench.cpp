@@ -15,7 +15,7 @@ namespace terrain {
 namespace {
 
 constexpr int kChunk = 65;
-constexpr int kWindow = kChunk + 2 * kWindowBorder;
+constexpr int kWindow = kChunk + 2 * kBorder;
 constexpr double kSpacing = 90.0;
 
 /// A static leaf of the demo terrain (the window at samples 512.., a ridge) with its displacement.
@@ -36,7 +36,7 @@ Leaf makeLeaf(const DetailSynthesizer& synthesizer)
         return std::move(f).value();
     }();
     Leaf leaf;
-    leaf.where = {0.0, 0.0, 0.0, kSpacing, 512 - kWindowBorder, 512 - kWindowBorder};
+    leaf.where = {0.0, 0.0, 0.0, kSpacing, 512 - kBorder, 512 - kBorder};
     leaf.map.size = kWindow;
     leaf.map.base.resize(kWindow * kWindow);
     for (int j = 0; j < kWindow; ++j) {
@@ -82,8 +82,8 @@ void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> mat
     for (auto _ : state) {
         WindowPlacement where = leaf.where;
         where.spacing *= 0.5;
-        where.gx0 = 2 * (leaf.where.gx0 + kWindowBorder) + (quadrant & 1) * (kChunk - 1) - kWindowBorder;
-        where.gy0 = 2 * (leaf.where.gy0 + kWindowBorder) + (quadrant >> 1) * (kChunk - 1) - kWindowBorder;
+        where.gx0 = 2 * (leaf.where.gx0 + kBorder) + (quadrant & 1) * (kChunk - 1) - kBorder;
+        where.gy0 = 2 * (leaf.where.gy0 + kBorder) + (quadrant >> 1) * (kChunk - 1) - kBorder;
         DualHeightMap child = synthesizer->synthesizeChild(leaf.map, quadrant, where);
         auto weights = synthesizer->materialWeights(child, where);
         auto texture = upsampleTexture(leaf.texture, kChunk, quadrant);

@@ -15,7 +15,7 @@ namespace {
 
 const std::filesystem::path kMaterials = TERRAIN_MATERIALS_DIR;
 constexpr int kN = 17;  // small chunks keep the test fast; the rules do not depend on N
-constexpr int kW = kN + 2 * kWindowBorder;
+constexpr int kW = kN + 2 * kBorder;
 constexpr double kRootSpacing = 64.0;
 constexpr double kOriginX = 612'345.0;  // hundreds of km from the origin, as real maps are
 constexpr double kOriginY = 4'123'456.0;
@@ -46,7 +46,7 @@ struct Node {
 WindowPlacement placementOf(const Node& node)
 {
     const double spacing = std::ldexp(kRootSpacing, -node.level);
-    return {kOriginX, kOriginY, 1000.0, spacing, node.x * (kN - 1) - kWindowBorder, node.y * (kN - 1) - kWindowBorder};
+    return {kOriginX, kOriginY, 1000.0, spacing, node.x * (kN - 1) - kBorder, node.y * (kN - 1) - kBorder};
 }
 
 /// Steep hills: slopes from flat to well past the rock material's 30 degrees, so both materials and their
@@ -96,7 +96,7 @@ private:
 
 float surfaceAt(const DualHeightMap& map, int i, int j)
 {
-    return map.height(static_cast<std::size_t>(j + kWindowBorder) * kW + i + kWindowBorder);
+    return map.height(static_cast<std::size_t>(j + kBorder) * kW + i + kBorder);
 }
 
 bool bitEqual(float a, float b)

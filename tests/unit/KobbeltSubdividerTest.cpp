@@ -16,8 +16,6 @@
 namespace terrain {
 namespace {
 
-static_assert(kWindowBorder == kBorder, "synthesis and the map format must agree on the window border");
-
 std::size_t idx(int x, int y, int w)
 {
     return static_cast<std::size_t>(y) * w + x;

@@ -11,19 +11,6 @@ namespace {
 
 constexpr int kChunkSizes[] = {3, 5, 17, 33, 65, 129};
 
-TEST(TemplateMesh, ValidChunkSizes)
-{
-    struct Case {
-        int chunkSize;
-        bool valid;
-    };
-    const Case cases[] = {{-1, false}, {0, false}, {1, false}, {2, false},    {3, true},    {4, false},   {5, true},
-                          {6, false},  {9, true},  {65, true}, {1024, false}, {1025, true}, {2049, false}};
-    for (const Case& c : cases) {
-        EXPECT_EQ(isValidTemplateChunkSize(c.chunkSize), c.valid) << c.chunkSize;
-    }
-}
-
 TEST(TemplateMesh, GridVerticesAreRowMajorAndFlat)
 {
     for (const int n : kChunkSizes) {
