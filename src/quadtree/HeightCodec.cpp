@@ -1,20 +1,17 @@
 // Residual coding of static node heights from the Kobbelt 4-point prediction of the parent
-// (Kobbelt 1996 regular case, omega = 1; shared/DESIGN.md "Static heights on disk").
+// (quadtree/FourPointSubdivision.h with omega = 1; shared/DESIGN.md "Static heights on disk").
 #include "quadtree/HeightCodec.h"
 
 #include "core/ByteIo.h"
 #include "core/Check.h"
 #include "core/Zlib.h"
+#include "quadtree/FourPointSubdivision.h"
 
 #include <algorithm>
-#include <memory>
 
 namespace terrain {
 
 namespace {
-
-// 4-point weights scaled by 16: -1/16, 9/16, 9/16, -1/16.
-constexpr std::int32_t kTap[4] = {-1, 9, 9, -1};
 
 std::uint32_t zigzag(std::int32_t v) { return (static_cast<std::uint32_t>(v) << 1) ^ static_cast<std::uint32_t>(v >> 31); }
 std::int32_t unzigzag(std::uint32_t v) { return static_cast<std::int32_t>(v >> 1) ^ -static_cast<std::int32_t>(v & 1); }
@@ -30,8 +27,7 @@ void putVarint(std::vector<std::uint8_t>& out, std::uint32_t v)
 
 bool isCoded(const NodeId& id, int x, int y)
 {
-    // Window index parity equals sample parity because kBorder is even; even-even samples are the parent's.
-    static_assert(kBorder % 2 == 0);
+    // Window index parity equals sample parity (kBorder is even); even-even samples are the parent's.
     return id.isRoot() || (x & 1) != 0 || (y & 1) != 0;
 }
 
@@ -82,52 +78,10 @@ void fillOutside(std::span<std::uint16_t> window, int size, const WindowRect& in
 void predictChildWindow(std::span<const std::uint16_t> parent, int size, int chunkSize, int quadrant,
                         std::span<std::int32_t> out)
 {
-    TERRAIN_EXPECTS(parent.size() == static_cast<std::size_t>(size) * size && out.size() == parent.size(),
-                    "windows must have size*size samples");
-    const int half = (chunkSize - 1) / 2;
-    const int px0 = kBorder + (quadrant & 1) * half;   // parent window index of the child's u = 0
-    const int py0 = kBorder + (quadrant >> 1) * half;
-    // For child index c (u = c - kBorder), the parent indices and weights (scaled by 16) it combines.
-    struct Stencil {
-        int first;
-        int count;
-        const std::int32_t* taps;
-    };
-    static constexpr std::int32_t kCopy[1] = {16};
-    auto stencil = [&](int c, int p0) -> Stencil {
-        int u = c - kBorder;
-        if ((u & 1) == 0) {
-            return {p0 + u / 2, 1, kCopy};
-        }
-        int m = (u - 1) / 2;
-        return {p0 + m - 1, 4, kTap};
-    };
-    // Horizontal pass over the parent rows some child row needs, then the vertical pass.
-    std::unique_ptr<std::int32_t[]> rows(new std::int32_t[static_cast<std::size_t>(size) * size]);  // no zero fill
-    const int firstRow = stencil(1, py0).first;
-    const int lastRow = stencil(size - 2, py0).first + 3;
-    for (int py = firstRow; py <= lastRow; ++py) {
-        for (int c = 0; c < size; ++c) {
-            Stencil s = stencil(c, px0);
-            std::int32_t sum = 0;
-            for (int t = 0; t < s.count; ++t) {
-                TERRAIN_ASSERT(s.first + t >= 0 && s.first + t < size);
-                sum += s.taps[t] * parent[static_cast<std::size_t>(py) * size + s.first + t];
-            }
-            rows[static_cast<std::size_t>(py) * size + c] = sum;
-        }
-    }
-    for (int cy = 0; cy < size; ++cy) {
-        Stencil s = stencil(cy, py0);
-        for (int c = 0; c < size; ++c) {
-            std::int32_t sum = 0;
-            for (int t = 0; t < s.count; ++t) {
-                TERRAIN_ASSERT(s.first + t >= 0 && s.first + t < size);
-                sum += s.taps[t] * rows[static_cast<std::size_t>(s.first + t) * size + c];
-            }
-            out[static_cast<std::size_t>(cy) * size + c] = (sum + 128) >> 8;  // round half up, exact for copies
-        }
-    }
+    TERRAIN_EXPECTS(size == windowSize(chunkSize), "the window size must be the chunk size's");
+    // Weights scaled by 16 in each pass, so a sum carries 256: round half up, exact for copies.
+    subdivideFourPoint(parent, chunkSize, quadrant, kKobbeltWeightsTimes16, out,
+                       [](std::int32_t sum) { return (sum + 128) >> 8; });
 }
 
 std::vector<std::uint8_t> encodeNodeHeights(const NodeWindow& geometry, const NodeId& id,

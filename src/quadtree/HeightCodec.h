@@ -1,6 +1,7 @@
 // Static heights on disk (shared/DESIGN.md, "Static heights on disk"): each node is coded as the residual
-// from the Kobbelt 4-point prediction of its parent (weights -1/16, 9/16, 9/16, -1/16 in each direction,
-// tensor product), so static and dynamic nodes are two cases of one step: parent -> subdivide -> add.
+// from the Kobbelt 4-point prediction of its parent (quadtree/FourPointSubdivision.h with omega = 1: weights
+// -1/16, 9/16, 9/16, -1/16 in each direction, tensor product), so static and dynamic nodes are two cases of
+// one step: parent -> subdivide -> add.
 //
 // A node's heights form a window of W = N + 2 * kBorder samples per side, 16-bit codes, row-major with
 // rows running south to north. Window samples outside the terrain grid are never stored: they are the
@@ -44,8 +45,9 @@ private:
 /// (x first, then y), clamped to [0, 65535].
 void fillOutside(std::span<std::uint16_t> window, int size, const WindowRect& inside);
 
-/// The Kobbelt 4-point prediction of child `quadrant`'s whole window from its parent's window, rounded to
-/// the nearest code (ties up). Even-even samples equal the parent's samples exactly. `out` has size*size.
+/// The Kobbelt 4-point prediction of child `quadrant`'s whole window from its parent's window
+/// (subdivideFourPoint in integers, omega = 1), rounded to the nearest code (ties up). Even-even samples
+/// equal the parent's samples exactly. `size` is windowSize(chunkSize); `out` has size*size.
 void predictChildWindow(std::span<const std::uint16_t> parent, int size, int chunkSize, int quadrant,
                         std::span<std::int32_t> out);
 

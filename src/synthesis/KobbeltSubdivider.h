@@ -13,14 +13,12 @@ namespace terrain {
 /// -w, 1/2 + w, 1/2 + w, -w with w = omega / 16 (omega = `detail_subdivision_factor`: 0 is bilinear,
 /// 1 is Kobbelt's rule, which reproduces cubics; C1 in the limit for 0 < omega < 2.47).
 ///
-/// Geometry, the float twin of quadtree/HeightCodec.h's predictChildWindow: child window index c is child
-/// coordinate u = c - 2 in [-2, N + 1]. Even u is the parent sample at window index p0 + u / 2 with
-/// p0 = 2 + qx (N - 1) / 2 (qx = quadrant & 1); odd u = 2m + 1 combines parent window indices
-/// p0 + m - 1 .. p0 + m + 2. The same in y with qy = quadrant >> 1. Samples with even u and even v are
-/// copied exactly.
+/// The stencil and its geometry are quadtree/FourPointSubdivision.h's subdivideFourPoint, the one the static
+/// nodes' integer predictor (quadtree/HeightCodec.h's predictChildWindow) uses with omega = 1. Samples with
+/// even u and even v are copied exactly.
 ///
 /// `parent` and `child` hold W * W heights in metres (W = chunkSize + 4), rows south to north; they must
-/// not overlap. `chunkSize` is 2^k + 1, `quadrant` in 0..3, `omega` finite.
+/// not overlap. `chunkSize` is isValidChunkSize (2^k + 1 in [3, 1025]), `quadrant` in 0..3, `omega` finite.
 ///
 /// Precision: heights are float (24-bit mantissa: 1 mm steps up to 8 km, plenty for terrain relative to
 /// the detail's centimetres, half the memory of double in the node cache). Every sample is accumulated in
@@ -28,16 +26,17 @@ namespace terrain {
 ///
 /// Determinism: each child sample is evaluated from the same parent samples with the same operations in
 /// the same order whichever child (sibling or cousin) computes it: the x pass on parent rows, each value
-/// from the same 4 parent samples as ((w0 a0 + w1 a1) + w1 a2) + w0 a3, then the y pass over those values
-/// in the same form. The file is compiled with -ffp-contract=off, so no fused multiply-add can make one
-/// copy of the loop round differently from another; x86-64 SSE2 has no excess precision.
+/// from the same 4 parent samples as ((w0 a0 + w1 a1) + w1 a2) + w0 a3 (fourPoint), then the y pass over
+/// those values in the same form. KobbeltSubdivider.cpp, where the double form is instantiated, is compiled
+/// with -ffp-contract=off, so no fused multiply-add can make one copy of the loop round differently from
+/// another; x86-64 SSE2 has no excess precision.
 void subdivideChildWindow(std::span<const float> parent, int chunkSize, int quadrant, double omega,
                           std::span<float> child);
 
 /// The Subdivider for `detail_subdivision_scheme = kobbelt`.
 class KobbeltSubdivider final : public Subdivider {
 public:
-    /// `chunkSize` is 2^k + 1; `omega` is finite.
+    /// `chunkSize` is isValidChunkSize; `omega` is finite.
     KobbeltSubdivider(int chunkSize, double omega);
 
     int chunkSize() const override { return mChunkSize; }

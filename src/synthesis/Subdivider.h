@@ -1,7 +1,7 @@
 // The subdivision step of dynamic nodes (paper 3.3.2, 3.4.3): a child's base height window from its
 // parent's. One interface, three schemes picked by `detail_subdivision_scheme`:
 //   kobbelt        Kobbelt's interpolatory 4-point rule, tensor product (KobbeltSubdivider.h); the default,
-//                  and the same geometry as the static nodes' residual predictor (quadtree/HeightCodec.h).
+//                  and the stencil of the static nodes' residual predictor (quadtree/FourPointSubdivision.h).
 //   bilinear       OpenSubdiv's bilinear scheme (OpenSubdivRefiner.h); equals kobbelt with omega = 0.
 //   catmull-clark  OpenSubdiv's Catmull-Clark scheme: smoother (C2 in the limit) but approximating, so the
 //                  parent's samples move and a child's even samples are not its parent's.
