@@ -4,7 +4,6 @@
 #include "core/Parse.h"
 #include "core/ParallelFor.h"
 #include "heightfield/HeightFieldIo.h"
-#include "lod/TerrainNodeSource.h"
 #include "synthesis/LeafErrorEstimator.h"
 #include "quadtree/QuadtreeBuilder.h"
 #include "synthesis/DetailRecipeSetup.h"

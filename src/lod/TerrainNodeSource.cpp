@@ -2,7 +2,6 @@
 #include "lod/TerrainNodeSource.h"
 
 #include "core/Check.h"
-#include "synthesis/LeafErrorEstimator.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,31 +20,6 @@ TerrainNodeSource::TerrainNodeSource(const MapFile& map, DetailPolicy policy) : 
             }
         }
     }
-}
-
-WindowPlacement windowPlacement(const MapHeader& h, const NodeId& id)
-{
-    const std::int64_t cells = h.chunkSize - 1;
-    return {h.originX,
-            h.originY,
-            h.heightOffset,
-            h.spacingAt(id.level),
-            static_cast<std::int64_t>(id.x) * cells - kBorder,
-            static_cast<std::int64_t>(id.y) * cells - kBorder};
-}
-
-std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
-    const DetailSynthesizer& synthesizer)
-{
-    return [&synthesizer](const MapHeader& h, const NodeId& id, std::span<const std::uint16_t> codes) {
-        DualHeightMap leaf;
-        leaf.size = h.windowSize();
-        leaf.base.resize(codes.size());
-        for (std::size_t k = 0; k < codes.size(); ++k) {
-            leaf.base[k] = static_cast<float>(h.heightStep * codes[k]);  // as loadStatic makes it
-        }
-        return estimateLeafDetailError(std::move(leaf), windowPlacement(h, id), synthesizer, id.key());
-    };
 }
 
 WindowPlacement TerrainNodeSource::placement(const NodeId& id) const

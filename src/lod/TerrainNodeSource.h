@@ -8,20 +8,7 @@
 #include "quadtree/MapFile.h"
 #include "synthesis/DetailSynthesizer.h"
 
-#include <functional>
-#include <span>
-
 namespace terrain {
-
-/// Where node `id`'s window lies in the world of the map with header `h` (synthesis/DetailSynthesizer.h):
-/// the one placement rule shared by the viewer, prep's detail error estimate and height queries.
-WindowPlacement windowPlacement(const MapHeader& h, const NodeId& id);
-
-/// QuadtreeBuilder's leafDetailError for `synthesizer` (paper 3.4.1): the leaf's codes as the viewer's
-/// base heights, placed as the viewer places them, estimated by estimateLeafDetailError with the node's
-/// key as the seed. `synthesizer` must outlive the returned function.
-std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
-    const DetailSynthesizer& synthesizer);
 
 /// How far synthesis goes.
 struct DetailPolicy {
@@ -43,7 +30,7 @@ public:
     /// (naming the node) for a node without children.
     Expected<ChildNodes> loadChildren(const NodeData& parent) override;
 
-    /// Where a node's window lies in the world (synthesis/DetailSynthesizer.h).
+    /// Where a node's window lies in the world (windowPlacement, synthesis/DetailSynthesizer.h).
     WindowPlacement placement(const NodeId& id) const;
     /// The most the displacement moves the surface, metres (the bounding boxes grow by it).
     double displacementBound() const { return mDisplacementBound; }

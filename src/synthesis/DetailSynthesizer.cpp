@@ -25,6 +25,17 @@ Expected<std::unique_ptr<const DetailSynthesizer>> DetailSynthesizer::create(int
         new DetailSynthesizer(std::move(subdivider.value()), std::move(settings)));
 }
 
+WindowPlacement windowPlacement(const MapHeader& h, const NodeId& id)
+{
+    const std::int64_t cells = h.chunkSize - 1;
+    return {h.originX,
+            h.originY,
+            h.heightOffset,
+            h.spacingAt(id.level),
+            static_cast<std::int64_t>(id.x) * cells - kBorder,
+            static_cast<std::int64_t>(id.y) * cells - kBorder};
+}
+
 DetailSynthesizer::DetailSynthesizer(std::unique_ptr<Subdivider> subdivider, DetailSettings settings)
     : mSubdivider(std::move(subdivider)), mSettings(std::move(settings))
 {

@@ -13,6 +13,7 @@
 #pragma once
 
 #include "core/Expected.h"
+#include "quadtree/MapFormat.h"
 #include "synthesis/DualHeightMap.h"
 #include "synthesis/Fractal.h"
 #include "synthesis/Material.h"
@@ -51,6 +52,11 @@ struct WindowPlacement {
 
     SampleGrid grid(int windowSize) const { return {originX, originY, gx0, gy0, spacing, windowSize, windowSize}; }
 };
+
+/// Where node `id`'s window lies in the world of the map with header `h`: the one placement rule shared by
+/// the viewer (lod/TerrainNodeSource.h), prep's detail error estimate (leafDetailErrorFunction) and height
+/// queries.
+WindowPlacement windowPlacement(const MapHeader& h, const NodeId& id);
 
 class DetailSynthesizer {
 public:

@@ -134,4 +134,18 @@ float estimateLeafDetailError(DualHeightMap leaf, const WindowPlacement& where, 
     return static_cast<float>(worst);
 }
 
+std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
+    const DetailSynthesizer& synthesizer)
+{
+    return [&synthesizer](const MapHeader& h, const NodeId& id, std::span<const std::uint16_t> codes) {
+        DualHeightMap leaf;
+        leaf.size = h.windowSize();
+        leaf.base.resize(codes.size());
+        for (std::size_t k = 0; k < codes.size(); ++k) {
+            leaf.base[k] = static_cast<float>(h.heightStep * codes[k]);  // as TerrainNodeSource::loadStatic makes it
+        }
+        return estimateLeafDetailError(std::move(leaf), windowPlacement(h, id), synthesizer, id.key());
+    };
+}
+
 }  // namespace terrain

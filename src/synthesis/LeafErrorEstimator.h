@@ -10,6 +10,8 @@
 #include "synthesis/DualHeightMap.h"
 
 #include <cstdint>
+#include <functional>
+#include <span>
 
 namespace terrain {
 
@@ -56,6 +58,12 @@ struct LeafErrorSampling {
 /// Thread-safe: the synthesizer is shared read-only.
 float estimateLeafDetailError(DualHeightMap leaf, const WindowPlacement& where, const DetailSynthesizer& synthesizer,
                               std::uint64_t seed, const LeafErrorSampling& sampling = {});
+
+/// QuadtreeBuilder's leafDetailError for `synthesizer` (paper 3.4.1): the leaf's codes as the viewer's
+/// base heights, placed as the viewer places them (windowPlacement), estimated by estimateLeafDetailError
+/// with the node's key as the seed. `synthesizer` must outlive the returned function.
+std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
+    const DetailSynthesizer& synthesizer);
 
 /// Where child `quadrant` (bit 0 east, bit 1 north) of the node placed at `parent` lies: half the spacing,
 /// global sample indices of the next level. `chunkSize` is N.

@@ -10,6 +10,7 @@
 #include "lod/TerrainNodeSource.h"
 #include "quadtree/MapFile.h"
 #include "quadtree/QuadtreeBuilder.h"
+#include "synthesis/LeafErrorEstimator.h"
 
 #include <gtest/gtest.h>
 

@@ -7,6 +7,7 @@
 #include "lod/NodeServer.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
+#include "synthesis/LeafErrorEstimator.h"
 
 #include <gtest/gtest.h>
 

@@ -278,5 +278,28 @@ TEST(LeafErrorEstimator, ChildPlacementIsTheChildNodesPlacement)
     }
 }
 
+TEST(LeafErrorEstimator, WindowPlacementIsTheMapFormatsPlacement)
+{
+    // windowPlacement is what the viewer and prep's estimate (leafDetailErrorFunction) both place nodes with.
+    MapHeader h;
+    h.chunkSize = 17;
+    h.levels = 5;
+    h.sampleSpacing = 2.5;
+    h.originX = 612'345.0;
+    h.originY = 4'123'456.0;
+    h.heightOffset = -120.0;
+    const NodeId ids[] = {NodeId::root(), {1, 1, 0}, {3, 5, 6}, {4, 15, 15}, {7, 100, 3}};
+    for (const NodeId& id : ids) {
+        const WindowPlacement expected = placementOf(h, id.level, id.x, id.y);
+        const WindowPlacement where = windowPlacement(h, id);
+        EXPECT_EQ(where.originX, expected.originX) << id.toString();
+        EXPECT_EQ(where.originY, expected.originY) << id.toString();
+        EXPECT_EQ(where.heightOffset, expected.heightOffset) << id.toString();
+        EXPECT_EQ(where.spacing, expected.spacing) << id.toString();
+        EXPECT_EQ(where.gx0, expected.gx0) << id.toString();
+        EXPECT_EQ(where.gy0, expected.gy0) << id.toString();
+    }
+}
+
 }  // namespace
 }  // namespace terrain
