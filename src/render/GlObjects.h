@@ -79,20 +79,10 @@ struct ProgramTraits {
     static GLuint create() { return glCreateProgram(); }
     static void destroy(GLuint n) { glDeleteProgram(n); }
 };
-struct QueryTraits {
-    static GLuint create()
-    {
-        GLuint n = 0;
-        glGenQueries(1, &n);
-        return n;
-    }
-    static void destroy(GLuint n) { glDeleteQueries(1, &n); }
-};
 
 using Buffer = Object<BufferTraits>;
 using VertexArray = Object<VertexArrayTraits>;
 using Texture = Object<TextureTraits>;
 using Program = Object<ProgramTraits>;
-using Query = Object<QueryTraits>;
 
 }  // namespace terrain::gl
