@@ -60,31 +60,6 @@ private:
     const MapFile& mMap;
 };
 
-/// `lod_minimum_spacing` (Appendix A): another tree without the nodes whose sample spacing would be finer
-/// than `minimumSpacing` metres; their parents become leaves. `tree` must outlive this; `chunkSize` is N.
-class MinimumSpacingTree final : public LodTree {
-public:
-    MinimumSpacingTree(const LodTree& tree, int chunkSize, double minimumSpacing)
-        : mTree(tree), mChunkCells(chunkSize - 1), mMinimumSpacing(minimumSpacing)
-    {
-    }
-    QuadtreeExtent extent() const override { return mTree.extent(); }
-    NodeInfo info(const NodeId& id) const override
-    {
-        NodeInfo info = mTree.info(id);
-        const double childSpacing = extent().nodeSize(id.level + 1) / mChunkCells;
-        if (childSpacing < mMinimumSpacing) {
-            info.hasChildren = false;
-        }
-        return info;
-    }
-
-private:
-    const LodTree& mTree;
-    int mChunkCells;
-    double mMinimumSpacing;
-};
-
 /// Whether all four children of `parent` are resident (ready to draw). Empty function: all resident.
 using ChildrenResident = std::function<bool(const NodeId& parent)>;
 

@@ -147,33 +147,39 @@ TEST_F(TerrainStreamerTest, ACorruptNodeIsReportedOnceAndItsParentKeepsBeingDraw
     EXPECT_TRUE(parentDrawn);
 }
 
-}  // namespace
-}  // namespace terrain
-
-namespace terrain {
-namespace {
-
 TEST_F(TerrainStreamerTest, MinimumSpacingStopsRefinement)
 {
-    // 10 m samples at the finest level: a 20 m minimum keeps every node at 20 m or coarser.
-    MapLodTree mapTree(*mMap);
-    MinimumSpacingTree tree(mapTree, static_cast<int>(mMap->header().chunkSize), 20.0);
+    // lod_minimum_spacing as the viewer applies it (DetailPolicy::minimumSpacing of the node source): 10 m
+    // samples at the finest level, so a 20 m minimum keeps every node at 20 m or coarser, one level short of
+    // the leaves the same view reaches without it.
     Camera camera;
     camera.position = {2560, 2560, 1100};
     camera.pitch = -1.2;
-    LodSelection limited, full;
-    selectNodes(tree, camera, 0.5, {}, limited);
-    selectNodes(mapTree, camera, 0.5, {}, full);
-    int deepestLimited = 0, deepestFull = 0;
-    for (const auto& node : limited.nodes) {
-        deepestLimited = std::max(deepestLimited, node.id.level);
-        EXPECT_GE(mMap->header().spacingAt(node.id.level), 20.0) << node.id.toString();
-    }
-    for (const auto& node : full.nodes) {
-        deepestFull = std::max(deepestFull, node.id.level);
-    }
+    auto deepestSettled = [&](double minimumSpacing) {
+        TerrainNodeSource source(*mMap, {nullptr, minimumSpacing});
+        StreamerOptions options;
+        options.cacheSize = mMap->directory().size();
+        options.workers = 0;  // inline: deterministic
+        auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+        EXPECT_TRUE(streamer.ok()) << streamer.error().message;
+        for (int round = 0; round < 32 && (*streamer)->update(camera, 0.5).requested != 0; ++round) {
+            (*streamer)->drain();
+        }
+        EXPECT_EQ((*streamer)->update(camera, 0.5).requested, 0u) << "the selection should have settled";
+        int deepest = 0;
+        for (const auto& node : (*streamer)->selection().nodes) {
+            deepest = std::max(deepest, node.id.level);
+            EXPECT_GE(mMap->header().spacingAt(node.id.level), minimumSpacing) << node.id.toString();
+        }
+        return deepest;
+    };
+    const int deepestFull = deepestSettled(0.0);
     EXPECT_EQ(deepestFull, static_cast<int>(mMap->header().levels) - 1) << "without the limit the view reaches the leaves";
-    EXPECT_EQ(deepestLimited, deepestFull - 1);
+    EXPECT_EQ(deepestSettled(20.0), deepestFull - 1);
+    // A minimum between two levels' spacings keeps the coarser one: 15 m allows 20 m nodes, not 10 m ones.
+    EXPECT_EQ(deepestSettled(15.0), deepestFull - 1);
+    // A minimum of exactly a level's spacing still allows that level.
+    EXPECT_EQ(deepestSettled(10.0), deepestFull);
 }
 
 }  // namespace
