@@ -1,8 +1,11 @@
 // Error values for "the world is wrong" failures (STYLE.md, Errors, kind 3): a missing file, a corrupt
-// map, a bad PNG, an out-of-range config value. They carry a message a user can act on.
+// map, a bad PNG, an out-of-range config value. They carry a message a user can act on. Reading the value
+// of an error, or the error of a value, is a caller's bug: a checked precondition (core/Check.h), on in
+// every build type.
 #pragma once
 
-#include <cassert>
+#include "core/Check.h"
+
 #include <sstream>
 #include <string>
 #include <utility>
@@ -24,7 +27,8 @@ Error makeError(Args&&... args)
     return Error{s.str()};
 }
 
-/// Either a value or an Error. A small stand-in for C++23 std::expected.
+/// Either a value or an Error. A small stand-in for C++23 std::expected. value() (and *, ->) requires
+/// ok(); error() requires !ok().
 template <class T>
 class [[nodiscard]] Expected {
 public:
@@ -36,17 +40,17 @@ public:
 
     T& value() &
     {
-        assert(ok());
+        TERRAIN_EXPECTS(ok(), "value() of an Expected that holds an error");
         return std::get<0>(mData);
     }
     const T& value() const&
     {
-        assert(ok());
+        TERRAIN_EXPECTS(ok(), "value() of an Expected that holds an error");
         return std::get<0>(mData);
     }
     T&& value() &&
     {
-        assert(ok());
+        TERRAIN_EXPECTS(ok(), "value() of an Expected that holds an error");
         return std::get<0>(std::move(mData));
     }
     T& operator*() & { return value(); }
@@ -56,7 +60,7 @@ public:
 
     const Error& error() const
     {
-        assert(!ok());
+        TERRAIN_EXPECTS(!ok(), "error() of an Expected that holds a value");
         return std::get<1>(mData);
     }
 
@@ -64,7 +68,7 @@ private:
     std::variant<T, Error> mData;
 };
 
-/// Success or an Error, for operations without a result value.
+/// Success or an Error, for operations without a result value. error() requires !ok().
 class [[nodiscard]] Status {
 public:
     Status() = default;
@@ -74,7 +78,7 @@ public:
     explicit operator bool() const { return mOk; }
     const Error& error() const
     {
-        assert(!mOk);
+        TERRAIN_EXPECTS(!mOk, "error() of a Status that is success");
         return mError;
     }
 
