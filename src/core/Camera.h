@@ -1,4 +1,4 @@
-// The viewer's camera on the CPU, in double precision (shared/DESIGN.md, "World space"): world metres,
+// The viewer's camera on the CPU, in double precision (docs/design.md, "World space"): world metres,
 // x east, y north, z up. Orientation is yaw/pitch, no roll: yaw 0 looks north (+y), positive yaw turns
 // east (clockwise seen from above); pitch 0 is horizontal, positive looks up.
 #pragma once

@@ -1,4 +1,4 @@
-// Preconditions and internal invariants (STYLE.md, Errors, kinds 1 and 2). Both stay on in release
+// Preconditions and internal invariants (docs/design.md, "Errors", kinds 1 and 2). Both stay on in release
 // builds: a broken precondition is a caller's bug and must not turn into silent memory corruption.
 #pragma once
 

@@ -1,4 +1,4 @@
-// Error values for "the world is wrong" failures (STYLE.md, Errors, kind 3): a missing file, a corrupt
+// Error values for "the world is wrong" failures (docs/design.md, "Errors", kind 3): a missing file, a corrupt
 // map, a bad PNG, an out-of-range config value. They carry a message a user can act on. Reading the value
 // of an error, or the error of a value, is a caller's bug: a checked precondition (core/Check.h), on in
 // every build type.

@@ -1,5 +1,5 @@
-// Memory budget checks: refuse an input that cannot fit before allocating it (issue 2, "refused before
-// any allocation with a message saying why").
+// Memory budget checks: an input that cannot fit is refused before any allocation, with a message saying
+// why (docs/design.md, "Errors", kind 3).
 #pragma once
 
 #include "core/Expected.h"

@@ -30,7 +30,7 @@ namespace {
 constexpr std::size_t kBtHeaderSize = 256;
 /// VTP's INVALID_ELEVATION (SHRT_MIN), the no-data marker in int16, int32 and float files alike.
 constexpr float kBtNoData = -32768.0f;
-/// Metres per degree for geographic (degree) extents: the brief's equatorial length of a degree of
+/// Metres per degree for geographic (degree) extents: the customary equatorial length of a degree of
 /// longitude (scaled by cos(latitude)) and the mean length of a degree of latitude.
 constexpr double kMetresPerDegreeLongitudeAtEquator = 111320.0;
 constexpr double kMetresPerDegreeLatitude = 110574.0;

@@ -1,5 +1,5 @@
 // Residual coding of static node heights from the Kobbelt 4-point prediction of the parent
-// (quadtree/FourPointSubdivision.h with omega = 1; shared/DESIGN.md "Static heights on disk").
+// (quadtree/FourPointSubdivision.h with omega = 1; docs/design.md "Static heights on disk").
 #include "quadtree/HeightCodec.h"
 
 #include "core/ByteIo.h"

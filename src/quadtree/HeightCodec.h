@@ -1,4 +1,4 @@
-// Static heights on disk (shared/DESIGN.md, "Static heights on disk"): each node is coded as the residual
+// Static heights on disk (docs/design.md, "Static heights on disk"): each node is coded as the residual
 // from the Kobbelt 4-point prediction of its parent (quadtree/FourPointSubdivision.h with omega = 1: weights
 // -1/16, 9/16, 9/16, -1/16 in each direction, tensor product), so static and dynamic nodes are two cases of
 // one step: parent -> subdivide -> add.

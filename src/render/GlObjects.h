@@ -1,4 +1,4 @@
-// Thin RAII wrappers over OpenGL object names (STYLE.md, "GL code"): move-only, one type per kind of
+// Thin RAII wrappers over OpenGL object names (docs/design.md, "GL code"): move-only, one type per kind of
 // object, so a texture cannot be passed where a buffer is expected. Requires a current GL context for
 // construction and destruction.
 #pragma once

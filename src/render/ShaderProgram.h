@@ -1,4 +1,4 @@
-// GLSL programs from the files in shaders/ (STYLE.md: shaders are real files; variants by prepending
+// GLSL programs from the files in shaders/ (docs/design.md, "GL code": shaders are real files; variants by prepending
 // #defines; a compile or link failure returns the info log as an error).
 #pragma once
 

@@ -1,7 +1,7 @@
 // One dynamic node (paper 3.4.3, 4.2.4), as a worker thread makes it: subdivision of the parent's base
 // (65 x 65 chunk plus its 2-sample border: a 69 x 69 window), the material displacement of its new samples,
 // its material weights and its upsampled texture. One thread; the parent is a 90 m static leaf of the
-// bundled real terrain (demos/data). Issue 5's target: median <= 200 us with an 8-octave fBm material.
+// bundled real terrain (demos/data). Target: median <= 200 us with an 8-octave fBm material.
 // Prints figures, never gates.
 #include "heightfield/HeightFieldIo.h"
 #include "synthesis/DetailSynthesizer.h"

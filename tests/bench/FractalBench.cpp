@@ -1,7 +1,7 @@
 // Displacement of one dynamic node (paper 3.3.3, "Real-time Fractals"): microseconds per 69 x 69 window
 // (65 x 65 chunk plus a 2-sample border each side) of 8-octave fBm and ridged, one thread, 500 km from
 // the origin: exact vs cached basis vs cached fractal, and the exact path on the SSE2 baseline. Target
-// from issue 5: the whole dynamic node (subdivision ~7 us + displacement) <= 200 us median, so the
+// (DynamicNodeBench.cpp): the whole dynamic node (subdivision ~7 us + displacement) <= 200 us median, so the
 // displacement must stay well below that. Measured on a 2-core AMD EPYC (Zen 3, 2.45 GHz), best of
 // repeated runs: exact 96 us (fBm) / 101 us (ridged) with AVX2, 305 / 315 us on the SSE2 baseline (the
 // scalar double code before: 455 / 538 us; 580 / 750 us mean); cached basis 310 / 390 us; cached fractal

@@ -1,4 +1,4 @@
-// prep throughput and peak memory (issue 2): builds a map from a generated 4097 x 4097 raw 16-bit height
+// prep throughput and peak memory (paper 4.1.1): builds a map from a generated 4097 x 4097 raw 16-bit height
 // field and prints million input samples per second and peak resident memory against the input's size.
 //
 //   build/tests/PrepBench [--benchmark_filter=...]       (TERRAIN_BENCH_SIZE=1025 for a quick run)

@@ -1,5 +1,5 @@
 // Triangle throughput of the chunk renderer against a brute-force single mesh with the same triangle
-// count, on the same OpenGL context and camera path (issue 4): per camera, the brute-force mesh is the
+// count, on the same OpenGL context and camera path: per camera, the brute-force mesh is the
 // engine's own triangles of that frame merged into one static mesh (positions and normals, one draw
 // call, a plain lit shader), so the ratio is what the engine's per-node machinery (template mesh,
 // per-node buffers and textures, morphing, one call per node) costs. Needs a display: run under Xvfb,

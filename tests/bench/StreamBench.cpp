@@ -1,4 +1,4 @@
-// Runtime core figures (issue 3): static node decode time, nodes per second through the node server with
+// Runtime core figures (paper 3.2.14-3.2.15): static node decode time, nodes per second through the node server with
 // 1 and 2 workers, and memory over a long camera path on a large map with a bounded cache.
 //
 //   build/tests/StreamBench                      (TERRAIN_BENCH_STREAM_SIZE=2049 for a quick run)

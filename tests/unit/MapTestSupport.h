@@ -1,5 +1,5 @@
 // Shared fixtures for the quadtree, map-file and prep tests: generated height fields, whole decoded trees,
-// and reference implementations written from docs/map-format.md and shared/DESIGN.md rather than from
+// and reference implementations written from docs/map-format.md and docs/design.md rather than from
 // the code under test (the 4-point predictor in floating point, the edge reflection as a recursion, the
 // template triangulation as explicit triangles with barycentric interpolation, a PNG reader on libpng).
 #pragma once
@@ -263,7 +263,7 @@ struct Triangle {
     double z[3];
 };
 
-/// The template triangulation (DESIGN.md "Template mesh"; 3.2.9) of a grid of `cells` x `cells` quads
+/// The template triangulation (docs/design.md "Template mesh"; 3.2.9) of a grid of `cells` x `cells` quads
 /// whose corner (i, j) stands at (i, j) with height z(i, j): each quad split along its south-west to
 /// north-east diagonal.
 inline std::vector<Triangle> templateTriangles(int cells, const std::function<double(int, int)>& z)

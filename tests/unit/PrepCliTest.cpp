@@ -1,4 +1,4 @@
-// The command-line programs, run as a user runs them: prep on the real data (acceptance: exact heights
+// The command-line programs, run as a user runs them: prep on the real data (exact heights
 // read back by `tengine-tool height` against the PNG read independently with libpng, pinned bits per
 // sample), clear errors for bad arguments and inputs, no output left behind by a failed write, and
 // tengine-tool's exit codes.

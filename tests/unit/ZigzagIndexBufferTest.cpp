@@ -248,7 +248,7 @@ std::vector<std::uint32_t> rowMajorGrid(int n)
     return out;
 }
 
-// Pinned quality (the thresholds): measured by meshoptimizer's FIFO model, grid only.
+// Pinned quality: measured by meshoptimizer's FIFO model, grid only.
 TEST(ZigzagIndexBuffer, VertexCacheMissRatioOf65Chunk)
 {
     const int n = 65;
