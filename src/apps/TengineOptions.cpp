@@ -40,7 +40,7 @@ struct OptionSpec {
 };
 
 constexpr std::string_view kGroupMap = "Map and level of detail";
-constexpr std::string_view kGroupDetail = "Detail synthesis (paper 3.3, 3.4; accepted now, used once synthesis lands)";
+constexpr std::string_view kGroupDetail = "Detail synthesis (paper 3.3, 3.4)";
 constexpr std::string_view kGroupCamera = "Camera";
 constexpr std::string_view kGroupDisplay = "Display";
 constexpr std::string_view kGroupVideo = "Demo and video mode";
@@ -259,7 +259,9 @@ std::vector<OptionSpec> makeOptionTable()
                            "No node is refined below this sample spacing; limits how far detail synthesis goes.",
                            &O::lodMinimumSpacing, atLeast(0), "metres"));
     t.push_back({"dynamic_texture_size", kGroupMap,
-                 "Width and height of the texture that diffuse lighting is burnt into for each node.",
+                 "The paper's width and height of the texture that diffuse lighting is burnt into for each node. "
+                 "Accepted and checked, but not used yet: node textures have the map's texture size (prep "
+                 "--texture-size), and dynamic nodes upsample their parent's.",
                  "a power of two or a power of two plus one, in [16, 4096] (texels)",
                  [](std::string_view value, const SetContext&, O& o) {
                      auto v = parseInt(value, 16, 4096);

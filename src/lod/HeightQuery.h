@@ -1,4 +1,5 @@
-// Height queries against the static quadtree: the surface exactly as the finest static level renders it.
+// Height queries: the surface exactly as the finest static level renders it, or as the viewer renders any
+// level, synthesized detail included.
 #pragma once
 
 #include "core/Expected.h"

@@ -39,7 +39,8 @@ struct QuadtreeExtent {
 /// The extent of a map's quadtree: its root's square.
 QuadtreeExtent extentOf(const MapHeader& header);
 
-/// The tree being selected from: the static map now, static plus dynamic nodes later.
+/// The tree being selected from: a map's static nodes (MapLodTree), or the resident static and dynamic
+/// nodes the streamer holds (TerrainStreamer::tree).
 class LodTree {
 public:
     virtual ~LodTree() = default;
