@@ -1,14 +1,15 @@
 // prep: height field -> .map (paper 4.4.1). Argument parsing and reporting only; the work is buildMap().
 #include "core/Memory.h"
 #include "core/OutputGuard.h"
-#include "core/Parse.h"
 #include "core/ParallelFor.h"
+#include "core/Parse.h"
 #include "heightfield/HeightFieldIo.h"
-#include "synthesis/LeafErrorEstimator.h"
 #include "quadtree/QuadtreeBuilder.h"
 #include "synthesis/DetailRecipeSetup.h"
 #include "synthesis/DetailSynthesizer.h"
+#include "synthesis/LeafErrorEstimator.h"
 
+#include <unistd.h>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -18,7 +19,6 @@
 #include <mutex>
 #include <optional>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 namespace {
@@ -65,7 +65,7 @@ struct Arguments {
     HeightFieldReadOptions read;
     DetailSettings detail;
     bool detailFactorGiven = false;
-    std::vector<std::string> warnings;  ///< about options that have no effect
+    std::vector<std::string> warnings;             ///< about options that have no effect
     std::vector<std::filesystem::path> materials;  ///< empty: the viewer's default (built-in grass.mat)
     bool noMaterial = false;                       ///< --no-material
 };
@@ -150,7 +150,9 @@ Expected<Arguments> parseArguments(int argc, char** argv)
         } else if (arg == "--chunk" || arg == "--texture-size" || arg == "--threads") {
             auto v = integer();
             TERRAIN_TRY(v);
-            (arg == "--chunk" ? args.build.chunkSize : arg == "--texture-size" ? args.build.textureSize : args.build.threads) = *v;
+            (arg == "--chunk"          ? args.build.chunkSize
+             : arg == "--texture-size" ? args.build.textureSize
+                                       : args.build.threads) = *v;
         } else if (arg == "--raw-size") {
             auto text = value();
             TERRAIN_TRY(text);
@@ -313,23 +315,23 @@ int main(int argc, char** argv)
         std::printf("            %llu no-data samples filled from their neighbours\n",
                     static_cast<unsigned long long>(h.noDataFilled));
     }
-    std::printf("  quadtree  %u levels, %llu nodes of %u x %u samples (grid %llu x %llu), textures %u x %u\n",
-                h.levels, static_cast<unsigned long long>(report->nodes), h.chunkSize, h.chunkSize,
+    std::printf("  quadtree  %u levels, %llu nodes of %u x %u samples (grid %llu x %llu), textures %u x %u\n", h.levels,
+                static_cast<unsigned long long>(report->nodes), h.chunkSize, h.chunkSize,
                 static_cast<unsigned long long>(h.gridSize()), static_cast<unsigned long long>(h.gridSize()),
                 h.textureSize, h.textureSize);
     std::printf("  heights   step %g m, %s\n", h.heightStep,
-                h.maxErrorBound == 0 ? "lossless"
-                                     : ("max error " + std::to_string(h.maxErrorBound) + " m").c_str());
+                h.maxErrorBound == 0 ? "lossless" : ("max error " + std::to_string(h.maxErrorBound) + " m").c_str());
     std::printf("  file      %s: heights %s (%.2f bits per input sample, %.2f per stored sample),\n",
                 formatBytes(report->fileBytes).c_str(), formatBytes(report->heightBytes).c_str(),
                 8.0 * static_cast<double>(report->heightBytes) / inputSamples,
                 8.0 * static_cast<double>(report->heightBytes) / static_cast<double>(report->storedSamples));
     std::printf("            textures %s (%.2f bits per input sample)\n", formatBytes(report->textureBytes).c_str(),
                 8.0 * static_cast<double>(report->textureBytes) / inputSamples);
-    std::printf("  detail    leaf error max %.3f m, mean %.3f m over %llu leaves (3.4.1; per leaf %d descents of %d "
-                "synthesized levels)\n",
-                static_cast<double>(report->maxLeafDetailError), report->meanLeafDetailError,
-                static_cast<unsigned long long>(report->leaves), kLeafErrorDescents, kLeafErrorDepth);
+    std::printf(
+        "  detail    leaf error max %.3f m, mean %.3f m over %llu leaves (3.4.1; per leaf %d descents of %d "
+        "synthesized levels)\n",
+        static_cast<double>(report->maxLeafDetailError), report->meanLeafDetailError,
+        static_cast<unsigned long long>(report->leaves), kLeafErrorDescents, kLeafErrorDepth);
     std::printf("            for %s; %.2f s estimating (summed over threads)\n",
                 h.detailRecipe ? h.detailRecipe->describe().c_str() : "no recipe", report->leafDetailSeconds);
     std::printf("  time      %.2f s, %.1f million input samples per second (%d threads)\n", report->seconds,

@@ -22,6 +22,7 @@
 #include <GLFW/glfw3.h>
 #include <glm/geometric.hpp>
 
+#include <unistd.h>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -34,7 +35,6 @@
 #include <optional>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <utility>
 #include <vector>
 
@@ -197,7 +197,8 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
 
     // Detail synthesis (3.4): the synthesizer dynamic nodes are made with, null when it is off.
     std::vector<std::string> materialWarnings;
-    auto synthesizer = makeDetailSynthesizer(o, static_cast<int>(header.chunkSize), TERRAIN_MATERIALS_DIR, materialWarnings);
+    auto synthesizer =
+        makeDetailSynthesizer(o, static_cast<int>(header.chunkSize), TERRAIN_MATERIALS_DIR, materialWarnings);
     for (const auto& warning : materialWarnings) {
         log("warning: " + warning);
     }
@@ -242,7 +243,8 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
     }
     scene->window = std::move(window).value();
     log(scene->window->description());
-    const std::filesystem::path shaders = o.shaderPath.empty() ? std::filesystem::path(TERRAIN_SHADER_DIR) : o.shaderPath;
+    const std::filesystem::path shaders =
+        o.shaderPath.empty() ? std::filesystem::path(TERRAIN_SHADER_DIR) : o.shaderPath;
     auto renderer = TerrainRenderer::create(shaders, header, o.vertexCacheSize, materials);
     if (!renderer.ok()) {
         return fail(renderer.error().message);
@@ -254,8 +256,8 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
     }
     scene->overlay = std::move(overlay).value();
 
-    scene->source = std::make_unique<TerrainNodeSource>(
-        *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing});
+    scene->source =
+        std::make_unique<TerrainNodeSource>(*scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing});
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
@@ -302,7 +304,8 @@ Camera initialCamera(const TengineOptions& o, const Scene& scene)
         camera.position = *o.cameraPosition;
     } else {
         const double top = header.heightOf(scene.map->directory().front().maxCode);
-        camera.position = {header.originX + extent / 2, header.originY + extent / 2 - extent * 0.6, top + extent * 0.25};
+        camera.position = {header.originX + extent / 2, header.originY + extent / 2 - extent * 0.6,
+                           top + extent * 0.25};
     }
     camera.yaw = o.cameraYaw * kDegrees;
     camera.pitch = o.cameraPitch * kDegrees;
@@ -311,8 +314,8 @@ Camera initialCamera(const TengineOptions& o, const Scene& scene)
 
 /// The overlay's lines: rate (measured) or frame and time (video), triangles, nodes, cache, camera.
 std::vector<std::string> overlayLines(bool video, std::size_t frame, double time, std::optional<double> fps,
-                                      const RenderStats& render, const Scene& scene, const Camera& camera,
-                                      double tau, bool wireframe)
+                                      const RenderStats& render, const Scene& scene, const Camera& camera, double tau,
+                                      bool wireframe)
 {
     char line[160];
     std::vector<std::string> lines;
@@ -352,10 +355,9 @@ public:
         std::ostringstream row;
         row << frame << ',' << time << ',' << milliseconds << ',' << render.triangles << ',' << render.staticNodes
             << ',' << render.dynamicNodes << ',' << cache.size() << ',' << cache.hits() - mHits << ','
-            << cache.misses() - mMisses << ',' << server.requested - mRequested << ','
-            << server.completed - mCompleted << ',' << server.queued + server.inFlight << ','
-            << server.failed - mFailed << ',' << server.peakPending << ',' << currentResidentBytes() << ','
-            << deepestLevel;
+            << cache.misses() - mMisses << ',' << server.requested - mRequested << ',' << server.completed - mCompleted
+            << ',' << server.queued + server.inFlight << ',' << server.failed - mFailed << ',' << server.peakPending
+            << ',' << currentResidentBytes() << ',' << deepestLevel;
         remember(scene);
         return row.str();
     }
@@ -415,8 +417,9 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
     }
     const std::size_t lastVideoFrame =
         scene->path ? static_cast<std::size_t>(std::floor(scene->path->duration() * o.framesPerSecond + 1e-9)) : 0;
-    const std::size_t videoFrames = o.videoFrames > 0 ? std::min<std::size_t>(static_cast<std::size_t>(o.videoFrames), lastVideoFrame + 1)
-                                                      : lastVideoFrame + 1;
+    const std::size_t videoFrames =
+        o.videoFrames > 0 ? std::min<std::size_t>(static_cast<std::size_t>(o.videoFrames), lastVideoFrame + 1)
+                          : lastVideoFrame + 1;
     std::unique_ptr<VideoRecorder> recorder;
     if (video) {
         VideoRecorderOptions recording;
@@ -504,7 +507,8 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
             // A recording shows every frame complete: load what it wants, select again, until it wants
             // nothing more (or the cache is full). Independent of thread timing: identical runs give
             // identical frames.
-            for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred + frameStats.tooFast; ++round) {
+            for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred + frameStats.tooFast;
+                 ++round) {
                 scene->streamer->drain();
                 frameStats = scene->streamer->update(camera, o.lodError, speed);
             }
@@ -523,7 +527,8 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
             if (recorder->savesImage(frame)) {
                 pixels = captureFrame(camera.viewportWidth, camera.viewportHeight);
             }
-            if (auto added = recorder->add(frame, std::move(pixels), counters.row(frame, time, milliseconds, renderStats, *scene));
+            if (auto added = recorder->add(frame, std::move(pixels),
+                                           counters.row(frame, time, milliseconds, renderStats, *scene));
                 !added.ok()) {
                 log(added.error().message);
                 (void)recorder->finish(true);

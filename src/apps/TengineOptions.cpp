@@ -455,7 +455,8 @@ std::vector<OptionSpec> makeOptionTable()
     t.push_back(pathOption("shader_path", kGroupDisplay,
                            "Directory with the GLSL programs (terrain, sky, text). Relative paths in a config file are "
                            "taken from that file's directory.",
-                           &O::shaderPath, PathKind::Input, "a directory path (empty: the shaders/ directory this build came with)"));
+                           &O::shaderPath, PathKind::Input,
+                           "a directory path (empty: the shaders/ directory this build came with)"));
     t.push_back(pathOption("log_file", kGroupDisplay,
                            "Also write the log to this file. Relative paths are taken from the working directory.",
                            &O::logFile, PathKind::Output, "a path (empty: log to stderr only)"));

@@ -40,14 +40,15 @@ struct TengineOptions {
     int requestQueueSize = 8;                      ///< request_queue_size: node groups waiting, >= 1
 
     // ---- Detail synthesis (3.3, 3.4) ----
-    bool detailCreateNewNodes = true;      ///< detail_create_new_nodes
-    double detailSubdivisionFactor = 1.0;  ///< detail_subdivision_factor: omega in [0, 2]
-    bool detailAddMaterial = true;         ///< detail_add_material
-    int detailMaterialType = 0;            ///< detail_material_type: 0 (grass.mat) or 1 (rock.mat)
+    bool detailCreateNewNodes = true;                 ///< detail_create_new_nodes
+    double detailSubdivisionFactor = 1.0;             ///< detail_subdivision_factor: omega in [0, 2]
+    bool detailAddMaterial = true;                    ///< detail_add_material
+    int detailMaterialType = 0;                       ///< detail_material_type: 0 (grass.mat) or 1 (rock.mat)
     std::string detailSubdivisionScheme = "kobbelt";  ///< detail_subdivision_scheme: kobbelt | bilinear | catmull-clark
-    std::vector<std::filesystem::path> detailMaterials;  ///< detail_materials: a material set; empty = detail_material_type
-    std::filesystem::path materialPath;    ///< material_path: built-in materials; empty = this build's materials/
-    double detailVelocityLimit = 100.0;    ///< detail_velocity_limit: new-node samples per second, >= 0; 0 = off
+    std::vector<std::filesystem::path>
+        detailMaterials;                 ///< detail_materials: a material set; empty = detail_material_type
+    std::filesystem::path materialPath;  ///< material_path: built-in materials; empty = this build's materials/
+    double detailVelocityLimit = 100.0;  ///< detail_velocity_limit: new-node samples per second, >= 0; 0 = off
 
     // ---- Camera ----
     double cameraFov = 60.0;                   ///< camera_fov: vertical, degrees, in (1, 179)

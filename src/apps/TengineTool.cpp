@@ -1,25 +1,25 @@
 // tengine-tool: inspect (info), check (verify) and query (height) terrain maps.
+#include "apps/DetailSetup.h"
 #include "core/Memory.h"
 #include "core/Parse.h"
+#include "heightfield/Image.h"
 #include "lod/CameraPath.h"
 #include "lod/HeightQuery.h"
-#include "apps/DetailSetup.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "quadtree/MapFile.h"
-#include "heightfield/Image.h"
 #include "quadtree/MapVerifier.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <numbers>
-#include <optional>
-#include <thread>
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <numbers>
+#include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -101,9 +101,10 @@ int info(const MapFile& map)
         if (h.hasDetailErrors()) {
             std::snprintf(detail, sizeof detail, "%14.3f", l.maxDetailDeltaC);
         }
-        std::printf("%5zu %6llu %11.3f  %9.3f .. %-9.3f %14s %13llu %14llu\n", i, static_cast<unsigned long long>(l.nodes),
-                    h.spacingAt(static_cast<int>(i)), l.nodes ? l.minDeltaC : 0.0f, l.maxDeltaC, detail,
-                    static_cast<unsigned long long>(l.heightBytes), static_cast<unsigned long long>(l.textureBytes));
+        std::printf("%5zu %6llu %11.3f  %9.3f .. %-9.3f %14s %13llu %14llu\n", i,
+                    static_cast<unsigned long long>(l.nodes), h.spacingAt(static_cast<int>(i)),
+                    l.nodes ? l.minDeltaC : 0.0f, l.maxDeltaC, detail, static_cast<unsigned long long>(l.heightBytes),
+                    static_cast<unsigned long long>(l.textureBytes));
     }
     const double inputSamples = static_cast<double>(h.validWidth) * h.validHeight;
     const double storedSamples = static_cast<double>(map.directory().size() * map.window().sampleCount());
@@ -149,8 +150,8 @@ int texture(const MapFile& map, const std::string& node, const std::string& outp
     const int size = static_cast<int>(map.header().textureSize);
     Image image{size, size, 3, std::vector<std::uint8_t>(loaded->texture.size())};
     for (int y = 0; y < size; ++y) {  // node rows run south to north, image rows north to south
-        std::copy_n(&loaded->texture[static_cast<std::size_t>(size - 1 - y) * size * 3], static_cast<std::size_t>(size) * 3,
-                    image.pixel(0, y));
+        std::copy_n(&loaded->texture[static_cast<std::size_t>(size - 1 - y) * size * 3],
+                    static_cast<std::size_t>(size) * 3, image.pixel(0, y));
     }
     auto written = writePngImage(output, image);
     if (!written.ok()) {
@@ -197,7 +198,8 @@ Expected<ViewOptions> parseViewOptions(const std::vector<std::string>& args, std
             std::size_t start = 0;
             while (start <= value.size()) {
                 auto comma = value.find(',', start);
-                auto piece = parseDouble(value.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+                auto piece =
+                    parseDouble(value.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
                 if (!piece.ok()) {
                     return makeError("--camera: '", value, "' is not X,Y,Z,YAW,PITCH");
                 }
@@ -339,15 +341,19 @@ int stream(const MapFile& map, const ViewOptions& view)
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const auto server = (*streamer)->serverStats();
     std::sort(selectMicros.begin(), selectMicros.end());
-    auto percentile = [&](double p) { return selectMicros[static_cast<std::size_t>(p * static_cast<double>(selectMicros.size() - 1))]; };
+    auto percentile = [&](double p) {
+        return selectMicros[static_cast<std::size_t>(p * static_cast<double>(selectMicros.size() - 1))];
+    };
     std::printf("frames                 %zu over %.1f s of path (%s, %.1f s wall)\n", frames, path->duration(),
                 view.fast ? "as fast as possible" : "real time", seconds);
     std::printf("groups loaded          %llu (%.1f nodes/s), cancelled %llu, rejected (queue full) %llu, failed %llu\n",
-                static_cast<unsigned long long>(server.completed), 4.0 * static_cast<double>(server.completed) / seconds,
+                static_cast<unsigned long long>(server.completed),
+                4.0 * static_cast<double>(server.completed) / seconds,
                 static_cast<unsigned long long>(server.cancelled), static_cast<unsigned long long>(server.rejected),
                 static_cast<unsigned long long>(server.failed));
     std::printf("resident nodes         peak %zu of %zu (cache), %llu evictions, %zu groups refused\n", peakResident,
-                (*streamer)->cache().capacity(), static_cast<unsigned long long>((*streamer)->cache().evictions()), refused);
+                (*streamer)->cache().capacity(), static_cast<unsigned long long>((*streamer)->cache().evictions()),
+                refused);
     std::printf("frames waiting         %zu of %zu wanted a node that was not resident yet\n", framesWaiting, frames);
     std::printf("selection per frame    median %.1f us, p95 %.1f us, max %.1f us\n", percentile(0.5), percentile(0.95),
                 selectMicros.back());

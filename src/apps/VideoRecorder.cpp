@@ -118,7 +118,8 @@ void VideoRecorder::report(std::size_t done)
 {
     const std::size_t total = mOptions.frames;
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - mStart).count();
-    const double remaining = done > 0 ? elapsed / static_cast<double>(done) * static_cast<double>(total - std::min(done, total)) : 0.0;
+    const double remaining =
+        done > 0 ? elapsed / static_cast<double>(done) * static_cast<double>(total - std::min(done, total)) : 0.0;
     char line[160];
     std::snprintf(line, sizeof line, "recording: frame %zu of %zu, %s elapsed, %s remaining", done, total,
                   formatDuration(elapsed).c_str(), formatDuration(remaining).c_str());
@@ -223,11 +224,26 @@ Status VideoRecorder::makeVideo(std::size_t frames)
     const auto mp4 = mOptions.directory / kVideoName;
     const auto partial = mOptions.directory / kPartialVideoName;
     // -frames:v: exactly the frames of this recording, even where an older, longer one left more behind.
-    const std::vector<std::string> argv = {"ffmpeg", "-nostdin", "-loglevel", "error", "-y", "-framerate",
-                                           std::to_string(mOptions.framesPerSecond), "-i",
-                                           (mOptions.directory / "frame_%05d.png").string(), "-frames:v",
-                                           std::to_string(frames), "-c:v", "libx264", "-pix_fmt", "yuv420p",
-                                           "-crf", "20", "-f", "mp4", partial.string()};
+    const std::vector<std::string> argv = {"ffmpeg",
+                                           "-nostdin",
+                                           "-loglevel",
+                                           "error",
+                                           "-y",
+                                           "-framerate",
+                                           std::to_string(mOptions.framesPerSecond),
+                                           "-i",
+                                           (mOptions.directory / "frame_%05d.png").string(),
+                                           "-frames:v",
+                                           std::to_string(frames),
+                                           "-c:v",
+                                           "libx264",
+                                           "-pix_fmt",
+                                           "yuv420p",
+                                           "-crf",
+                                           "20",
+                                           "-f",
+                                           "mp4",
+                                           partial.string()};
     auto ran = runProcess(argv);
     std::error_code ec;
     if (!ran.ok() || *ran != 0) {

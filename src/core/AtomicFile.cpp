@@ -1,13 +1,13 @@
 #include "core/AtomicFile.h"
 
+#include <fcntl.h>
+#include <pthread.h>
+#include <unistd.h>
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
-#include <fcntl.h>
-#include <pthread.h>
-#include <unistd.h>
 
 namespace terrain {
 
@@ -112,7 +112,10 @@ AtomicFile& AtomicFile::operator=(AtomicFile&& other) noexcept
     return *this;
 }
 
-AtomicFile::~AtomicFile() { discard(); }
+AtomicFile::~AtomicFile()
+{
+    discard();
+}
 
 void AtomicFile::discard()
 {

@@ -21,9 +21,10 @@ public:
     void put(T value)
     {
         static_assert(std::is_arithmetic_v<T>);
-        using U = std::conditional_t<sizeof(T) == 1, std::uint8_t,
-                  std::conditional_t<sizeof(T) == 2, std::uint16_t,
-                  std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>>;
+        using U =
+            std::conditional_t<sizeof(T) == 1, std::uint8_t,
+                               std::conditional_t<sizeof(T) == 2, std::uint16_t,
+                                                  std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>>;
         U bits = std::bit_cast<U>(value);
         for (std::size_t i = 0; i < sizeof(T); ++i) {
             mOut.push_back(static_cast<std::uint8_t>(bits >> (8 * i)));
@@ -61,9 +62,10 @@ public:
     T get()
     {
         static_assert(std::is_arithmetic_v<T>);
-        using U = std::conditional_t<sizeof(T) == 1, std::uint8_t,
-                  std::conditional_t<sizeof(T) == 2, std::uint16_t,
-                  std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>>;
+        using U =
+            std::conditional_t<sizeof(T) == 1, std::uint8_t,
+                               std::conditional_t<sizeof(T) == 2, std::uint16_t,
+                                                  std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>>;
         if (mPos + sizeof(T) > mIn.size()) {
             mFailed = true;
             mPos = mIn.size();

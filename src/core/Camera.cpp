@@ -15,9 +15,15 @@ glm::dvec3 Camera::forward() const
     return {std::sin(yaw) * cp, std::cos(yaw) * cp, std::sin(pitch)};
 }
 
-glm::dvec3 Camera::right() const { return {std::cos(yaw), -std::sin(yaw), 0.0}; }
+glm::dvec3 Camera::right() const
+{
+    return {std::cos(yaw), -std::sin(yaw), 0.0};
+}
 
-glm::dvec3 Camera::up() const { return glm::cross(right(), forward()); }
+glm::dvec3 Camera::up() const
+{
+    return glm::cross(right(), forward());
+}
 
 glm::dmat4 Camera::viewRotation() const
 {
@@ -51,6 +57,9 @@ glm::dmat4 Camera::projection() const
     return glm::perspective(verticalFov, aspect(), nearPlane, farPlane);
 }
 
-glm::dmat4 Camera::viewProjection() const { return projection() * view(); }
+glm::dmat4 Camera::viewProjection() const
+{
+    return projection() * view();
+}
 
 }  // namespace terrain

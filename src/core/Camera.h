@@ -9,14 +9,14 @@
 namespace terrain {
 
 struct Camera {
-    glm::dvec3 position{0.0};     ///< metres, world space
-    double yaw = 0.0;             ///< radians, any value (wraps)
-    double pitch = 0.0;           ///< radians, in [-pi/2, pi/2]
+    glm::dvec3 position{0.0};                 ///< metres, world space
+    double yaw = 0.0;                         ///< radians, any value (wraps)
+    double pitch = 0.0;                       ///< radians, in [-pi/2, pi/2]
     double verticalFov = 1.0471975511965976;  ///< radians, in (0, pi); default 60 degrees
-    int viewportWidth = 1280;     ///< pixels, > 0
-    int viewportHeight = 720;     ///< pixels, > 0 (S of eq. 3.2)
-    double nearPlane = 0.5;       ///< metres, > 0
-    double farPlane = 100000.0;   ///< metres, > nearPlane
+    int viewportWidth = 1280;                 ///< pixels, > 0
+    int viewportHeight = 720;                 ///< pixels, > 0 (S of eq. 3.2)
+    double nearPlane = 0.5;                   ///< metres, > 0
+    double farPlane = 100000.0;               ///< metres, > nearPlane
 
     double aspect() const { return static_cast<double>(viewportWidth) / static_cast<double>(viewportHeight); }
 

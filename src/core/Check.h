@@ -23,10 +23,9 @@ namespace terrain::detail {
     } while (false)
 
 /// An internal invariant: failing means a bug in this code base.
-#define TERRAIN_ASSERT(cond)                                                               \
-    do {                                                                                   \
-        if (!(cond)) {                                                                     \
-            ::terrain::detail::checkFailed("assertion", #cond, "internal error", __FILE__, \
-                                           __LINE__);                                      \
-        }                                                                                  \
+#define TERRAIN_ASSERT(cond)                                                                          \
+    do {                                                                                              \
+        if (!(cond)) {                                                                                \
+            ::terrain::detail::checkFailed("assertion", #cond, "internal error", __FILE__, __LINE__); \
+        }                                                                                             \
     } while (false)

@@ -1,12 +1,12 @@
 #include "core/Memory.h"
 
+#include <sys/resource.h>
+#include <unistd.h>
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <optional>
 #include <string>
-#include <sys/resource.h>
-#include <unistd.h>
 
 namespace terrain {
 

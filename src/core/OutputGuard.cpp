@@ -24,8 +24,7 @@ Status refuseInputAsOutput(const std::string& outputRole, const std::filesystem:
         if (!input.path.empty() && isSameFile(output, input.path)) {
             const bool sameName = output.lexically_normal() == input.path.lexically_normal();
             return makeError("refusing to write the ", outputRole, " to ", output.string(), ": it is the ", input.role,
-                             sameName ? "" : " " + input.path.string(),
-                             sameName ? " itself" : " (the same file)",
+                             sameName ? "" : " " + input.path.string(), sameName ? " itself" : " (the same file)",
                              "; nothing was written, choose another output path");
         }
     }

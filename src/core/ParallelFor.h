@@ -33,7 +33,7 @@ void parallelFor(std::size_t count, int threads, Body&& body)
             }
         }
     };
-    std::size_t helpers = std::min<std::size_t>(count, static_cast<std::size_t>(std::max(threads, 1))) ;
+    std::size_t helpers = std::min<std::size_t>(count, static_cast<std::size_t>(std::max(threads, 1)));
     std::vector<std::thread> pool;
     for (std::size_t t = 1; t < helpers; ++t) {
         pool.emplace_back(work);
@@ -48,6 +48,9 @@ void parallelFor(std::size_t count, int threads, Body&& body)
 }
 
 /// A sensible default thread count: the hardware's, at least 1.
-inline int defaultThreadCount() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+inline int defaultThreadCount()
+{
+    return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
 
 }  // namespace terrain

@@ -1,8 +1,8 @@
 #include "core/StopSignals.h"
 
+#include <pthread.h>
 #include <csignal>
 #include <ctime>
-#include <pthread.h>
 
 namespace terrain {
 

@@ -2,8 +2,8 @@
 
 #include "core/Check.h"
 
-#include <memory>
 #include <zlib.h>
+#include <memory>
 
 namespace terrain {
 

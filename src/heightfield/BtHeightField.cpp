@@ -16,12 +16,12 @@
 #include "heightfield/HeightFieldIoSupport.h"
 
 #include <array>
-#include <string>
-#include <vector>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <numbers>
+#include <string>
+#include <vector>
 
 namespace terrain {
 
@@ -65,14 +65,14 @@ const char* sampleTypeName(const BtHeader& header)
 const char* unitsName(BtUnits units)
 {
     switch (units) {
-    case BtUnits::Degrees:
-        return "degrees";
-    case BtUnits::Metres:
-        return "metres";
-    case BtUnits::InternationalFeet:
-        return "feet";
-    case BtUnits::UsSurveyFeet:
-        return "US survey feet";
+        case BtUnits::Degrees:
+            return "degrees";
+        case BtUnits::Metres:
+            return "metres";
+        case BtUnits::InternationalFeet:
+            return "feet";
+        case BtUnits::UsSurveyFeet:
+            return "US survey feet";
     }
     return "?";
 }
@@ -80,12 +80,12 @@ const char* unitsName(BtUnits units)
 double metresPerUnit(BtUnits units)
 {
     switch (units) {
-    case BtUnits::InternationalFeet:
-        return kInternationalFootMetres;
-    case BtUnits::UsSurveyFeet:
-        return kUsSurveyFootMetres;
-    default:
-        return 1.0;
+        case BtUnits::InternationalFeet:
+            return kInternationalFootMetres;
+        case BtUnits::UsSurveyFeet:
+            return kUsSurveyFootMetres;
+        default:
+            return 1.0;
     }
 }
 
@@ -230,16 +230,16 @@ Expected<HeightField> readBtHeightField(const std::filesystem::path& path, const
     const std::uint64_t rows = std::uint64_t(header->rows);
     const bool isFloat = header->isFloat;
     const int dataSize = header->dataSize;
-    const bool ok = detail::forEachSample(
-        *file, kBtHeaderSize, count, static_cast<std::size_t>(dataSize), [&](std::uint64_t k, const std::uint8_t* p) {
-            float value = isFloat         ? detail::loadLe<float>(p)
-                          : dataSize == 2 ? float(detail::loadLe<std::int16_t>(p))
-                                          : float(detail::loadLe<std::int32_t>(p));
-            if (value == kBtNoData) {
-                value = std::nanf("");
-            }
-            field.at(static_cast<int>(k / rows), static_cast<int>(k % rows)) = value;
-        });
+    const bool ok = detail::forEachSample(*file, kBtHeaderSize, count, static_cast<std::size_t>(dataSize),
+                                          [&](std::uint64_t k, const std::uint8_t* p) {
+                                              float value = isFloat         ? detail::loadLe<float>(p)
+                                                            : dataSize == 2 ? float(detail::loadLe<std::int16_t>(p))
+                                                                            : float(detail::loadLe<std::int32_t>(p));
+                                              if (value == kBtNoData) {
+                                                  value = std::nanf("");
+                                              }
+                                              field.at(static_cast<int>(k / rows), static_cast<int>(k % rows)) = value;
+                                          });
     if (!ok) {
         return makeError(path.string(), ": read error in the samples");
     }
@@ -330,16 +330,17 @@ Status writeBtHeightField(const std::filesystem::path& path, const HeightField& 
                 value = kBtNoData;
             }
             switch (type) {
-            case BtSampleType::Int16:
-                // Finite values stop at -32767 so that they never turn into the no-data marker.
-                out.put(static_cast<std::int16_t>(detail::roundClamp(value, noData ? -32768.0 : -32767.0, 32767.0)));
-                break;
-            case BtSampleType::Int32:
-                out.put(static_cast<std::int32_t>(detail::roundClamp(value, kInt32Min, kInt32Max)));
-                break;
-            case BtSampleType::Float32:
-                out.put(static_cast<float>(value));
-                break;
+                case BtSampleType::Int16:
+                    // Finite values stop at -32767 so that they never turn into the no-data marker.
+                    out.put(
+                        static_cast<std::int16_t>(detail::roundClamp(value, noData ? -32768.0 : -32767.0, 32767.0)));
+                    break;
+                case BtSampleType::Int32:
+                    out.put(static_cast<std::int32_t>(detail::roundClamp(value, kInt32Min, kInt32Max)));
+                    break;
+                case BtSampleType::Float32:
+                    out.put(static_cast<float>(value));
+                    break;
             }
         }
         file->write(column.data(), column.size());

@@ -30,7 +30,10 @@ T loadLe(const std::uint8_t* p)
 }
 
 /// Big-endian 16-bit, as in PNG samples and big-endian raw files (ByteIo.h is little-endian only).
-inline std::uint16_t loadU16Be(const std::uint8_t* p) { return static_cast<std::uint16_t>((p[0] << 8) | p[1]); }
+inline std::uint16_t loadU16Be(const std::uint8_t* p)
+{
+    return static_cast<std::uint16_t>((p[0] << 8) | p[1]);
+}
 inline void storeU16Be(std::uint8_t* p, std::uint16_t v)
 {
     p[0] = static_cast<std::uint8_t>(v >> 8);
@@ -101,7 +104,10 @@ Status checkFieldShape(const std::filesystem::path& path, const HeightField& fie
 Status checkNoNaN(const std::filesystem::path& path, const HeightField& field, std::string_view format);
 
 /// Rounds to nearest and clamps to [lo, hi]; the value must not be NaN.
-inline double roundClamp(double value, double lo, double hi) { return std::clamp(std::nearbyint(value), lo, hi); }
+inline double roundClamp(double value, double lo, double hi)
+{
+    return std::clamp(std::nearbyint(value), lo, hi);
+}
 
 /// A number for descriptions and messages: up to 6 significant digits, no trailing zeros ("30", "92.6").
 std::string formatNumber(double value);

@@ -25,7 +25,7 @@ Status writePngImage(const std::filesystem::path& path, const Image& image, PngC
     }
     if (image.width < 1 || image.height < 1 ||
         image.pixels.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) *
-                                    static_cast<std::size_t>(image.channels)) {
+                                   static_cast<std::size_t>(image.channels)) {
         return makeError(path.string(), ": cannot write a ", image.width, "x", image.height, "x", image.channels,
                          " image with ", image.pixels.size(), " bytes of pixels (need width, height >= 1 and ",
                          "width * height * channels bytes)");

@@ -13,7 +13,7 @@ namespace terrain {
 struct Image {
     int width = 0;
     int height = 0;
-    int channels = 0;  ///< 1 (gray), 3 (RGB) or 4 (RGBA)
+    int channels = 0;                  ///< 1 (gray), 3 (RGB) or 4 (RGBA)
     std::vector<std::uint8_t> pixels;  ///< width * height * channels bytes, row-major, channel-interleaved
 
     std::uint8_t* pixel(int x, int y) { return pixels.data() + (static_cast<std::size_t>(y) * width + x) * channels; }

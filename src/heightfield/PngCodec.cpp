@@ -6,11 +6,11 @@
 #include "core/Check.h"
 #include "core/Memory.h"
 
+#include <png.h>
 #include <cerrno>
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
-#include <png.h>
 #include <sstream>
 
 namespace terrain::detail {
@@ -159,18 +159,18 @@ struct FileCloser {
 std::string pngColorTypeName(int colorType)
 {
     switch (colorType) {
-    case PNG_COLOR_TYPE_GRAY:
-        return "gray";
-    case PNG_COLOR_TYPE_GRAY_ALPHA:
-        return "gray+alpha";
-    case PNG_COLOR_TYPE_RGB:
-        return "RGB";
-    case PNG_COLOR_TYPE_RGB_ALPHA:
-        return "RGBA";
-    case PNG_COLOR_TYPE_PALETTE:
-        return "palette";
-    default:
-        return "colour type " + std::to_string(colorType);
+        case PNG_COLOR_TYPE_GRAY:
+            return "gray";
+        case PNG_COLOR_TYPE_GRAY_ALPHA:
+            return "gray+alpha";
+        case PNG_COLOR_TYPE_RGB:
+            return "RGB";
+        case PNG_COLOR_TYPE_RGB_ALPHA:
+            return "RGBA";
+        case PNG_COLOR_TYPE_PALETTE:
+            return "palette";
+        default:
+            return "colour type " + std::to_string(colorType);
     }
 }
 
@@ -239,8 +239,8 @@ Expected<DecodedPng> decodePng(const std::filesystem::path& path, PngReadMode mo
     // bytes), the caller's own buffer, and libpng's two rows as stored (current and previous).
     const std::uint64_t bytesPerPixel =
         mode == PngReadMode::NativeGray ? (decoded.sourceBitDepth == 16 ? 2 : 1) : std::uint64_t(channels);
-    TERRAIN_TRY(checkAllocation(pixelCount * (bytesPerPixel + extraBytesPerPixel) + 2 * (storedRowBytes + 1),
-                                what.str()));
+    TERRAIN_TRY(
+        checkAllocation(pixelCount * (bytesPerPixel + extraBytesPerPixel) + 2 * (storedRowBytes + 1), what.str()));
 
     if (!pngSetTransforms(handles.png, handles.info, mode, channels)) {
         return makeError(name, ": unsupported PNG: ", errorState.message);

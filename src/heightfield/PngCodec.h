@@ -24,10 +24,10 @@ enum class PngReadMode {
 struct DecodedPng {
     int width = 0;
     int height = 0;
-    int sourceBitDepth = 0;   ///< as stored in the file
-    int sourceColorType = 0;  ///< PNG_COLOR_TYPE_* as stored in the file
-    int channels = 0;         ///< after transforms
-    int bytesPerChannel = 0;  ///< after transforms: 1, or 2 (big-endian) for 16-bit NativeGray
+    int sourceBitDepth = 0;            ///< as stored in the file
+    int sourceColorType = 0;           ///< PNG_COLOR_TYPE_* as stored in the file
+    int channels = 0;                  ///< after transforms
+    int bytesPerChannel = 0;           ///< after transforms: 1, or 2 (big-endian) for 16-bit NativeGray
     std::vector<std::uint8_t> pixels;  ///< rows top to bottom, channel-interleaved
 };
 

@@ -49,20 +49,19 @@ Expected<HeightField> readRawHeightField(const std::filesystem::path& path, cons
     detail::allocateSamples(field);
     const bool isSigned = options.rawSigned;
     const bool bigEndian = options.rawBigEndian;
-    const bool ok = detail::forEachSample(*file, 0, width * height, kRawBytesPerSample,
-                                          [&](std::uint64_t k, const std::uint8_t* p) {
-                                              const std::uint16_t bits = bigEndian ? detail::loadU16Be(p)
-                                                                                   : detail::loadLe<std::uint16_t>(p);
-                                              const int row = static_cast<int>(k / width);
-                                              field.at(static_cast<int>(k % width), field.height - 1 - row) =
-                                                  isSigned ? float(static_cast<std::int16_t>(bits)) : float(bits);
-                                          });
+    const bool ok = detail::forEachSample(
+        *file, 0, width * height, kRawBytesPerSample, [&](std::uint64_t k, const std::uint8_t* p) {
+            const std::uint16_t bits = bigEndian ? detail::loadU16Be(p) : detail::loadLe<std::uint16_t>(p);
+            const int row = static_cast<int>(k / width);
+            field.at(static_cast<int>(k % width), field.height - 1 - row) =
+                isSigned ? float(static_cast<std::int16_t>(bits)) : float(bits);
+        });
     if (!ok) {
         return makeError(name, ": read error in the samples");
     }
     detail::applyNoData(field, options);
-    field.description = rawVariant(isSigned, bigEndian) + " " + std::to_string(field.width) + "x" +
-                        std::to_string(field.height);
+    field.description =
+        rawVariant(isSigned, bigEndian) + " " + std::to_string(field.width) + "x" + std::to_string(field.height);
     return field;
 }
 

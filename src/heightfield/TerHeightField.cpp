@@ -19,11 +19,11 @@
 #include "heightfield/HeightFieldIoSupport.h"
 
 #include <array>
-#include <string>
-#include <vector>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <string>
+#include <vector>
 
 namespace terrain {
 
@@ -38,7 +38,10 @@ constexpr double kHeightScaleUnit = 65536.0;
 /// Largest point count a 16-bit XPTS/YPTS/SIZE field holds (read as unsigned).
 constexpr int kTerMaxPoints = 65535;
 
-bool markerIs(const std::uint8_t* marker, const char* name) { return std::memcmp(marker, name, kMarkerSize) == 0; }
+bool markerIs(const std::uint8_t* marker, const char* name)
+{
+    return std::memcmp(marker, name, kMarkerSize) == 0;
+}
 
 }  // namespace
 
@@ -141,8 +144,8 @@ Expected<HeightField> readTerHeightField(const std::filesystem::path& path, cons
             const std::uint64_t expectedBytes = count * 2;
             const std::uint64_t foundBytes = file->size() - std::min(file->size(), position);
             if (foundBytes < expectedBytes) {
-                return makeError(name, ": truncated: expected ", expectedBytes, " bytes of samples, found ",
-                                 foundBytes, " (the header says ", field.width, "x", field.height, " samples)");
+                return makeError(name, ": truncated: expected ", expectedBytes, " bytes of samples, found ", foundBytes,
+                                 " (the header says ", field.width, "x", field.height, " samples)");
             }
             detail::allocateSamples(field);
             const std::uint64_t width = std::uint64_t(field.width);
@@ -174,9 +177,9 @@ Expected<HeightField> readTerHeightField(const std::filesystem::path& path, cons
     field.verticalScale = double(scal[2]) * heightScale / kHeightScaleUnit;
     field.verticalOffset = double(scal[2]) * baseHeight;
     detail::applyNoData(field, options);
-    field.description = "Terragen " + std::to_string(field.width) + "x" + std::to_string(field.height) +
-                        ", spacing " + detail::formatNumber(scal[0]) + " m, HeightScale " +
-                        std::to_string(heightScale) + ", BaseHeight " + std::to_string(baseHeight);
+    field.description = "Terragen " + std::to_string(field.width) + "x" + std::to_string(field.height) + ", spacing " +
+                        detail::formatNumber(scal[0]) + " m, HeightScale " + std::to_string(heightScale) +
+                        ", BaseHeight " + std::to_string(baseHeight);
     if (scal[1] != scal[0]) {
         field.description += " (x; SCAL y is " + detail::formatNumber(scal[1]) + " m)";
     }

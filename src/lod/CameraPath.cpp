@@ -65,8 +65,8 @@ double uniformCatmullRom(double p0, double p1, double p2, double p3, double u)
 }
 
 /// Centripetal Catmull-Rom between p1 (u = 0) and p2 (u = 1); p0 and p3 must differ from p1 and p2.
-glm::dvec3 centripetalCatmullRom(const glm::dvec3& p0, const glm::dvec3& p1, const glm::dvec3& p2,
-                                 const glm::dvec3& p3, double u)
+glm::dvec3 centripetalCatmullRom(const glm::dvec3& p0, const glm::dvec3& p1, const glm::dvec3& p2, const glm::dvec3& p3,
+                                 double u)
 {
     double t0 = 0.0;
     double t1 = t0 + std::sqrt(glm::length(p1 - p0));
@@ -146,8 +146,8 @@ Expected<CameraPath> CameraPath::parse(std::string_view text, const std::string&
             continue;
         }
         if (words.size() != 6) {
-            return makeError(name, ":", lineNumber, ": expected 6 numbers 'time x y z yaw pitch', found ",
-                             words.size(), " fields");
+            return makeError(name, ":", lineNumber, ": expected 6 numbers 'time x y z yaw pitch', found ", words.size(),
+                             " fields");
         }
         double v[6];
         for (int f = 0; f < 6; ++f) {

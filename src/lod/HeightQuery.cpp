@@ -69,7 +69,8 @@ Expected<HeightSample> staticHeightAt(const MapFile& map, double x, double y)
     auto code = [&](int i, int j) -> double {
         return node->heights[static_cast<std::size_t>(j + kBorder) * w + i + kBorder];
     };
-    double c = interpolateQuad(code(ix, iy), code(ix + 1, iy), code(ix, iy + 1), code(ix + 1, iy + 1), lx - ix, ly - iy);
+    double c =
+        interpolateQuad(code(ix, iy), code(ix + 1, iy), code(ix, iy + 1), code(ix + 1, iy + 1), lx - ix, ly - iy);
     return HeightSample{h.heightOffset + h.heightStep * c, id};
 }
 

@@ -11,7 +11,10 @@
 
 namespace terrain {
 
-double QuadtreeExtent::nodeSize(int level) const { return std::ldexp(rootSize, -level); }
+double QuadtreeExtent::nodeSize(int level) const
+{
+    return std::ldexp(rootSize, -level);
+}
 
 Aabb QuadtreeExtent::box(const NodeId& id, double zMin, double zMax) const
 {
@@ -21,7 +24,10 @@ Aabb QuadtreeExtent::box(const NodeId& id, double zMin, double zMax) const
     return {{x0, y0, zMin}, {x0 + size, y0 + size, zMax}};
 }
 
-QuadtreeExtent extentOf(const MapHeader& h) { return {h.originX, h.originY, h.nodeSizeAt(0)}; }
+QuadtreeExtent extentOf(const MapHeader& h)
+{
+    return {h.originX, h.originY, h.nodeSizeAt(0)};
+}
 
 MapLodTree::MapLodTree(const MapFile& map) : mMap(map) {}
 
@@ -43,7 +49,8 @@ double lodDistanceFactor(const Camera& camera, double tauPixels)
 {
     TERRAIN_EXPECTS(tauPixels > 0.0, "the screen-space error threshold tau must be > 0 pixels");
     camera.expectValid();
-    return static_cast<double>(camera.viewportHeight) / (2.0 * tauPixels * std::abs(std::tan(camera.verticalFov * 0.5)));
+    return static_cast<double>(camera.viewportHeight) /
+           (2.0 * tauPixels * std::abs(std::tan(camera.verticalFov * 0.5)));
 }
 
 namespace {
@@ -123,8 +130,13 @@ void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, co
     out.requests.clear();
     out.visitedNodes = 0;
     out.culledNodes = 0;
-    Selector s{tree, resident, tree.extent(), Frustum::fromCamera(camera), camera.position,
-               lodDistanceFactor(camera, tauPixels), out};
+    Selector s{tree,
+               resident,
+               tree.extent(),
+               Frustum::fromCamera(camera),
+               camera.position,
+               lodDistanceFactor(camera, tauPixels),
+               out};
     TERRAIN_EXPECTS(s.extent.rootSize > 0.0, "the quadtree's root size must be > 0");
     NodeId root = NodeId::root();
     NodeInfo info = tree.info(root);

@@ -26,7 +26,7 @@ struct NodeInfo {
 
 /// Where the quadtree's square lies in the world.
 struct QuadtreeExtent {
-    double originX = 0.0;   ///< metres: south-west corner of the root
+    double originX = 0.0;  ///< metres: south-west corner of the root
     double originY = 0.0;
     double rootSize = 1.0;  ///< metres: side of the root node, > 0
 
@@ -67,10 +67,11 @@ using ChildrenResident = std::function<bool(const NodeId& parent)>;
 /// One node to draw this frame.
 struct SelectedNode {
     NodeId id;
-    float morph = 1.0f;  ///< eq. 3.5 morph factor in [0, 1]: 0 looks like the parent, 1 the node's own detail
-    double distance = 0.0;                  ///< metres from the camera to the node's bounding box
-    glm::dvec3 cameraRelativeOrigin{0.0};  ///< metres: the node's south-west corner at height 0, minus the camera position
-    double size = 0.0;                      ///< metres: side of the node's square
+    float morph = 1.0f;     ///< eq. 3.5 morph factor in [0, 1]: 0 looks like the parent, 1 the node's own detail
+    double distance = 0.0;  ///< metres from the camera to the node's bounding box
+    glm::dvec3 cameraRelativeOrigin{
+        0.0};           ///< metres: the node's south-west corner at height 0, minus the camera position
+    double size = 0.0;  ///< metres: side of the node's square
 };
 
 /// A node that wants to be refined but whose children are not all resident: load (or synthesize) them.
@@ -81,10 +82,10 @@ struct ChildRequest {
 
 /// The output of one frame; owned by the caller and reused so a steady state allocates nothing.
 struct LodSelection {
-    std::vector<SelectedNode> nodes;      ///< in traversal order, see selectNodes()
-    std::vector<ChildRequest> requests;   ///< in traversal order (not sorted by distance)
-    std::size_t visitedNodes = 0;         ///< nodes that passed culling (statistics)
-    std::size_t culledNodes = 0;          ///< nodes rejected by the frustum test (statistics)
+    std::vector<SelectedNode> nodes;     ///< in traversal order, see selectNodes()
+    std::vector<ChildRequest> requests;  ///< in traversal order (not sorted by distance)
+    std::size_t visitedNodes = 0;        ///< nodes that passed culling (statistics)
+    std::size_t culledNodes = 0;         ///< nodes rejected by the frustum test (statistics)
 };
 
 /// C of eq. 3.3: S / (2 tau |tan(fov / 2)|) with S = viewport height in pixels. A node is refined when

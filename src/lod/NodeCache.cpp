@@ -83,8 +83,9 @@ bool NodeCache::evictOne()
 NodeCache::Insert NodeCache::insertChildren(const NodeId& parent, ChildNodes children)
 {
     for (int q = 0; q < 4; ++q) {
-        TERRAIN_EXPECTS(children[static_cast<std::size_t>(q)] && children[static_cast<std::size_t>(q)]->id == parent.child(q),
-                        "children must be the four children of parent, in quadrant order");
+        TERRAIN_EXPECTS(
+            children[static_cast<std::size_t>(q)] && children[static_cast<std::size_t>(q)]->id == parent.child(q),
+            "children must be the four children of parent, in quadrant order");
     }
     if (mGroups.count(parent.key()) != 0) {
         return Insert::AlreadyResident;

@@ -60,7 +60,7 @@ private:
     std::size_t mCapacity;
     NodePtr mRoot;
     std::unordered_map<std::uint64_t, Group> mGroups;  ///< by parent key
-    std::list<std::uint64_t> mLru;                      ///< parent keys, most recently used first
+    std::list<std::uint64_t> mLru;                     ///< parent keys, most recently used first
     std::uint64_t mFrame = 1;
     std::uint64_t mHits = 0;
     std::uint64_t mMisses = 0;

@@ -15,18 +15,18 @@ namespace terrain {
 
 struct NodeData {
     NodeId id;
-    bool isStatic = true;           ///< read from the map; false: synthesized (a dynamic node, 3.4)
-    bool hasChildren = false;       ///< children can be loaded or synthesized (and are wanted: see the source)
-    bool hasStaticChildren = false; ///< the children are in the map (else they would be dynamic)
-    float deltaC = 0.0f;            ///< nested error, metres (eq. 3.1; 3.4.1 for dynamic nodes)
-    double zMin = 0.0;              ///< nested bounding box, absolute metres (3.2.12)
+    bool isStatic = true;            ///< read from the map; false: synthesized (a dynamic node, 3.4)
+    bool hasChildren = false;        ///< children can be loaded or synthesized (and are wanted: see the source)
+    bool hasStaticChildren = false;  ///< the children are in the map (else they would be dynamic)
+    float deltaC = 0.0f;             ///< nested error, metres (eq. 3.1; 3.4.1 for dynamic nodes)
+    double zMin = 0.0;               ///< nested bounding box, absolute metres (3.2.12)
     double zMax = 0.0;
-    double spacing = 0.0;           ///< metres between the node's samples
-    std::vector<std::uint16_t> codes;    ///< static nodes: the window of height codes the map's children
-                                         ///< are predicted from; empty for dynamic nodes
-    DualHeightMap heights;               ///< base + displacement, (N + 4)^2, metres above the map's offset
+    double spacing = 0.0;                       ///< metres between the node's samples
+    std::vector<std::uint16_t> codes;           ///< static nodes: the window of height codes the map's children
+                                                ///< are predicted from; empty for dynamic nodes
+    DualHeightMap heights;                      ///< base + displacement, (N + 4)^2, metres above the map's offset
     std::vector<std::uint8_t> materialWeights;  ///< N x N x 4 material weights (DetailSynthesizer), or empty
-    std::vector<std::uint8_t> texture;   ///< T x T RGB, rows south to north
+    std::vector<std::uint8_t> texture;          ///< T x T RGB, rows south to north
 };
 
 using NodePtr = std::shared_ptr<const NodeData>;

@@ -34,13 +34,13 @@ struct LoadedChildren {
 };
 
 struct NodeServerStats {
-    std::uint64_t requested = 0;   ///< requests accepted into the queue
-    std::uint64_t completed = 0;   ///< groups loaded (successfully or not)
-    std::uint64_t cancelled = 0;   ///< queued requests dropped because no longer wanted
-    std::uint64_t rejected = 0;    ///< wanted but not queued: the queue was full
-    std::uint64_t failed = 0;      ///< groups that could not be loaded
-    std::size_t queued = 0;        ///< waiting for a worker now
-    std::size_t inFlight = 0;      ///< being loaded now
+    std::uint64_t requested = 0;  ///< requests accepted into the queue
+    std::uint64_t completed = 0;  ///< groups loaded (successfully or not)
+    std::uint64_t cancelled = 0;  ///< queued requests dropped because no longer wanted
+    std::uint64_t rejected = 0;   ///< wanted but not queued: the queue was full
+    std::uint64_t failed = 0;     ///< groups that could not be loaded
+    std::size_t queued = 0;       ///< waiting for a worker now
+    std::size_t inFlight = 0;     ///< being loaded now
     /// Most requests queued or loading at once since the server started (sampled where it can grow: after
     /// submit() admits requests), at most queueLimit + workers.
     std::size_t peakPending = 0;
@@ -83,8 +83,8 @@ private:
     NodeSource& mSource;
     Options mOptions;
     mutable std::mutex mMutex;
-    std::condition_variable mWork;   ///< a request arrived or stopping
-    std::condition_variable mIdle;   ///< a load finished
+    std::condition_variable mWork;  ///< a request arrived or stopping
+    std::condition_variable mIdle;  ///< a load finished
     std::vector<LoadRequest> mQueue;
     std::unordered_set<std::uint64_t> mPending;  ///< parents queued, loading or completed-not-taken
     std::unordered_set<std::uint64_t> mFailed;

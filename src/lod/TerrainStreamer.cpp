@@ -8,7 +8,9 @@
 namespace terrain {
 
 TerrainStreamer::TerrainStreamer(NodeSource& source, const QuadtreeExtent& extent, const StreamerOptions& options)
-    : mOptions(options), mTree(*this, extent), mCache(options.cacheSize),
+    : mOptions(options),
+      mTree(*this, extent),
+      mCache(options.cacheSize),
       mServer(source, {options.workers, options.queueLimit})
 {
 }
@@ -75,8 +77,9 @@ FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels, doubl
     stats.inserted = collect(stats.refused);
 
     const auto start = std::chrono::steady_clock::now();
-    selectNodes(mTree, camera, tauPixels, [this](const NodeId& parent) { return mCache.touchChildren(parent) != nullptr; },
-                mSelection);
+    selectNodes(
+        mTree, camera, tauPixels, [this](const NodeId& parent) { return mCache.touchChildren(parent) != nullptr; },
+        mSelection);
     stats.selectionSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     stats.selected = mSelection.nodes.size();
     stats.requested = mSelection.requests.size();

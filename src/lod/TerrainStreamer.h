@@ -14,9 +14,9 @@
 namespace terrain {
 
 struct StreamerOptions {
-    std::size_t cacheSize = 512;    ///< quad_cache_size, nodes
-    std::size_t queueLimit = 8;     ///< most load requests waiting at once
-    int workers = 1;                ///< loader threads; 0 = inline (loads happen in drain())
+    std::size_t cacheSize = 512;  ///< quad_cache_size, nodes
+    std::size_t queueLimit = 8;   ///< most load requests waiting at once
+    int workers = 1;              ///< loader threads; 0 = inline (loads happen in drain())
     /// detail_velocity_limit (3.4.4): no new dynamic nodes while the camera moves faster than this many of
     /// their sample spacings per second; 0 = no limit. Static nodes are always loaded.
     double velocityLimit = 0.0;
@@ -24,13 +24,13 @@ struct StreamerOptions {
 
 /// Per-frame figures.
 struct FrameStats {
-    std::size_t selected = 0;          ///< nodes drawn
-    std::size_t requested = 0;         ///< child groups the traversal wanted but were not resident
-    std::size_t deferred = 0;          ///< of those, not asked for: the cache has no room this frame
-    std::size_t tooFast = 0;           ///< of those, not asked for: dynamic, and the camera is too fast (3.4.4)
-    std::size_t inserted = 0;          ///< groups that became resident this frame
-    std::size_t refused = 0;           ///< finished groups the cache had no room (or no parent) for
-    double selectionSeconds = 0.0;     ///< time in selectNodes
+    std::size_t selected = 0;       ///< nodes drawn
+    std::size_t requested = 0;      ///< child groups the traversal wanted but were not resident
+    std::size_t deferred = 0;       ///< of those, not asked for: the cache has no room this frame
+    std::size_t tooFast = 0;        ///< of those, not asked for: dynamic, and the camera is too fast (3.4.4)
+    std::size_t inserted = 0;       ///< groups that became resident this frame
+    std::size_t refused = 0;        ///< finished groups the cache had no room (or no parent) for
+    double selectionSeconds = 0.0;  ///< time in selectNodes
 };
 
 class TerrainStreamer {

@@ -13,8 +13,14 @@ namespace terrain {
 
 namespace {
 
-std::uint32_t zigzag(std::int32_t v) { return (static_cast<std::uint32_t>(v) << 1) ^ static_cast<std::uint32_t>(v >> 31); }
-std::int32_t unzigzag(std::uint32_t v) { return static_cast<std::int32_t>(v >> 1) ^ -static_cast<std::int32_t>(v & 1); }
+std::uint32_t zigzag(std::int32_t v)
+{
+    return (static_cast<std::uint32_t>(v) << 1) ^ static_cast<std::uint32_t>(v >> 31);
+}
+std::int32_t unzigzag(std::uint32_t v)
+{
+    return static_cast<std::int32_t>(v >> 1) ^ -static_cast<std::int32_t>(v & 1);
+}
 
 void putVarint(std::vector<std::uint8_t>& out, std::uint32_t v)
 {
@@ -31,7 +37,10 @@ bool isCoded(const NodeId& id, int x, int y)
     return id.isRoot() || (x & 1) != 0 || (y & 1) != 0;
 }
 
-std::uint16_t clampCode(std::int32_t v) { return static_cast<std::uint16_t>(std::clamp(v, 0, 65535)); }
+std::uint16_t clampCode(std::int32_t v)
+{
+    return static_cast<std::uint16_t>(std::clamp(v, 0, 65535));
+}
 
 }  // namespace
 

@@ -3,13 +3,13 @@
 #include "core/MappedCopy.h"
 #include "quadtree/TextureCodec.h"
 
-#include <algorithm>
-#include <cerrno>
-#include <cstring>
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
 
 namespace terrain {
 

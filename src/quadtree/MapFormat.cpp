@@ -3,12 +3,12 @@
 #include "core/ByteIo.h"
 #include "core/Check.h"
 
+#include <zlib.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <sstream>
-#include <zlib.h>
 
 namespace terrain {
 
@@ -174,8 +174,8 @@ std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& h)
 Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std::string& name)
 {
     if (bytes.size() < kHeaderBytes) {
-        return makeError(name, ": not a terrain map: file is ", bytes.size(), " bytes, shorter than the ",
-                         kHeaderBytes, "-byte header");
+        return makeError(name, ": not a terrain map: file is ", bytes.size(), " bytes, shorter than the ", kHeaderBytes,
+                         "-byte header");
     }
     if (!std::equal(kMapMagic.begin(), kMapMagic.end(), bytes.begin())) {
         return makeError(name, ": not a terrain map (wrong magic bytes; expected a file written by prep)");
@@ -262,8 +262,8 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
     }
     if (h.nodeCount < 1 || h.directoryBytes != std::uint64_t{h.nodeCount} * kDirectoryEntryBytes ||
         h.directoryOffset < h.nodeAreaOffset() || h.directoryOffset > UINT64_MAX - h.directoryBytes) {
-        return bad("directory of ", h.nodeCount, " nodes at offset ", h.directoryOffset, " with ",
-                   h.directoryBytes, " bytes is inconsistent");
+        return bad("directory of ", h.nodeCount, " nodes at offset ", h.directoryOffset, " with ", h.directoryBytes,
+                   " bytes is inconsistent");
     }
     return h;
 }
@@ -341,8 +341,7 @@ Expected<std::vector<DirectoryEntry>> decodeDirectory(std::span<const std::uint8
             return bad("position outside its level");
         }
         if (e.offset < header.nodeAreaOffset() || e.offset > header.directoryOffset ||
-            e.payloadBytes() > header.directoryOffset - e.offset || e.heightBytes == 0 ||
-            e.textureBytes == 0) {
+            e.payloadBytes() > header.directoryOffset - e.offset || e.heightBytes == 0 || e.textureBytes == 0) {
             return bad("payload at ", e.offset, " with ", e.payloadBytes(), " bytes lies outside the node area");
         }
         if (e.minCode > e.maxCode || !(e.deltaC >= e.deltaM) || !(e.deltaM >= 0)) {

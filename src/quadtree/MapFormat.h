@@ -94,7 +94,10 @@ struct MapHeader {
     /// Samples per side of the whole padded grid at the finest level: (N - 1) * 2^(levels-1) + 1.
     std::uint64_t gridSize() const { return std::uint64_t{chunkSize - 1} * (std::uint64_t{1} << (levels - 1)) + 1; }
     /// Samples per side of the grid at `level`.
-    std::uint64_t levelGridSize(int level) const { return std::uint64_t{chunkSize - 1} * (std::uint64_t{1} << level) + 1; }
+    std::uint64_t levelGridSize(int level) const
+    {
+        return std::uint64_t{chunkSize - 1} * (std::uint64_t{1} << level) + 1;
+    }
     /// Samples per node side including the border on both sides (quadtree/ChunkGeometry.h).
     int windowSize() const { return terrain::windowSize(static_cast<int>(chunkSize)); }
     /// Metres between samples of a node at `level` (may be deeper than the static levels).
@@ -116,10 +119,10 @@ struct DirectoryEntry {
     std::uint64_t offset = 0;      ///< file offset of the payload
     std::uint32_t heightBytes = 0;
     std::uint32_t textureBytes = 0;
-    std::uint32_t crc = 0;       ///< CRC32 of the payload (heightBytes + textureBytes bytes)
-    float deltaM = 0.0f;         ///< metres: own simplification error (3.2.5)
-    float deltaC = 0.0f;         ///< metres: nested error, eq. 3.1 (max over children + deltaM)
-    std::uint16_t minCode = 0;   ///< nested bounding box in height codes (3.2.12)
+    std::uint32_t crc = 0;      ///< CRC32 of the payload (heightBytes + textureBytes bytes)
+    float deltaM = 0.0f;        ///< metres: own simplification error (3.2.5)
+    float deltaC = 0.0f;        ///< metres: nested error, eq. 3.1 (max over children + deltaM)
+    std::uint16_t minCode = 0;  ///< nested bounding box in height codes (3.2.12)
     std::uint16_t maxCode = 0;
     /// metres: nested error including the detail synthesized below the static leaves (3.4.1): a leaf's is
     /// its estimated detail error, an inner node's max over children + deltaM, so >= deltaC. Version 1: 0.

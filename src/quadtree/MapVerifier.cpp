@@ -81,10 +81,10 @@ private:
             const int n = static_cast<int>(mMap.header().chunkSize);
             const int w = window.size();
             double deltaM = mMap.header().heightStep * simplificationErrorCodes(n, [&](int a, int b) -> std::int32_t {
-                int q = (a >= n - 1 ? 1 : 0) | (b >= n - 1 ? 2 : 0);
-                int u = a - (q & 1) * (n - 1), v = b - (q >> 1) * (n - 1);
-                return children[q].heights[static_cast<std::size_t>(v + kBorder) * w + u + kBorder];
-            });
+                                int q = (a >= n - 1 ? 1 : 0) | (b >= n - 1 ? 2 : 0);
+                                int u = a - (q & 1) * (n - 1), v = b - (q >> 1) * (n - 1);
+                                return children[q].heights[static_cast<std::size_t>(v + kBorder) * w + u + kBorder];
+                            });
             if (std::abs(deltaM - entry.deltaM) > 1e-4 * std::max(1.0, deltaM)) {
                 problem(node.id, "delta_m is " + std::to_string(entry.deltaM) + " m but the decoded heights give " +
                                      std::to_string(deltaM) + " m");
@@ -110,9 +110,9 @@ private:
                                  std::to_string(entry.deltaC) + " m");
         }
         if (checked.minCode != entry.minCode || checked.maxCode != entry.maxCode) {
-            problem(node.id, "bounding box codes " + std::to_string(entry.minCode) + ".." + std::to_string(entry.maxCode) +
-                                 " differ from the decoded subtree's " + std::to_string(checked.minCode) + ".." +
-                                 std::to_string(checked.maxCode));
+            problem(node.id, "bounding box codes " + std::to_string(entry.minCode) + ".." +
+                                 std::to_string(entry.maxCode) + " differ from the decoded subtree's " +
+                                 std::to_string(checked.minCode) + ".." + std::to_string(checked.maxCode));
         }
         checked.deltaC = entry.deltaC;
         checked.detailDeltaC = entry.detailDeltaC;

@@ -37,10 +37,7 @@ struct NodeId {
     }
 
     /// "level/x/y", the form used in every message that names a node.
-    std::string toString() const
-    {
-        return std::to_string(level) + "/" + std::to_string(x) + "/" + std::to_string(y);
-    }
+    std::string toString() const { return std::to_string(level) + "/" + std::to_string(x) + "/" + std::to_string(y); }
 
     friend bool operator==(const NodeId&, const NodeId&) = default;
 };

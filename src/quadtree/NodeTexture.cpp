@@ -45,8 +45,7 @@ void toBytes(const double* c, std::uint8_t* rgb)
 
 }  // namespace
 
-HeightColouring::HeightColouring(const QuantizedGrid& grid, const MapHeader& header, double heightMin,
-                                 double heightMax)
+HeightColouring::HeightColouring(const QuantizedGrid& grid, const MapHeader& header, double heightMin, double heightMax)
     : mGrid(grid), mTable(static_cast<std::size_t>(kTableSteps) * kTableSteps * 3)
 {
     heightMax = std::max(heightMax, heightMin + header.heightStep);
@@ -80,8 +79,10 @@ const std::uint8_t* HeightColouring::colourAt(std::int64_t x, std::int64_t y) co
     };
     const double dx = code(std::min(x + 1, last), y) - code(std::max<std::int64_t>(x - 1, 0), y);
     const double dy = code(x, std::min(y + 1, last)) - code(x, std::max<std::int64_t>(y - 1, 0));
-    const auto i = static_cast<int>(std::clamp((code(x, y) - mCodeMin) * mHeightStepsPerCode + 0.5, 0.0, kTableSteps - 1.0));
-    const auto j = static_cast<int>(std::min(std::sqrt(dx * dx + dy * dy) * mSlopeStepsPerCode + 0.5, kTableSteps - 1.0));
+    const auto i =
+        static_cast<int>(std::clamp((code(x, y) - mCodeMin) * mHeightStepsPerCode + 0.5, 0.0, kTableSteps - 1.0));
+    const auto j =
+        static_cast<int>(std::min(std::sqrt(dx * dx + dy * dy) * mSlopeStepsPerCode + 0.5, kTableSteps - 1.0));
     return &mTable[(static_cast<std::size_t>(i) * kTableSteps + j) * 3];
 }
 
@@ -111,8 +112,10 @@ void HeightColouring::colour(double gx, double gy, double footprint, std::uint8_
     } else {
         // Box average over the samples under the texel.
         auto half = footprint / 2;
-        auto xa = static_cast<std::int64_t>(std::ceil(gx - half)), xb = static_cast<std::int64_t>(std::floor(gx + half));
-        auto ya = static_cast<std::int64_t>(std::ceil(gy - half)), yb = static_cast<std::int64_t>(std::floor(gy + half));
+        auto xa = static_cast<std::int64_t>(std::ceil(gx - half)),
+             xb = static_cast<std::int64_t>(std::floor(gx + half));
+        auto ya = static_cast<std::int64_t>(std::ceil(gy - half)),
+             yb = static_cast<std::int64_t>(std::floor(gy + half));
         int count = 0;
         for (auto y = ya; y <= yb; ++y) {
             for (auto x = xa; x <= xb; ++x) {
@@ -165,8 +168,10 @@ void ImageTexture::colour(double gx, double gy, double footprint, std::uint8_t* 
         }
     } else {
         double half = pixelsPerTexel / 2;
-        auto xa = static_cast<std::int64_t>(std::ceil(px - half)), xb = static_cast<std::int64_t>(std::floor(px + half));
-        auto ya = static_cast<std::int64_t>(std::ceil(py - half)), yb = static_cast<std::int64_t>(std::floor(py + half));
+        auto xa = static_cast<std::int64_t>(std::ceil(px - half)),
+             xb = static_cast<std::int64_t>(std::floor(px + half));
+        auto ya = static_cast<std::int64_t>(std::ceil(py - half)),
+             yb = static_cast<std::int64_t>(std::floor(py + half));
         int count = 0;
         for (auto y = ya; y <= yb; ++y) {
             for (auto x = xa; x <= xb; ++x) {
@@ -204,7 +209,8 @@ void sampleNodeTexture(const TextureSource& source, const MapHeader& header, con
 void downsampleChildTextures(const std::array<std::span<const std::uint8_t>, 4>& children, int size,
                              std::span<std::uint8_t> parent)
 {
-    TERRAIN_EXPECTS(parent.size() == static_cast<std::size_t>(size) * size * 3, "texture must have size*size RGB texels");
+    TERRAIN_EXPECTS(parent.size() == static_cast<std::size_t>(size) * size * 3,
+                    "texture must have size*size RGB texels");
     // The four children side by side (their shared edges coincide): (2 size - 1)^2 RGB texels.
     const int combined = 2 * size - 1;
     const std::size_t rowBytes = static_cast<std::size_t>(combined) * 3;

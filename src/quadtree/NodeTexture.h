@@ -41,9 +41,9 @@ private:
     const std::uint8_t* colourAt(std::int64_t x, std::int64_t y) const;
 
     const QuantizedGrid& mGrid;
-    double mCodeMin;          ///< code of the lowest valid height
-    double mHeightStepsPerCode;  ///< table rows per code
-    double mSlopeStepsPerCode;   ///< table columns per code of height difference over 2 samples
+    double mCodeMin;                   ///< code of the lowest valid height
+    double mHeightStepsPerCode;        ///< table rows per code
+    double mSlopeStepsPerCode;         ///< table columns per code of height difference over 2 samples
     std::vector<std::uint8_t> mTable;  ///< kTableSteps^2 RGB colours, [height step][slope step]
 };
 

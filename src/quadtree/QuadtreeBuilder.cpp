@@ -74,7 +74,8 @@ public:
     {
         std::uint64_t n = 0;
         for (const auto& level : mFlags) {
-            n += static_cast<std::uint64_t>(std::count_if(level.begin(), level.end(), [](auto f) { return f & kExists; }));
+            n += static_cast<std::uint64_t>(
+                std::count_if(level.begin(), level.end(), [](auto f) { return f & kExists; }));
         }
         return n;
     }
@@ -123,8 +124,15 @@ public:
     Builder(const MapHeader& header, const QuantizedGrid& grid, const TreeShape& shape, const TextureSource& texture,
             const std::vector<std::uint8_t>& filledMask, const BuildOptions& options, std::atomic<std::uint64_t>& done,
             std::atomic<std::int64_t>& detailNanoseconds)
-        : mHeader(header), mGrid(grid), mShape(shape), mTexture(texture), mFilledMask(filledMask), mOptions(options),
-          mWindow(header), mDone(done), mDetailNanoseconds(detailNanoseconds)
+        : mHeader(header),
+          mGrid(grid),
+          mShape(shape),
+          mTexture(texture),
+          mFilledMask(filledMask),
+          mOptions(options),
+          mWindow(header),
+          mDone(done),
+          mDetailNanoseconds(detailNanoseconds)
     {
     }
 
@@ -169,7 +177,8 @@ public:
             const NodeId child = id.child(q);
             std::vector<std::uint16_t> childWindow(mWindow.sampleCount());
             mGrid.extractWindow(mHeader, child, childWindow);
-            emit(child, encodeNodeHeights(mWindow, child, childWindow, window, mHeader.quantizerBin, mOptions.zlibLevel),
+            emit(child,
+                 encodeNodeHeights(mWindow, child, childWindow, window, mHeader.quantizerBin, mOptions.zlibLevel),
                  children[q], out);
             worstChild = std::max(worstChild, children[q].deltaC);
             worstChildDetail = std::max(worstChildDetail, children[q].detailDeltaC);
@@ -192,8 +201,9 @@ public:
     {
         std::vector<std::uint16_t> window(mWindow.sampleCount());
         mGrid.extractWindow(mHeader, NodeId::root(), window);
-        emit(NodeId::root(), encodeNodeHeights(mWindow, NodeId::root(), window, {}, mHeader.quantizerBin, mOptions.zlibLevel),
-             root, out);
+        emit(NodeId::root(),
+             encodeNodeHeights(mWindow, NodeId::root(), window, {}, mHeader.quantizerBin, mOptions.zlibLevel), root,
+             out);
     }
 
 private:
@@ -234,7 +244,8 @@ private:
         if (mFilledMask.empty()) {
             return false;
         }
-        const std::uint64_t size = std::uint64_t{mHeader.chunkSize - 1} << (mHeader.levels - 1 - static_cast<std::uint32_t>(id.level));
+        const std::uint64_t size = std::uint64_t{mHeader.chunkSize - 1}
+                                   << (mHeader.levels - 1 - static_cast<std::uint32_t>(id.level));
         const std::uint64_t x1 = std::min<std::uint64_t>(id.x * size + size, mHeader.validWidth - 1);
         const std::uint64_t y1 = std::min<std::uint64_t>(id.y * size + size, mHeader.validHeight - 1);
         for (std::uint64_t y = id.y * size; y <= y1; ++y) {
@@ -333,8 +344,8 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     if (field.verticalScale) {
         scale = *field.verticalScale;
         if (options.verticalScale && *options.verticalScale != scale) {
-            warn("-v " + std::to_string(*options.verticalScale) + " has no effect: the file gives a vertical scale of " +
-                 std::to_string(scale));
+            warn("-v " + std::to_string(*options.verticalScale) +
+                 " has no effect: the file gives a vertical scale of " + std::to_string(scale));
         }
     } else if (options.verticalScale) {
         scale = *options.verticalScale;
@@ -410,7 +421,8 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
         textureImage = std::move(image.value());
         textureSource = std::make_unique<ImageTexture>(textureImage, header);
     } else {
-        textureSource = std::make_unique<HeightColouring>(*grid, header, header.heightOf(lowest), header.heightOf(highest));
+        textureSource =
+            std::make_unique<HeightColouring>(*grid, header, header.heightOf(lowest), header.heightOf(highest));
     }
     std::unique_ptr<WeightMap> weights;
     if (options.weights) {

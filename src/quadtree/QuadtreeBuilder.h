@@ -15,12 +15,12 @@
 namespace terrain {
 
 struct BuildOptions {
-    int chunkSize = 65;                      ///< N: isValidChunkSize, 2^k + 1 in [3, kMaxChunkSize = 1025]
-    std::optional<double> spacing;           ///< -h: metres between samples, used when the file has none
-    std::optional<double> verticalScale;     ///< -v: metres per native unit, used when the file has none
-    double offset = 0.0;                     ///< --offset: metres added after scaling
-    double maxError = 0.0;                   ///< --max-error: L-infinity bound in metres, 0 = lossless
-    int textureSize = 0;                     ///< --texture-size: 2^k + 1 up to kMaxTextureSize; 0 = the chunk size
+    int chunkSize = 65;                   ///< N: isValidChunkSize, 2^k + 1 in [3, kMaxChunkSize = 1025]
+    std::optional<double> spacing;        ///< -h: metres between samples, used when the file has none
+    std::optional<double> verticalScale;  ///< -v: metres per native unit, used when the file has none
+    double offset = 0.0;                  ///< --offset: metres added after scaling
+    double maxError = 0.0;                ///< --max-error: L-infinity bound in metres, 0 = lossless
+    int textureSize = 0;                  ///< --texture-size: 2^k + 1 up to kMaxTextureSize; 0 = the chunk size
     int threads = 1;
     std::optional<std::filesystem::path> texture;  ///< -t: RGB texture stretched over the input
     std::optional<std::filesystem::path> weights;  ///< -w: gray weight map for pruning (3.2.13)
@@ -48,9 +48,9 @@ struct BuildReport {
     int inputHeight = 0;
     std::uint64_t nodes = 0;
     std::uint64_t fileBytes = 0;
-    std::uint64_t heightBytes = 0;   ///< node height streams
-    std::uint64_t textureBytes = 0;  ///< node texture streams
-    std::uint64_t storedSamples = 0; ///< node window samples, borders included
+    std::uint64_t heightBytes = 0;    ///< node height streams
+    std::uint64_t textureBytes = 0;   ///< node texture streams
+    std::uint64_t storedSamples = 0;  ///< node window samples, borders included
     double seconds = 0.0;
     std::uint64_t leaves = 0;
     float maxLeafDetailError = 0.0f;   ///< metres, over the leaves (0 without leafDetailError)

@@ -64,10 +64,7 @@ Expected<Quantization> chooseQuantization(const HeightField& field, double scale
     return q;
 }
 
-QuantizedGrid::QuantizedGrid(std::uint32_t size)
-    : mSize(size), mCodes(static_cast<std::size_t>(size) * size)
-{
-}
+QuantizedGrid::QuantizedGrid(std::uint32_t size) : mSize(size), mCodes(static_cast<std::size_t>(size) * size) {}
 
 Expected<QuantizedGrid> QuantizedGrid::build(const HeightField& field, const Quantization& q, std::uint32_t size)
 {
@@ -119,7 +116,8 @@ void QuantizedGrid::reconstructLossy(const MapHeader& header, std::uint32_t bin,
         WindowRect inside = geometry.insideRect(NodeId::root());
         for (int y = inside.y0; y <= inside.y1; ++y) {
             for (int x = inside.x0; x <= inside.x1; ++x) {
-                auto& code = at(static_cast<std::uint64_t>(x - kBorder) * stride, static_cast<std::uint64_t>(y - kBorder) * stride);
+                auto& code = at(static_cast<std::uint64_t>(x - kBorder) * stride,
+                                static_cast<std::uint64_t>(y - kBorder) * stride);
                 std::int32_t predicted = rootPrediction(window, w, inside, x, y);
                 code = static_cast<std::uint16_t>(predicted + quantizeResidual(code - predicted, bin));
                 window[static_cast<std::size_t>(y) * w + x] = code;
@@ -150,8 +148,7 @@ void QuantizedGrid::reconstructLossy(const MapHeader& header, std::uint32_t bin,
                         }
                         auto gx = (std::uint64_t{child.x} * (n - 1) + u) * childStride;
                         auto gy = (std::uint64_t{child.y} * (n - 1) + v) * childStride;
-                        std::int32_t predicted =
-                            prediction[static_cast<std::size_t>(v + kBorder) * w + u + kBorder];
+                        std::int32_t predicted = prediction[static_cast<std::size_t>(v + kBorder) * w + u + kBorder];
                         auto& code = at(gx, gy);
                         code = static_cast<std::uint16_t>(predicted + quantizeResidual(code - predicted, bin));
                     }

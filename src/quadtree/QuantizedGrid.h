@@ -18,19 +18,18 @@ namespace terrain {
 struct Quantization {
     double offset = 0.0;
     double step = 1.0;
-    std::uint32_t bin = 1;      ///< residual quantizer bin in codes, 2 * E + 1
-    double errorBound = 0.0;    ///< guaranteed max |stored - input| in metres
-    std::uint32_t margin = 0;   ///< codes kept free below and above the data so lossy values stay in range
-    double nativeMin = 0.0;     ///< the native value that maps to code `margin`
-    double nativePerCode = 1.0; ///< native units per code
+    std::uint32_t bin = 1;       ///< residual quantizer bin in codes, 2 * E + 1
+    double errorBound = 0.0;     ///< guaranteed max |stored - input| in metres
+    std::uint32_t margin = 0;    ///< codes kept free below and above the data so lossy values stay in range
+    double nativeMin = 0.0;      ///< the native value that maps to code `margin`
+    double nativePerCode = 1.0;  ///< native units per code
 };
 
 /// Chooses the quantization of `field` (no NaN left) with metres = baseOffset + scale * native. Integer
 /// input whose range fits 16 bits is stored losslessly with one code per native unit; otherwise (float
 /// samples or a range over 65535 units) the step is the finest that fits. `maxError` (metres, >= 0) is the
 /// L-infinity bound the map may add on top. Fails if scale is not positive and finite.
-Expected<Quantization> chooseQuantization(const HeightField& field, double scale, double baseOffset,
-                                          double maxError);
+Expected<Quantization> chooseQuantization(const HeightField& field, double scale, double baseOffset, double maxError);
 
 class QuantizedGrid {
 public:

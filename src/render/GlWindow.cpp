@@ -1,6 +1,8 @@
 #include "render/GlWindow.h"
 
+// libepoxy must come before GLFW (which would otherwise include the system GL header first).
 #include <epoxy/gl.h>
+
 #include <GLFW/glfw3.h>
 
 #include <cstdio>
@@ -14,7 +16,8 @@ std::string lastGlfwError()
 {
     const char* description = nullptr;
     int code = glfwGetError(&description);
-    return code == GLFW_NO_ERROR ? "no details" : "GLFW error " + std::to_string(code) + ": " + (description ? description : "");
+    return code == GLFW_NO_ERROR ? "no details"
+                                 : "GLFW error " + std::to_string(code) + ": " + (description ? description : "");
 }
 
 #ifndef NDEBUG
@@ -78,10 +81,22 @@ GlWindow::~GlWindow()
     glfwTerminate();
 }
 
-bool GlWindow::shouldClose() const { return glfwWindowShouldClose(mWindow) != 0; }
-void GlWindow::requestClose() { glfwSetWindowShouldClose(mWindow, GLFW_TRUE); }
-void GlWindow::swapBuffers() { glfwSwapBuffers(mWindow); }
-void GlWindow::pollEvents() { glfwPollEvents(); }
+bool GlWindow::shouldClose() const
+{
+    return glfwWindowShouldClose(mWindow) != 0;
+}
+void GlWindow::requestClose()
+{
+    glfwSetWindowShouldClose(mWindow, GLFW_TRUE);
+}
+void GlWindow::swapBuffers()
+{
+    glfwSwapBuffers(mWindow);
+}
+void GlWindow::pollEvents()
+{
+    glfwPollEvents();
+}
 
 int GlWindow::width() const
 {

@@ -15,7 +15,7 @@ namespace terrain {
 struct WindowOptions {
     int width = 1280;
     int height = 720;
-    bool visible = true;       ///< false: an offscreen-sized hidden window (video mode, tests)
+    bool visible = true;  ///< false: an offscreen-sized hidden window (video mode, tests)
     std::string title = "tengine";
     bool vsync = false;
 };

@@ -11,7 +11,10 @@ namespace terrain {
 
 namespace {
 
-std::int16_t toSnorm16(double v) { return static_cast<std::int16_t>(std::lround(std::clamp(v, -1.0, 1.0) * 32767.0)); }
+std::int16_t toSnorm16(double v)
+{
+    return static_cast<std::int16_t>(std::lround(std::clamp(v, -1.0, 1.0) * 32767.0));
+}
 
 }  // namespace
 
@@ -23,9 +26,7 @@ std::vector<NodeVertex> buildNodeVertices(const TemplateMesh& mesh, std::span<co
     TERRAIN_EXPECTS(window.size() == static_cast<std::size_t>(w) * w, "window must be (N + 4)^2 heights");
     TERRAIN_EXPECTS(materialWeights.empty() || materialWeights.size() == static_cast<std::size_t>(n) * n * 4,
                     "material weights must be N x N x 4 bytes");
-    auto code = [&](int i, int j) -> double {
-        return window[static_cast<std::size_t>(j + kBorder) * w + i + kBorder];
-    };
+    auto code = [&](int i, int j) -> double { return window[static_cast<std::size_t>(j + kBorder) * w + i + kBorder]; };
     // Slopes in metres per sample, turned into unit normals (x, y) with the spacing.
     const double scale = 1.0 / spacing;
     auto normal = [&](double gx, double gy, std::int16_t* out) {

@@ -33,7 +33,8 @@ std::string withDefines(const std::string& source, const std::vector<std::string
     auto lineEnd = source.find('\n', version);
     lineEnd = lineEnd == std::string::npos ? source.size() : lineEnd + 1;
     // Keep the driver's line numbers matching the file: reset with #line after the defines.
-    std::size_t versionLine = 1 + static_cast<std::size_t>(std::count(source.begin(), source.begin() + static_cast<std::ptrdiff_t>(lineEnd), '\n'));
+    std::size_t versionLine = 1 + static_cast<std::size_t>(std::count(
+                                      source.begin(), source.begin() + static_cast<std::ptrdiff_t>(lineEnd), '\n'));
     return source.substr(0, lineEnd) + block + "#line " + std::to_string(versionLine) + "\n" + source.substr(lineEnd);
 }
 

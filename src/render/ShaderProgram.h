@@ -20,7 +20,8 @@ public:
                                         const std::vector<std::string>& defines = {});
     /// Same from source text; `name` is used in messages.
     static Expected<ShaderProgram> fromSource(const std::string& name, const std::string& vertex,
-                                              const std::string& fragment, const std::vector<std::string>& defines = {});
+                                              const std::string& fragment,
+                                              const std::vector<std::string>& defines = {});
 
     void use() const { glUseProgram(mProgram.name()); }
     /// Location of a uniform, cached; -1 when the program has none of that name (optimised away).

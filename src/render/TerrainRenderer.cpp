@@ -36,11 +36,11 @@ Expected<std::vector<DetailLayer>> loadDetailLayers(const MaterialSet& materials
             }
             auto image = readPngImage(file, 1);
             TERRAIN_TRY(image);
-            if (!layers.empty() && (image->width != layers.front().image.width ||
-                                    image->height != layers.front().image.height)) {
+            if (!layers.empty() &&
+                (image->width != layers.front().image.width || image->height != layers.front().image.height)) {
                 return makeError(file.string(), ": detail texture is ", image->width, "x", image->height,
-                                 " but the first one is ", layers.front().image.width, "x",
-                                 layers.front().image.height, " (all detail textures share one size)");
+                                 " but the first one is ", layers.front().image.width, "x", layers.front().image.height,
+                                 " (all detail textures share one size)");
             }
             layers.push_back({std::move(image).value(), static_cast<int>(m), size});
             size /= 4.0;
@@ -110,7 +110,8 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
                 glm::vec4 mask(0.0f);
                 mask[layers[k].material] = 1.0f;
                 glUniform4fv(terrainProgram.uniform(("uLayerMaterialMask" + index).c_str()), 1, glm::value_ptr(mask));
-                glUniform1f(terrainProgram.uniform(("uLayerScale" + index).c_str()), static_cast<float>(1.0 / layers[k].size));
+                glUniform1f(terrainProgram.uniform(("uLayerScale" + index).c_str()),
+                            static_cast<float>(1.0 / layers[k].size));
             }
             glm::vec4 tintColumns[3] = {glm::vec4(1.0f), glm::vec4(1.0f), glm::vec4(1.0f)};
             for (std::size_t m = 0; m < materials->materials().size(); ++m) {
@@ -279,9 +280,9 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
                                mHeader.originX + (mHeader.validX0 + mHeader.validWidth - 1.0) * s - camera.position.x,
                                mHeader.originY + (mHeader.validY0 + mHeader.validHeight - 1.0) * s - camera.position.y};
         const double slack = 1e-3 * s;  // keep fragments exactly on the last sample
-        glUniform4f(program.uniform("uValidRect"), static_cast<float>(valid.x - slack), static_cast<float>(valid.y - slack),
-                    static_cast<float>(valid.z + slack), static_cast<float>(valid.w + slack));
-
+        glUniform4f(program.uniform("uValidRect"), static_cast<float>(valid.x - slack),
+                    static_cast<float>(valid.y - slack), static_cast<float>(valid.z + slack),
+                    static_cast<float>(valid.w + slack));
     }
     glBindVertexArray(mTemplateVao.name());
     // Per-node uniform locations of each program variant (kNear, kFar).
@@ -291,7 +292,7 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
     };
     std::vector<Locations> locations;
     for (ShaderProgram& program : mPrograms) {
-        Locations l{program.uniform("uOrigin"), program.uniform("uSpacing"), program.uniform("uMorph"),
+        Locations l{program.uniform("uOrigin"),     program.uniform("uSpacing"),      program.uniform("uMorph"),
                     program.uniform("uSkirtDepth"), program.uniform("uParentOffset"), {}};
         for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
             l.layerOrigin.push_back(program.uniform(("uLayerOrigin[" + std::to_string(k) + "]").c_str()));

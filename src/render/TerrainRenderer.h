@@ -39,8 +39,8 @@ struct RenderStats {
     std::size_t staticNodes = 0;
     std::size_t dynamicNodes = 0;
     std::uint64_t triangles = 0;
-    std::size_t uploads = 0;       ///< nodes copied to the GPU this frame
-    std::size_t gpuNodes = 0;      ///< nodes with GPU copies after the frame
+    std::size_t uploads = 0;   ///< nodes copied to the GPU this frame
+    std::size_t gpuNodes = 0;  ///< nodes with GPU copies after the frame
 };
 
 class TerrainRenderer {
@@ -64,7 +64,7 @@ public:
 
 private:
     struct GpuNode {
-        NodePtr data;  ///< keeps the CPU copy alive while the GPU copy is in use; identity for eviction
+        NodePtr data;         ///< keeps the CPU copy alive while the GPU copy is in use; identity for eviction
         gl::Buffer vertices;  ///< NodeVertex per template vertex (render/NodeVertexData.h)
         gl::Texture colour;
         std::uint64_t lastFrame = 0;
@@ -88,8 +88,8 @@ private:
     GLsizei mIndexCount = 0;
     GLenum mIndexType = GL_UNSIGNED_INT;
     std::uint64_t mTrianglesPerNode = 0;
-    gl::VertexArray mEmptyVao;  ///< the sky's full-screen triangle needs no attributes
-    gl::Texture mDetail;        ///< GL_TEXTURE_2D_ARRAY of the detail layers, or none
+    gl::VertexArray mEmptyVao;       ///< the sky's full-screen triangle needs no attributes
+    gl::Texture mDetail;             ///< GL_TEXTURE_2D_ARRAY of the detail layers, or none
     std::vector<double> mLayerSize;  ///< metres per repeat of each detail layer
     /// Repeats of a detail layer beyond which the fragment shader has faded it out (terrain.frag).
     static constexpr double kDetailFadeRepeats = 40.0;

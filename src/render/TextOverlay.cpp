@@ -58,8 +58,10 @@ void TextOverlay::draw(const std::vector<std::string>& lines, int width, int hei
             for (int k = 0; k < 4; ++k) {
                 std::memcpy(corners[k], mScratch.data() + (q * 4 + k) * 16, sizeof(float) * 2);
             }
-            const float x0 = margin + corners[0][0] * scale, y0 = margin + (corners[0][1] + static_cast<float>(row) * lineHeight) * scale;
-            const float x1 = margin + corners[2][0] * scale, y1 = margin + (corners[2][1] + static_cast<float>(row) * lineHeight) * scale;
+            const float x0 = margin + corners[0][0] * scale,
+                        y0 = margin + (corners[0][1] + static_cast<float>(row) * lineHeight) * scale;
+            const float x1 = margin + corners[2][0] * scale,
+                        y1 = margin + (corners[2][1] + static_cast<float>(row) * lineHeight) * scale;
             quad(x0, y0, x1, y1, white);
         }
     }

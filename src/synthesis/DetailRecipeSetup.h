@@ -27,6 +27,7 @@ Expected<std::shared_ptr<const MaterialSet>> loadDetailMaterials(const std::vect
 
 /// The recipe of `settings` whose materials were loaded from `files` (in the same order; both empty for
 /// subdivision only): scheme, omega, and each material's name with the hash of its file.
-Expected<DetailRecipe> makeDetailRecipe(const DetailSettings& settings, const std::vector<std::filesystem::path>& files);
+Expected<DetailRecipe> makeDetailRecipe(const DetailSettings& settings,
+                                        const std::vector<std::filesystem::path>& files);
 
 }  // namespace terrain

@@ -23,7 +23,10 @@ std::uint64_t splitmix(std::uint64_t& state)
     return z ^ (z >> 31);
 }
 
-double unit(std::uint64_t& state) { return static_cast<double>(splitmix(state) >> 11) * 0x1.0p-53; }
+double unit(std::uint64_t& state)
+{
+    return static_cast<double>(splitmix(state) >> 11) * 0x1.0p-53;
+}
 
 /// Octave offsets stay below this many lattice units: large enough to decorrelate octaves, small
 /// enough not to cost precision in u = c * x + offset.
@@ -103,10 +106,9 @@ BasisTable BasisTable::fromNoise(const PerlinNoise& noise, int samplesPerCell)
     std::vector<float> values(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
     for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) {
-            values[static_cast<std::size_t>(j) * n + i] =
-                noise.cell(i / samplesPerCell, j / samplesPerCell,
-                           (i % samplesPerCell) / static_cast<double>(samplesPerCell),
-                           (j % samplesPerCell) / static_cast<double>(samplesPerCell));
+            values[static_cast<std::size_t>(j) * n + i] = noise.cell(
+                i / samplesPerCell, j / samplesPerCell, (i % samplesPerCell) / static_cast<double>(samplesPerCell),
+                (j % samplesPerCell) / static_cast<double>(samplesPerCell));
         }
     }
     return BasisTable(n, n, std::move(values), samplesPerCell, Filter::Bilinear);
@@ -201,8 +203,7 @@ Fractal::Fractal(const FractalParams& params, std::shared_ptr<const BasisTable> 
     }
 
     if (params.cache == FractalCache::Basis && !mTable) {
-        mTable = std::make_shared<BasisTable>(
-            BasisTable::fromNoise(mPeriodicNoise, kCachedBasisSamplesPerCell));
+        mTable = std::make_shared<BasisTable>(BasisTable::fromNoise(mPeriodicNoise, kCachedBasisSamplesPerCell));
     } else if (params.cache == FractalCache::Fractal) {
         buildCachedFractal();
     }
@@ -222,8 +223,8 @@ inline double Fractal::sum(const std::vector<Octave>& octaves, double x, double 
         double weight = 1.0;
         for (std::size_t i = 0; i < n; ++i) {
             const Octave& o = octaves[i];
-            double signal = mParams.ridgeOffset -
-                            std::abs(basis(i, o.cu * x - o.su * y + o.ou, o.su * x + o.cu * y + o.ov));
+            double signal =
+                mParams.ridgeOffset - std::abs(basis(i, o.cu * x - o.su * y + o.ou, o.su * x + o.cu * y + o.ov));
             signal *= signal * weight;
             result += o.weight * signal;
             weight = std::clamp(signal * mParams.ridgeFeedback, 0.0, 1.0);
@@ -260,8 +261,8 @@ void Fractal::buildCachedFractal()
     double scale = mParams.amplitude > 0.0 ? 1.0 / mParams.amplitude : 0.0;
     for (int j = 0; j < size; ++j) {
         for (int i = 0; i < size; ++i) {
-            values[static_cast<std::size_t>(j) * size + i] = static_cast<float>(
-                tileSum(static_cast<double>(i) / size, static_cast<double>(j) / size) * scale);
+            values[static_cast<std::size_t>(j) * size + i] =
+                static_cast<float>(tileSum(static_cast<double>(i) / size, static_cast<double>(j) / size) * scale);
         }
     }
     mFractalTable = std::make_shared<BasisTable>(size, size, std::move(values), size, BasisTable::Filter::Bilinear);

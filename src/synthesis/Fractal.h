@@ -93,14 +93,14 @@ struct SampleGrid {
 
 struct FractalParams {
     FractalType type = FractalType::Fbm;
-    int octaves = 8;            ///< number of basis samples summed, [1, 24]
-    double lacunarity = 2.0;    ///< frequency ratio between successive octaves, [1.1, 8]
-    double gain = 0.5;          ///< amplitude ratio between successive octaves, (0, 1]
-    double wavelength = 32.0;   ///< metres: a lattice cell (Perlin) or one bitmap tile at octave 0, > 0
-    double amplitude = 1.0;     ///< metres: every value lies in [-amplitude, amplitude], >= 0
-    std::uint64_t seed = 1;     ///< picks the noise and each octave's rotation and offset
-    double ridgeOffset = 1.0;   ///< ridged: Musgrave's offset, [0.5, 1.5]; 1 puts the ridges at basis 0
-    double ridgeFeedback = 2.0; ///< ridged: Musgrave's gain, how much a low octave damps the next, [0, 8]
+    int octaves = 8;             ///< number of basis samples summed, [1, 24]
+    double lacunarity = 2.0;     ///< frequency ratio between successive octaves, [1.1, 8]
+    double gain = 0.5;           ///< amplitude ratio between successive octaves, (0, 1]
+    double wavelength = 32.0;    ///< metres: a lattice cell (Perlin) or one bitmap tile at octave 0, > 0
+    double amplitude = 1.0;      ///< metres: every value lies in [-amplitude, amplitude], >= 0
+    std::uint64_t seed = 1;      ///< picks the noise and each octave's rotation and offset
+    double ridgeOffset = 1.0;    ///< ridged: Musgrave's offset, [0.5, 1.5]; 1 puts the ridges at basis 0
+    double ridgeFeedback = 2.0;  ///< ridged: Musgrave's gain, how much a low octave damps the next, [0, 8]
     FractalCache cache = FractalCache::None;
 };
 
@@ -204,13 +204,13 @@ private:
     PerlinNoise mNoise;
     PerlinNoise mPeriodicNoise;  ///< the noise a cached basis tabulates
     std::vector<Octave> mOctaves;
-    double mScale = 1.0;   ///< maps the raw sum to [-amplitude, amplitude] (see Fractal.cpp)
+    double mScale = 1.0;  ///< maps the raw sum to [-amplitude, amplitude] (see Fractal.cpp)
     double mOffset = 0.0;
-    std::shared_ptr<const BasisTable> mTable;  ///< bitmap or cached basis; null for exact Perlin
-    std::vector<PerlinNoise> mTileNoise;       ///< cached fractal: one periodic noise per octave
-    std::vector<Octave> mTileOctaves;          ///< cached fractal: transforms from tile units
+    std::shared_ptr<const BasisTable> mTable;         ///< bitmap or cached basis; null for exact Perlin
+    std::vector<PerlinNoise> mTileNoise;              ///< cached fractal: one periodic noise per octave
+    std::vector<Octave> mTileOctaves;                 ///< cached fractal: transforms from tile units
     std::shared_ptr<const BasisTable> mFractalTable;  ///< cached fractal, in tile units
-    double mTileSize = 0.0;                            ///< cached fractal: metres per tile
+    double mTileSize = 0.0;                           ///< cached fractal: metres per tile
 };
 
 }  // namespace terrain

@@ -34,7 +34,8 @@ Expected<std::vector<double>> parseList(std::string_view text)
     std::size_t start = 0;
     while (true) {
         std::size_t comma = text.find(',', start);
-        std::string_view part = text.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
+        std::string_view part =
+            text.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
         while (!part.empty() && (part.front() == ' ' || part.front() == '\t')) {
             part.remove_prefix(1);
         }
@@ -115,14 +116,16 @@ Status assign(Expected<T> value, T& target)
 const std::map<std::string, Setter, std::less<>>& setters()
 {
     static const std::map<std::string, Setter, std::less<>> table = {
-        {"name", [](const Reader& r) -> Status {
+        {"name",
+         [](const Reader& r) -> Status {
              if (r.entry.value.empty()) {
                  return r.fail("expected a name");
              }
              r.material.name = r.entry.value;
              return {};
          }},
-        {"displacement", [](const Reader& r) -> Status {
+        {"displacement",
+         [](const Reader& r) -> Status {
              static const std::map<std::string, DisplacementKind, std::less<>> kinds = {
                  {"none", DisplacementKind::None},
                  {"fbm", DisplacementKind::Fbm},
@@ -136,7 +139,8 @@ const std::map<std::string, Setter, std::less<>>& setters()
              r.material.kind = it->second;
              return {};
          }},
-        {"octaves", [](const Reader& r) -> Status {
+        {"octaves",
+         [](const Reader& r) -> Status {
              auto value = parseInteger(r.entry.value);
              if (!value || *value < 1 || *value > 24) {
                  return r.fail("expected an integer in [1, 24]");
@@ -144,8 +148,10 @@ const std::map<std::string, Setter, std::less<>>& setters()
              r.material.fractal.octaves = static_cast<int>(*value);
              return {};
          }},
-        {"lacunarity", [](const Reader& r) { return assign(r.number(1.1, 8.0, "[1.1, 8]"), r.material.fractal.lacunarity); }},
-        {"gain", [](const Reader& r) -> Status {
+        {"lacunarity",
+         [](const Reader& r) { return assign(r.number(1.1, 8.0, "[1.1, 8]"), r.material.fractal.lacunarity); }},
+        {"gain",
+         [](const Reader& r) -> Status {
              auto value = parseDouble(r.entry.value);
              if (!value || !(*value > 0.0 && *value <= 1.0)) {
                  return r.fail("expected a number in (0, 1]");
@@ -154,8 +160,10 @@ const std::map<std::string, Setter, std::less<>>& setters()
              return {};
          }},
         {"wavelength", [](const Reader& r) { return assign(r.positive(), r.material.fractal.wavelength); }},
-        {"amplitude", [](const Reader& r) { return assign(r.number(0.0, 1e4, "[0, 10000] metres"), r.material.fractal.amplitude); }},
-        {"seed", [](const Reader& r) -> Status {
+        {"amplitude",
+         [](const Reader& r) { return assign(r.number(0.0, 1e4, "[0, 10000] metres"), r.material.fractal.amplitude); }},
+        {"seed",
+         [](const Reader& r) -> Status {
              auto value = parseInteger(r.entry.value);
              if (!value || *value < 0) {
                  return r.fail("expected a non-negative integer");
@@ -163,9 +171,12 @@ const std::map<std::string, Setter, std::less<>>& setters()
              r.material.fractal.seed = static_cast<std::uint64_t>(*value);
              return {};
          }},
-        {"ridge_offset", [](const Reader& r) { return assign(r.number(0.5, 1.5, "[0.5, 1.5]"), r.material.fractal.ridgeOffset); }},
-        {"ridge_feedback", [](const Reader& r) { return assign(r.number(0.0, 8.0, "[0, 8]"), r.material.fractal.ridgeFeedback); }},
-        {"cache", [](const Reader& r) -> Status {
+        {"ridge_offset",
+         [](const Reader& r) { return assign(r.number(0.5, 1.5, "[0.5, 1.5]"), r.material.fractal.ridgeOffset); }},
+        {"ridge_feedback",
+         [](const Reader& r) { return assign(r.number(0.0, 8.0, "[0, 8]"), r.material.fractal.ridgeFeedback); }},
+        {"cache",
+         [](const Reader& r) -> Status {
              static const std::map<std::string, FractalCache, std::less<>> caches = {
                  {"none", FractalCache::None}, {"basis", FractalCache::Basis}, {"fractal", FractalCache::Fractal}};
              auto it = caches.find(r.entry.value);
@@ -176,7 +187,8 @@ const std::map<std::string, Setter, std::less<>>& setters()
              return {};
          }},
         {"bitmap", [](const Reader& r) { return assign(r.existingFile(), r.material.bitmap); }},
-        {"detail_texture", [](const Reader& r) -> Status {
+        {"detail_texture",
+         [](const Reader& r) -> Status {
              auto path = r.existingFile();
              if (!path) {
                  return path.error();
@@ -185,7 +197,8 @@ const std::map<std::string, Setter, std::less<>>& setters()
              return {};
          }},
         {"detail_texture_size", [](const Reader& r) { return assign(r.positive(), r.material.detailTextureSize); }},
-        {"tint", [](const Reader& r) -> Status {
+        {"tint",
+         [](const Reader& r) -> Status {
              auto list = parseList(r.entry.value);
              if (!list || list->size() != 3 ||
                  std::any_of(list->begin(), list->end(), [](double c) { return c < 0.0 || c > 1.0; })) {
@@ -196,7 +209,8 @@ const std::map<std::string, Setter, std::less<>>& setters()
              }
              return {};
          }},
-        {"slope", [](const Reader& r) -> Status {
+        {"slope",
+         [](const Reader& r) -> Status {
              auto range = r.range(0.0, 90.0, "degrees in [0, 90]");
              if (!range) {
                  return range.error();
@@ -205,8 +219,12 @@ const std::map<std::string, Setter, std::less<>>& setters()
              r.material.placement.slopeMax = (*range)[1];
              return {};
          }},
-        {"slope_blend", [](const Reader& r) { return assign(r.number(1e-3, 90.0, "[0.001, 90] degrees"), r.material.placement.slopeBlend); }},
-        {"height", [](const Reader& r) -> Status {
+        {"slope_blend",
+         [](const Reader& r) {
+             return assign(r.number(1e-3, 90.0, "[0.001, 90] degrees"), r.material.placement.slopeBlend);
+         }},
+        {"height",
+         [](const Reader& r) -> Status {
              auto range = r.range(-1e5, 1e5, "metres in [-100000, 100000]");
              if (!range) {
                  return range.error();
@@ -215,7 +233,10 @@ const std::map<std::string, Setter, std::less<>>& setters()
              r.material.placement.heightMax = (*range)[1];
              return {};
          }},
-        {"height_blend", [](const Reader& r) { return assign(r.number(1e-3, 1e5, "[0.001, 100000] metres"), r.material.placement.heightBlend); }},
+        {"height_blend",
+         [](const Reader& r) {
+             return assign(r.number(1e-3, 1e5, "[0.001, 100000] metres"), r.material.placement.heightBlend);
+         }},
     };
     return table;
 }
@@ -272,8 +293,8 @@ Expected<Material> parseMaterial(const ConfigFile& config, std::vector<std::stri
         }
         table = std::make_shared<BasisTable>(BasisTable::fromImage(*image));
     }
-    material.displacement = bitmap ? std::make_shared<Fractal>(material.fractal, table)
-                                   : std::make_shared<Fractal>(material.fractal);
+    material.displacement =
+        bitmap ? std::make_shared<Fractal>(material.fractal, table) : std::make_shared<Fractal>(material.fractal);
     return material;
 }
 
@@ -373,7 +394,8 @@ void MaterialSet::displacementGrid(const SampleGrid& grid, std::span<const float
         if (!any[m] || !mMaterials[m].displacement) {
             continue;
         }
-        mMaterials[m].displacement->evaluateGrid(grid, values, std::span<const std::uint8_t>(used.data() + m * count, count));
+        mMaterials[m].displacement->evaluateGrid(grid, values,
+                                                 std::span<const std::uint8_t>(used.data() + m * count, count));
         for (std::size_t k = 0; k < count; ++k) {
             if (used[m * count + k] != 0) {
                 sum[k] += w[k * n + m] * static_cast<double>(values[k]);

@@ -36,14 +36,14 @@ struct MaterialPlacement {
 enum class DisplacementKind { None, Fbm, Ridged, BitmapFbm, BitmapRidged };
 
 struct Material {
-    std::string name;                 ///< `name`, or the file's stem
-    std::string file;                 ///< where it was read from, for messages
+    std::string name;  ///< `name`, or the file's stem
+    std::string file;  ///< where it was read from, for messages
     DisplacementKind kind = DisplacementKind::None;
-    FractalParams fractal;            ///< the displacement's parameters (type set from kind)
-    std::filesystem::path bitmap;     ///< bitmap-* kinds: the gray tileable basis PNG (absolute)
+    FractalParams fractal;                              ///< the displacement's parameters (type set from kind)
+    std::filesystem::path bitmap;                       ///< bitmap-* kinds: the gray tileable basis PNG (absolute)
     std::vector<std::filesystem::path> detailTextures;  ///< resolved against the .mat file's directory
-    double detailTextureSize = 4.0;   ///< metres covered by one repeat of a detail texture, > 0
-    std::array<float, 3> tint = {1.0f, 1.0f, 1.0f};  ///< linear RGB multiplier, each in [0, 1]
+    double detailTextureSize = 4.0;                     ///< metres covered by one repeat of a detail texture, > 0
+    std::array<float, 3> tint = {1.0f, 1.0f, 1.0f};     ///< linear RGB multiplier, each in [0, 1]
     MaterialPlacement placement;
     std::shared_ptr<const Fractal> displacement;  ///< null for kind None (zero displacement)
 

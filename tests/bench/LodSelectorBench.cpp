@@ -66,7 +66,7 @@ private:
 
 void BM_SelectNodes(benchmark::State& state)
 {
-    const int levels = 9;                     // 65-sample chunks: (65 - 1) * 2^8 + 1 = 16385 samples
+    const int levels = 9;                          // 65-sample chunks: (65 - 1) * 2^8 + 1 = 16385 samples
     static const BenchTree tree(levels, 16384.0);  // 1 m spacing
     std::vector<Camera> cameras;
     for (int i = 0; i < 16; ++i) {

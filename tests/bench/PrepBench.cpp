@@ -46,7 +46,8 @@ std::filesystem::path generateRaw(int size)
     double wavelength = size * 0.7, amplitude = 9000;
     for (int i = 0; i < 12; ++i) {
         double a = angle(random);
-        octaves.push_back({std::cos(a) * 2 * M_PI / wavelength, std::sin(a) * 2 * M_PI / wavelength, phase(random), amplitude});
+        octaves.push_back(
+            {std::cos(a) * 2 * M_PI / wavelength, std::sin(a) * 2 * M_PI / wavelength, phase(random), amplitude});
         wavelength *= 0.55;
         amplitude *= 0.5;
     }

@@ -14,10 +14,10 @@
 #include "quadtree/QuadtreeBuilder.h"
 #include "render/GlWindow.h"
 #include "render/NodeVertexData.h"
-#include "render/TemplateMesh.h"
-#include "render/ZigzagIndexBuffer.h"
 #include "render/ShaderProgram.h"
+#include "render/TemplateMesh.h"
 #include "render/TerrainRenderer.h"
+#include "render/ZigzagIndexBuffer.h"
 
 #include <benchmark/benchmark.h>
 #include <glm/gtc/type_ptr.hpp>
@@ -31,8 +31,8 @@ namespace {
 
 using namespace terrain;
 
-constexpr int kFrames = 48;      ///< camera positions along the demo path
-constexpr int kRepeats = 2;      ///< each frame drawn this often per measurement
+constexpr int kFrames = 48;  ///< camera positions along the demo path
+constexpr int kRepeats = 2;  ///< each frame drawn this often per measurement
 
 /// Everything both measurements share: the context, the map, the cameras.
 struct Scene {
@@ -164,7 +164,8 @@ void BM_BruteForceMesh(benchmark::State& state)
     glEnableVertexAttribArray(0);
     glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
     glEnableVertexAttribArray(1);
-    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<const void*>(3 * sizeof(float)));
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                          reinterpret_cast<const void*>(3 * sizeof(float)));
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo.name());
     double seconds = 0, triangles = 0;
     for (auto _ : state) {

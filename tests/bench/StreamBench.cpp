@@ -41,7 +41,8 @@ const MapFile& benchMap()
             for (int j = 0; j < size; ++j) {
                 for (int i = 0; i < size; ++i) {
                     double h = 2000 + 800 * std::sin(i * 0.0021) * std::cos(j * 0.0017) +
-                               250 * (1 - 2 * std::abs(std::sin(i * 0.013 + j * 0.007))) + 40 * std::sin(i * 0.11) * std::sin(j * 0.09);
+                               250 * (1 - 2 * std::abs(std::sin(i * 0.013 + j * 0.007))) +
+                               40 * std::sin(i * 0.11) * std::sin(j * 0.09);
                     field.at(i, j) = static_cast<float>(std::round(h));
                 }
             }
@@ -100,7 +101,8 @@ void BM_DecodeStaticNode(benchmark::State& state)
         benchmark::DoNotOptimize(node);
         q = (q + 1) & 3;
     }
-    state.counters["nodes_per_s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["nodes_per_s"] =
+        benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_DecodeStaticNode)->Unit(benchmark::kMicrosecond);
 

@@ -1,8 +1,8 @@
-// The fuzz targets (docs/hardening.md, "Fuzzing"): one entry point per parser of untrusted input. Each takes arbitrary bytes,
-// runs the parser as the programs do and exercises what a successful parse hands on, and must never crash,
-// hang, leak or allocate without bound, whatever the bytes. libFuzzer drives them (tests/fuzz/FuzzMain.cpp,
-// clang builds with TERRAIN_FUZZ=ON); the unit tests replay every stored input under tests/data/fuzz/
-// (FuzzRegressionTest), so a finding stays fixed in every build.
+// The fuzz targets (docs/hardening.md, "Fuzzing"): one entry point per parser of untrusted input. Each takes arbitrary
+// bytes, runs the parser as the programs do and exercises what a successful parse hands on, and must never crash, hang,
+// leak or allocate without bound, whatever the bytes. libFuzzer drives them (tests/fuzz/FuzzMain.cpp, clang builds with
+// TERRAIN_FUZZ=ON); the unit tests replay every stored input under tests/data/fuzz/ (FuzzRegressionTest), so a finding
+// stays fixed in every build.
 #pragma once
 
 #include <cstddef>

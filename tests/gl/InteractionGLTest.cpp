@@ -12,15 +12,15 @@
 #include "quadtree/MapFile.h"
 #include "quadtree/QuadtreeBuilder.h"
 #include "synthesis/DetailRecipeSetup.h"
-#include "lod/TerrainNodeSource.h"
+#include "synthesis/LeafErrorEstimator.h"
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <chrono>
 #include <csignal>
 #include <fstream>
 #include <sstream>
-#include <sys/wait.h>
 #include <thread>
 
 namespace terrain {
@@ -28,7 +28,10 @@ namespace {
 
 using namespace std::chrono_literals;
 
-bool contains(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
+bool contains(const std::string& text, const std::string& what)
+{
+    return text.find(what) != std::string::npos;
+}
 
 std::size_t countOf(const std::string& text, const std::string& what)
 {
@@ -173,11 +176,11 @@ TEST_F(InteractionGLTest, RecordingStoppedBySignalKeepsEveryFrameItMade)
     for (int signal : {SIGTERM, SIGINT}) {
         test::ScratchDir out;
         const auto frames = out / "frames";
-        const pid_t pid = test::spawnProgram(
-            TERRAIN_TENGINE_EXE,
-            arguments({"camera_path=" + (*sDir / "flight.path").string(), "video_mode=true",
-                       "frames_per_second=30", "image_path=" + frames.string()}),
-            out / "tengine.log");
+        const pid_t pid =
+            test::spawnProgram(TERRAIN_TENGINE_EXE,
+                               arguments({"camera_path=" + (*sDir / "flight.path").string(), "video_mode=true",
+                                          "frames_per_second=30", "image_path=" + frames.string()}),
+                               out / "tengine.log");
         ASSERT_GT(pid, 0);
         // Stop it part-way, once a dozen frames are on disk (the whole path is 241 frames).
         ASSERT_TRUE(waitFor([&] { return lineCount(frames / "frames.csv") > 12; }, 120))
@@ -197,9 +200,9 @@ TEST_F(InteractionGLTest, RecordingStoppedBySignalKeepsEveryFrameItMade)
             std::snprintf(name, sizeof name, "frame_%05zu.png", i);
             EXPECT_TRUE(std::filesystem::exists(frames / name)) << name;
         }
-        auto probe = test::runProgram("ffprobe", {"-v", "error", "-count_frames", "-select_streams", "v:0",
-                                                  "-show_entries", "stream=nb_read_frames", "-of", "csv=p=0",
-                                                  (frames / "video.mp4").string()});
+        auto probe =
+            test::runProgram("ffprobe", {"-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
+                                         "stream=nb_read_frames", "-of", "csv=p=0", (frames / "video.mp4").string()});
         ASSERT_EQ(probe.exitCode, 0) << probe.output << "\n" << log;
         EXPECT_EQ(std::stoul(probe.output), made) << "the MP4 has every frame made";
         EXPECT_TRUE(contains(log, "recording stopped by")) << log;
@@ -289,18 +292,18 @@ TEST_F(InteractionGLTest, APathThroughAHillIsReportedOnceWithItsTimes)
     // Straight through the terrain at 1000 m: below the ground for most of the way; reported once.
     test::ScratchDir out;
     std::ofstream(out / "through.path") << "0 20000 20000 1000 45 0\n10 60000 60000 1000 45 0\n";
-    auto run = test::runProgram(TERRAIN_TENGINE_EXE,
-                                arguments({"camera_path=" + (out / "through.path").string(), "video_mode=true",
-                                           "video_frames=2", "video_ffmpeg=false",
-                                           "image_path=" + (out / "frames").string()}));
+    auto run = test::runProgram(
+        TERRAIN_TENGINE_EXE,
+        arguments({"camera_path=" + (out / "through.path").string(), "video_mode=true", "video_frames=2",
+                   "video_ffmpeg=false", "image_path=" + (out / "frames").string()}));
     ASSERT_EQ(run.exitCode, 0) << run.output;
     EXPECT_EQ(countOf(run.output, "passes below the terrain"), 1u) << run.output;
     EXPECT_TRUE(contains(run.output, "through.path passes below the terrain at 0-10 s")) << run.output;
     // The bundled demo path stays above it: no warning.
-    auto demo = test::runProgram(TERRAIN_TENGINE_EXE,
-                                 arguments({"camera_path=" + std::string(TERRAIN_DEMO_DIR) + "/trinidad.path",
-                                            "video_mode=true", "video_frames=1", "video_ffmpeg=false",
-                                            "image_path=" + (out / "demo").string()}));
+    auto demo = test::runProgram(
+        TERRAIN_TENGINE_EXE,
+        arguments({"camera_path=" + std::string(TERRAIN_DEMO_DIR) + "/trinidad.path", "video_mode=true",
+                   "video_frames=1", "video_ffmpeg=false", "image_path=" + (out / "demo").string()}));
     ASSERT_EQ(demo.exitCode, 0) << demo.output;
     EXPECT_FALSE(contains(demo.output, "passes below")) << demo.output;
 }
@@ -319,8 +322,9 @@ TEST_F(InteractionGLTest, DetailSettingsUnlikeTheMapsGiveExactlyOneWarning)
     auto same = run({});  // the viewer's defaults: grass.mat alone, Kobbelt, omega 1
     ASSERT_EQ(same.exitCode, 0) << same.output;
     EXPECT_EQ(countOf(same.output, "warning"), 0u) << same.output;
-    for (const std::string& setting : {std::string("detail_material_type=1"), std::string("detail_subdivision_factor=0.5"),
-                                       std::string("detail_add_material=false")}) {
+    for (const std::string& setting :
+         {std::string("detail_material_type=1"), std::string("detail_subdivision_factor=0.5"),
+          std::string("detail_add_material=false")}) {
         auto other = run({setting});
         ASSERT_EQ(other.exitCode, 0) << setting << ": " << other.output;
         EXPECT_EQ(countOf(other.output, "warning"), 1u) << setting << ": " << other.output;

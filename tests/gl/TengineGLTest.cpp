@@ -27,7 +27,6 @@ using test::isHole;
 using test::mustHitTerrain;
 using test::readCsv;
 
-
 /// The bundled terrain as a map, built once for all tests.
 class TengineGLTest : public ::testing::Test {
 protected:
@@ -93,12 +92,18 @@ protected:
                                  const std::filesystem::path& mapFile = {})
     {
         std::vector<std::string> args = {mapFile.empty() ? map().string() : mapFile.string(),
-                                         "--set", "camera_path=" + flight().string(),
-                                         "--set", "video_mode=true",
-                                         "--set", "video_ffmpeg=false",
-                                         "--set", "image_path=" + frames.string(),
-                                         "--set", "window_width=320",
-                                         "--set", "window_height=180"};
+                                         "--set",
+                                         "camera_path=" + flight().string(),
+                                         "--set",
+                                         "video_mode=true",
+                                         "--set",
+                                         "video_ffmpeg=false",
+                                         "--set",
+                                         "image_path=" + frames.string(),
+                                         "--set",
+                                         "window_width=320",
+                                         "--set",
+                                         "window_height=180"};
         for (auto& s : settings) {
             args.push_back("--set");
             args.push_back(s);
@@ -154,7 +159,8 @@ TEST_F(TengineGLTest, NoHolesAlongTheFlight)
     ASSERT_TRUE(path.ok());
     int framesChecked = 0, pixelsChecked = 0;
     for (int f = 0;; ++f) {
-        if (!std::filesystem::exists(frames.path() / ("frame_" + std::string(5 - std::to_string(f).size(), '0') + std::to_string(f) + ".png"))) {
+        if (!std::filesystem::exists(frames.path() / ("frame_" + std::string(5 - std::to_string(f).size(), '0') +
+                                                      std::to_string(f) + ".png"))) {
             break;
         }
         Image image = frame(frames.path(), f);
@@ -179,8 +185,9 @@ TEST_F(TengineGLTest, NoHolesAlongTheFlight)
                 }
             }
         }
-        EXPECT_EQ(holes, 0) << "frame " << f << ": " << holes << " pixels show the clear colour below the horizon, first at ("
-                            << firstX << ", " << firstY << ")";
+        EXPECT_EQ(holes, 0) << "frame " << f << ": " << holes
+                            << " pixels show the clear colour below the horizon, first at (" << firstX << ", " << firstY
+                            << ")";
         ++framesChecked;
     }
     EXPECT_EQ(framesChecked, 33);
@@ -318,10 +325,11 @@ TEST_F(TengineGLTest, DetailFlightHasDynamicNodesAndNoHoles)
     // The viewer's hole check over a low flight with detail synthesis: dynamic nodes next to static ones
     // and to each other at many levels, skirts and all, leave no pixel of the clear colour.
     test::ScratchDir frames;
-    auto run = video(frames.path(),
-                     lowDetailFlight({"frames_per_second=4", "draw_sky=false", "draw_user_interface=false",
-                                      "clear_color=1,0,1", "haze_distance=0", "camera_z_far=150000", "worker_threads=2"}),
-                     detailMap());
+    auto run =
+        video(frames.path(),
+              lowDetailFlight({"frames_per_second=4", "draw_sky=false", "draw_user_interface=false",
+                               "clear_color=1,0,1", "haze_distance=0", "camera_z_far=150000", "worker_threads=2"}),
+              detailMap());
     ASSERT_EQ(run.exitCode, 0) << run.output;
     auto mapFile = MapFile::open(detailMap(), ReaderKind::Stream);
     ASSERT_TRUE(mapFile.ok());

@@ -2,11 +2,11 @@
 
 #include "TestSupport.h"
 
-#include <cstdlib>
-#include <fstream>
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
-#include <gtest/gtest.h>
+#include <cstdlib>
+#include <fstream>
 
 namespace terrain {
 namespace {

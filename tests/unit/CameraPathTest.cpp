@@ -1,20 +1,26 @@
-#include "lod/CameraPath.h"
 #include "core/Parse.h"
+#include "lod/CameraPath.h"
 
 #include "TestSupport.h"
 
+#include <gtest/gtest.h>
 #include <cmath>
 #include <numbers>
-#include <gtest/gtest.h>
 
 namespace terrain {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-double deg(double d) { return d * kPi / 180.0; }
+double deg(double d)
+{
+    return d * kPi / 180.0;
+}
 
 /// Smallest angle between two directions, radians in [0, pi].
-double angleBetween(double a, double b) { return std::abs(std::remainder(a - b, 2.0 * kPi)); }
+double angleBetween(double a, double b)
+{
+    return std::abs(std::remainder(a - b, 2.0 * kPi));
+}
 
 CameraPath parseOk(const std::string& text)
 {
@@ -43,23 +49,28 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadPathCase{"TooFewFields", "0 0 0 0 0 0\n\n1 2 3 4 5\n",
                     "demo.path:3: expected 6 numbers 'time x y z yaw pitch', found 5 fields"},
-        BadPathCase{"TooManyFields", "0 0 0 0 0 0 7\n", "demo.path:1: expected 6 numbers 'time x y z yaw pitch', found 7 fields"},
-        BadPathCase{"NotANumber", "# header\n0 0 0 0 0 0\n1 0 0 0 north 0\n", "demo.path:3: yaw: 'north' is not a number"},
+        BadPathCase{"TooManyFields", "0 0 0 0 0 0 7\n",
+                    "demo.path:1: expected 6 numbers 'time x y z yaw pitch', found 7 fields"},
+        BadPathCase{"NotANumber", "# header\n0 0 0 0 0 0\n1 0 0 0 north 0\n",
+                    "demo.path:3: yaw: 'north' is not a number"},
         BadPathCase{"TrailingGarbage", "0 0 0 0 0 0\n1 0 0 10m 0 0\n", "demo.path:2: z: '10m' is not a number"},
         BadPathCase{"TimeNotIncreasing", "0 0 0 0 0 0\n# c\n2 0 0 0 0 0\n2 1 0 0 0 0\n",
                     "demo.path:4: time 2 is not after the previous keyframe's time 2 (line 3)"},
         BadPathCase{"TimeGoingBack", "0 0 0 0 0 0\n5 0 0 0 0 0\n4 1 0 0 0 0\n",
                     "demo.path:3: time 4 is not after the previous keyframe's time 5 (line 2)"},
-        BadPathCase{"PitchOutOfRange", "0 0 0 0 0 0\n1 0 0 0 0 91\n", "demo.path:2: pitch 91 is outside [-90, 90] degrees"},
+        BadPathCase{"PitchOutOfRange", "0 0 0 0 0 0\n1 0 0 0 0 91\n",
+                    "demo.path:2: pitch 91 is outside [-90, 90] degrees"},
         // Found by fuzzing: finite but huge values overflowed the spline to inf/NaN poses.
         BadPathCase{"CoordinateBeyondAMillionKilometres", "0 0 0 0 0 0\n1 5.9e105 0 0 0 0\n",
                     "demo.path:2: x 5.9e+105 m is outside [-1e9, 1e9]"},
         BadPathCase{"TimeBeyondThirtyYears", "0 0 0 0 0 0\n2e9 0 0 0 0 0\n",
                     "demo.path:2: time 2000000000 s is outside [-1e9, 1e9]"},
         BadPathCase{"InfiniteHeight", "0 0 0 0 0 0\n1 0 0 inf 0 0\n", "demo.path:2: z: 'inf' is not a number"},
-        BadPathCase{"OneKeyframe", "# only one\n0 0 0 0 0 0 # here\n", "demo.path: a camera path needs at least 2 keyframes, found 1"},
+        BadPathCase{"OneKeyframe", "# only one\n0 0 0 0 0 0 # here\n",
+                    "demo.path: a camera path needs at least 2 keyframes, found 1"},
         BadPathCase{"Empty", "", "demo.path: a camera path needs at least 2 keyframes, found 0"},
-        BadPathCase{"OnlyComments", "# nothing\n   \n\t# more\n", "demo.path: a camera path needs at least 2 keyframes, found 0"}),
+        BadPathCase{"OnlyComments", "# nothing\n   \n\t# more\n",
+                    "demo.path: a camera path needs at least 2 keyframes, found 0"}),
     [](const auto& testInfo) { return std::string(testInfo.param.name); });
 
 TEST(CameraPathTest, MissingFileNamesTheFile)
@@ -256,8 +267,9 @@ TEST(CameraPathTest, FindsWhereThePathPassesBelowTheGround)
     EXPECT_EQ(formatTimeSpans(spans), formatNumber(first) + "-" + formatNumber(last) + " s");
 
     // A clearance lifts the ground: the span grows; a path above it all has none.
-    EXPECT_GT(findPathBelowGround(*path, ground, 0.5, 20.0)[0].end - findPathBelowGround(*path, ground, 0.5, 20.0)[0].begin,
-              spans[0].end - spans[0].begin);
+    EXPECT_GT(
+        findPathBelowGround(*path, ground, 0.5, 20.0)[0].end - findPathBelowGround(*path, ground, 0.5, 20.0)[0].begin,
+        spans[0].end - spans[0].begin);
     auto high = CameraPath::parse("0 0 0 500 90 0\n100 1000 0 500 90 0\n", "high.path");
     ASSERT_TRUE(high.ok());
     EXPECT_TRUE(findPathBelowGround(*high, ground, 0.5).empty());

@@ -13,10 +13,24 @@ TEST(ChunkGeometry, PowerOfTwoPlusOne)
         std::int64_t n;
         bool expected;
     };
-    const Case cases[] = {{-1, false}, {0, false},    {1, false},    {2, false},     {3, true},
-                          {4, false},  {5, true},     {6, false},    {9, true},      {65, true},
-                          {66, false}, {1024, false}, {1025, true},  {2049, true},   {4097, true},
-                          {4096, false}, {std::int64_t{1} << 40, false}, {(std::int64_t{1} << 40) + 1, true}};
+    const Case cases[] = {{-1, false},
+                          {0, false},
+                          {1, false},
+                          {2, false},
+                          {3, true},
+                          {4, false},
+                          {5, true},
+                          {6, false},
+                          {9, true},
+                          {65, true},
+                          {66, false},
+                          {1024, false},
+                          {1025, true},
+                          {2049, true},
+                          {4097, true},
+                          {4096, false},
+                          {std::int64_t{1} << 40, false},
+                          {(std::int64_t{1} << 40) + 1, true}};
     for (const Case& c : cases) {
         EXPECT_EQ(isPowerOfTwoPlusOne(c.n), c.expected) << c.n;
     }
@@ -28,8 +42,8 @@ TEST(ChunkGeometry, ValidChunkSizesAre2kPlus1UpTo1025)
         int chunkSize;
         bool valid;
     };
-    const Case cases[] = {{-1, false}, {0, false},  {1, false},  {2, false},    {3, true},    {4, false},   {5, true},
-                          {6, false},  {9, true},   {65, true},  {1024, false}, {1025, true}, {2049, false}};
+    const Case cases[] = {{-1, false}, {0, false}, {1, false}, {2, false},    {3, true},    {4, false},   {5, true},
+                          {6, false},  {9, true},  {65, true}, {1024, false}, {1025, true}, {2049, false}};
     for (const Case& c : cases) {
         EXPECT_EQ(isValidChunkSize(c.chunkSize), c.valid) << c.chunkSize;
     }

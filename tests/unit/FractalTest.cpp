@@ -8,8 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <complex>
+#include <cstdio>
 #include <cstring>
 #include <numbers>
 #include <random>
@@ -61,7 +61,8 @@ std::vector<Case> allCases()
 {
     std::vector<Case> cases;
     for (FractalCache cache : {FractalCache::None, FractalCache::Basis, FractalCache::Fractal}) {
-        const char* names[3][2] = {{"fbm", "ridged"}, {"fbm/cached basis", "ridged/cached basis"},
+        const char* names[3][2] = {{"fbm", "ridged"},
+                                   {"fbm/cached basis", "ridged/cached basis"},
                                    {"fbm/cached fractal", "ridged/cached fractal"}};
         FractalParams f = fbm();
         f.cache = cache;
@@ -75,7 +76,10 @@ std::vector<Case> allCases()
     return cases;
 }
 
-Fractal make(const Case& c) { return c.bitmap ? Fractal(c.params, testBitmap()) : Fractal(c.params); }
+Fractal make(const Case& c)
+{
+    return c.bitmap ? Fractal(c.params, testBitmap()) : Fractal(c.params);
+}
 
 std::vector<float> window(const Fractal& f, double x0, double y0, double spacing, int n)
 {
@@ -506,7 +510,8 @@ TEST(Fractal, CachedBasisWithinDocumentedErrorAndSameStatistics)
             e.push_back(exact(x, y));
         }
         SCOPED_TRACE(type == FractalType::Fbm ? "fbm" : "ridged");
-        EXPECT_LE(maxError, (type == FractalType::Fbm ? kCachedBasisMaxErrorFbm : kCachedBasisMaxErrorRidged) * p.amplitude);
+        EXPECT_LE(maxError,
+                  (type == FractalType::Fbm ? kCachedBasisMaxErrorFbm : kCachedBasisMaxErrorRidged) * p.amplitude);
         EXPECT_GT(maxError, 0.0);
         std::printf("cached basis %s: max error %.4f x amplitude\n", type == FractalType::Fbm ? "fbm" : "ridged",
                     maxError / p.amplitude);

@@ -54,9 +54,9 @@ TEST(HeightCodecTest, PredictionMatchesFloatReferenceOfTheFourPointRule)
                         auto expected = test::referencePrediction(parents[p], size, chunk, quadrant, cx, cy);
                         auto actual = out[static_cast<std::size_t>(cy) * size + cx];
                         if (expected != actual && ++mismatches <= 3) {
-                            ADD_FAILURE() << "chunk " << chunk << " parent " << p << " quadrant " << quadrant
-                                          << " child (" << cx << ", " << cy << "): predicted " << actual
-                                          << ", reference " << expected;
+                            ADD_FAILURE()
+                                << "chunk " << chunk << " parent " << p << " quadrant " << quadrant << " child (" << cx
+                                << ", " << cy << "): predicted " << actual << ", reference " << expected;
                         }
                     }
                 }
@@ -119,7 +119,8 @@ TEST(HeightCodecTest, LinearParentIsPredictedOnItsPlaneRoundedHalfUp)
         const double x = 4 + (c.cx - 2) / 2.0, y = 4 + (c.cy - 2) / 2.0;
         const auto plane = static_cast<std::int32_t>(std::floor(1000 + 3 * x + 5 * y + 0.5));
         EXPECT_EQ(c.expected, plane) << "hand-computed table entry (" << c.cx << ", " << c.cy << ")";
-        EXPECT_EQ(out[static_cast<std::size_t>(c.cy) * size + c.cx], c.expected) << "child (" << c.cx << ", " << c.cy << ")";
+        EXPECT_EQ(out[static_cast<std::size_t>(c.cy) * size + c.cx], c.expected)
+            << "child (" << c.cx << ", " << c.cy << ")";
     }
 }
 
@@ -178,9 +179,8 @@ TEST(HeightCodecTest, FillOutsideClampsLargeReflections)
     const Case cases[] = {
         {{65000, 100, 0}, {65535, 65535}},  // 130000 - 0, 130000 - 100: above the range
         {{10, 60000, 5}, {15, 0}},          // 20 - 5 fits; 20 - 60000 below the range
-        {{0, 65535, 65535}, {0, 0}},
-        {{65535, 0, 0}, {65535, 65535}},
-        {{300, 200, 100}, {500, 400}},      // an ordinary slope continues
+        {{0, 65535, 65535}, {0, 0}},       {{65535, 0, 0}, {65535, 65535}},
+        {{300, 200, 100}, {500, 400}},  // an ordinary slope continues
     };
     for (const Case& c : cases) {
         std::vector<std::uint16_t> window(5 * 5, 0xBEEF);
@@ -225,7 +225,10 @@ struct RoundTripCase {
     int chunk;
 };
 
-void PrintTo(const RoundTripCase& c, std::ostream* os) { *os << c.name; }
+void PrintTo(const RoundTripCase& c, std::ostream* os)
+{
+    *os << c.name;
+}
 
 class HeightCodecRoundTripTest : public ::testing::TestWithParam<RoundTripCase> {};
 
@@ -255,7 +258,8 @@ TEST_P(HeightCodecRoundTripTest, EveryNodeDecodesToItsWindow)
         grid.reconstructLossy(header, c.bin, 1);
         bool lossy = false;
         for (std::size_t i = 0; i < original.size(); ++i) {
-            ASSERT_LE(std::abs(int{grid.codes()[i]} - int{original[i]}), static_cast<int>(margin)) << "grid sample " << i;
+            ASSERT_LE(std::abs(int{grid.codes()[i]} - int{original[i]}), static_cast<int>(margin))
+                << "grid sample " << i;
             lossy = lossy || grid.codes()[i] != original[i];
         }
         EXPECT_TRUE(lossy) << "a bin of " << c.bin << " should change some codes";
@@ -277,9 +281,11 @@ TEST_P(HeightCodecRoundTripTest, EveryNodeDecodesToItsWindow)
                     for (int cx = 0; cx < w; ++cx) {
                         auto expected = test::reflectedCode(
                             [&](std::int64_t gx, std::int64_t gy) {
-                                return grid.at(static_cast<std::uint64_t>(gx) * stride, static_cast<std::uint64_t>(gy) * stride);
+                                return grid.at(static_cast<std::uint64_t>(gx) * stride,
+                                               static_cast<std::uint64_t>(gy) * stride);
                             },
-                            last, std::int64_t{x} * (c.chunk - 1) + cx - kBorder, std::int64_t{y} * (c.chunk - 1) + cy - kBorder);
+                            last, std::int64_t{x} * (c.chunk - 1) + cx - kBorder,
+                            std::int64_t{y} * (c.chunk - 1) + cy - kBorder);
                         ASSERT_EQ(window[static_cast<std::size_t>(cy) * w + cx], expected)
                             << id.toString() << " window sample (" << cx << ", " << cy << ")";
                     }
@@ -309,14 +315,12 @@ TEST_P(HeightCodecRoundTripTest, EveryNodeDecodesToItsWindow)
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(, HeightCodecRoundTripTest,
-                         ::testing::Values(RoundTripCase{"SmoothLossless", false, 1, 17},
-                                           RoundTripCase{"RoughLossless", true, 1, 17},
-                                           RoundTripCase{"SmoothBin5", false, 5, 17},
-                                           RoundTripCase{"RoughBin5", true, 5, 17},
-                                           RoundTripCase{"RoughBin5Chunk5", true, 5, 5},
-                                           RoundTripCase{"RoughLosslessChunk3", true, 1, 3}),
-                         [](const auto& paramInfo) { return std::string(paramInfo.param.name); });
+INSTANTIATE_TEST_SUITE_P(
+    , HeightCodecRoundTripTest,
+    ::testing::Values(RoundTripCase{"SmoothLossless", false, 1, 17}, RoundTripCase{"RoughLossless", true, 1, 17},
+                      RoundTripCase{"SmoothBin5", false, 5, 17}, RoundTripCase{"RoughBin5", true, 5, 17},
+                      RoundTripCase{"RoughBin5Chunk5", true, 5, 5}, RoundTripCase{"RoughLosslessChunk3", true, 1, 3}),
+    [](const auto& paramInfo) { return std::string(paramInfo.param.name); });
 
 TEST(HeightCodecTest, RootOfArbitraryCodesRoundTrips)
 {
@@ -382,7 +386,8 @@ TEST(HeightCodecTest, CorruptStreamsAreErrors)
 
     EXPECT_FALSE(decodeStream(node, {}).ok()) << "empty stream";
     for (std::size_t length = 0; length < node.stream.size(); ++length) {
-        EXPECT_FALSE(decodeStream(node, std::span(node.stream).first(length)).ok()) << "truncated to " << length << " bytes";
+        EXPECT_FALSE(decodeStream(node, std::span(node.stream).first(length)).ok())
+            << "truncated to " << length << " bytes";
     }
     for (std::size_t i = 0; i < node.stream.size(); ++i) {
         for (std::uint8_t flip : {std::uint8_t{0x01}, std::uint8_t{0xff}}) {
@@ -429,7 +434,8 @@ TEST(HeightCodecTest, HandMadeRootStreamsDecodeByTheDocumentedPrediction)
     const std::uint16_t expected[3][3] = {{100, 101, 100}, {105, 105, 95}, {100, 150, 150}};
     for (int v = 0; v < 3; ++v) {
         for (int u = 0; u < 3; ++u) {
-            EXPECT_EQ(window[static_cast<std::size_t>(v + kBorder) * 7 + u + kBorder], expected[v][u]) << u << ", " << v;
+            EXPECT_EQ(window[static_cast<std::size_t>(v + kBorder) * 7 + u + kBorder], expected[v][u])
+                << u << ", " << v;
         }
     }
     // With a bin of 3 every residual counts three times.

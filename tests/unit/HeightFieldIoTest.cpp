@@ -6,18 +6,18 @@
 
 #include "TestSupport.h"
 
+#include <gtest/gtest.h>
+#include <png.h>
+#include <zlib.h>
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <csetjmp>
 #include <cstdio>
 #include <fstream>
-#include <gtest/gtest.h>
 #include <limits>
-#include <png.h>
 #include <string>
 #include <vector>
-#include <zlib.h>
 
 namespace terrain {
 namespace {
@@ -199,12 +199,12 @@ std::pair<float, float> minMax(const HeightField& field)
     return {*lo, *hi};
 }
 
-#define EXPECT_ERROR_MENTIONS(result, path, text)                                                        \
-    do {                                                                                                 \
-        ASSERT_FALSE((result).ok()) << "expected an error mentioning: " << (text);                       \
-        EXPECT_NE((result).error().message.find((path).filename().string()), std::string::npos)          \
-            << (result).error().message;                                                                 \
-        EXPECT_NE((result).error().message.find(text), std::string::npos) << (result).error().message;  \
+#define EXPECT_ERROR_MENTIONS(result, path, text)                                                      \
+    do {                                                                                               \
+        ASSERT_FALSE((result).ok()) << "expected an error mentioning: " << (text);                     \
+        EXPECT_NE((result).error().message.find((path).filename().string()), std::string::npos)        \
+            << (result).error().message;                                                               \
+        EXPECT_NE((result).error().message.find(text), std::string::npos) << (result).error().message; \
     } while (false)
 
 // ---- PNG ----
@@ -547,10 +547,21 @@ TEST(HeightFieldIoTest, BadBtFilesGiveErrorsNamingTheFile)
              return withSamples(b, 12);
          }(),
          "not a VTP Binary Terrain file"},
-        {"version.bt", [&] { LeBytes b = good(); b.bytes[9] = '7'; return withSamples(b, 12); }(),
+        {"version.bt",
+         [&] {
+             LeBytes b = good();
+             b.bytes[9] = '7';
+             return withSamples(b, 12);
+         }(),
          "found \"binterr1.7\""},
         {"empty.bt", Bytes{}, "truncated: a BT header is 256 bytes, the file has 0"},
-        {"short_header.bt", [&] { LeBytes b = good(); b.bytes.resize(100); return b.bytes; }(), "the file has 100"},
+        {"short_header.bt",
+         [&] {
+             LeBytes b = good();
+             b.bytes.resize(100);
+             return b.bytes;
+         }(),
+         "the file has 100"},
         {"truncated.bt", withSamples(good(), 7), "truncated: expected 12 bytes of samples, found 7"},
         {"zero_columns.bt", withSamples(btHeader(3, 0, 2, 2, 0, 1, 0, 2, 0, 1), 12), "BT size is 0x2"},
         {"negative_rows.bt", withSamples(btHeader(3, 3, -2, 2, 0, 1, 0, 2, 0, 1), 12), "BT size is 3x-2"},
@@ -585,7 +596,10 @@ TEST(HeightFieldIoTest, BtWriterRefusesBadArguments)
 
 // ---- Terragen .ter ----
 
-LeBytes terHeader() { return LeBytes().text("TERRAGENTERRAIN "); }
+LeBytes terHeader()
+{
+    return LeBytes().text("TERRAGENTERRAIN ");
+}
 
 TEST(HeightFieldIoTest, TerHandMadeRowsSouthToNorth)
 {

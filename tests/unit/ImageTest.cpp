@@ -7,12 +7,12 @@
 
 #include "TestSupport.h"
 
+#include <gtest/gtest.h>
+#include <png.h>
 #include <cmath>
 #include <csetjmp>
 #include <cstdio>
 #include <fstream>
-#include <gtest/gtest.h>
-#include <png.h>
 #include <string>
 #include <vector>
 
@@ -95,11 +95,11 @@ Image makeImage(int width, int height, int channels, Bytes pixels)
     return image;
 }
 
-#define EXPECT_ERROR_MENTIONS(result, path, text)                                                       \
-    do {                                                                                                \
-        ASSERT_FALSE((result).ok()) << "expected an error mentioning: " << (text);                      \
-        EXPECT_NE((result).error().message.find((path).filename().string()), std::string::npos)         \
-            << (result).error().message;                                                                \
+#define EXPECT_ERROR_MENTIONS(result, path, text)                                                      \
+    do {                                                                                               \
+        ASSERT_FALSE((result).ok()) << "expected an error mentioning: " << (text);                     \
+        EXPECT_NE((result).error().message.find((path).filename().string()), std::string::npos)        \
+            << (result).error().message;                                                               \
         EXPECT_NE((result).error().message.find(text), std::string::npos) << (result).error().message; \
     } while (false)
 

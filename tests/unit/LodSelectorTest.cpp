@@ -2,12 +2,12 @@
 
 #include "core/Frustum.h"
 
+#include <gtest/gtest.h>
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
 #include <random>
-#include <gtest/gtest.h>
 
 namespace terrain {
 namespace {
@@ -102,7 +102,6 @@ public:
     }
 
 private:
-
     int mLevels;
     QuadtreeExtent mExtent;
     std::vector<NodeInfo> mNodes;
@@ -112,15 +111,18 @@ private:
 const QuadtreeExtent kExtent{1000.0, -500.0, 4096.0};
 
 /// Some nodes' children are not resident: a fixed pseudo-random subset.
-bool sometimesResident(const NodeId& id) { return (id.key() * 2654435761u) % 7 != 3; }
+bool sometimesResident(const NodeId& id)
+{
+    return (id.key() * 2654435761u) % 7 != 3;
+}
 
 Camera randomCamera(std::mt19937_64& rng, const SyntheticTree& tree)
 {
     std::uniform_real_distribution<double> uni(0.0, 1.0);
     const QuadtreeExtent e = tree.extent();
     Camera c;
-    c.position = {e.originX - 300.0 + uni(rng) * (e.rootSize + 600.0), e.originY - 300.0 + uni(rng) * (e.rootSize + 600.0),
-                  -100.0 + uni(rng) * 600.0};
+    c.position = {e.originX - 300.0 + uni(rng) * (e.rootSize + 600.0),
+                  e.originY - 300.0 + uni(rng) * (e.rootSize + 600.0), -100.0 + uni(rng) * 600.0};
     c.yaw = uni(rng) * 2.0 * kPi;
     c.pitch = (uni(rng) * 100.0 - 70.0) * kPi / 180.0;
     c.verticalFov = (30.0 + uni(rng) * 60.0) * kPi / 180.0;
@@ -288,7 +290,8 @@ void checkNothingVisibleIsCulled(const SyntheticTree& tree, const Camera& cam, d
             for (int j = 0; j <= k; ++j) {
                 for (int l = 0; l <= k; ++l) {
                     glm::dvec3 p = b.lo + (b.hi - b.lo) * glm::dvec3(i, j, l) / double(k);
-                    ASSERT_FALSE(frustum.contains(p)) << id.toString() << " was culled but has a point inside the frustum";
+                    ASSERT_FALSE(frustum.contains(p))
+                        << id.toString() << " was culled but has a point inside the frustum";
                 }
             }
         }

@@ -8,11 +8,11 @@
 #include "heightfield/Image.h"
 #include "quadtree/MapVerifier.h"
 
-#include <bit>
 #include <gtest/gtest.h>
+#include <zlib.h>
+#include <bit>
 #include <limits>
 #include <thread>
-#include <zlib.h>
 
 namespace terrain {
 namespace {
@@ -21,7 +21,10 @@ using test::Bytes;
 
 constexpr ReaderKind kReaders[] = {ReaderKind::Stream, ReaderKind::MemoryMapped};
 
-const char* readerName(ReaderKind kind) { return kind == ReaderKind::Stream ? "stream" : "memory_mapped"; }
+const char* readerName(ReaderKind kind)
+{
+    return kind == ReaderKind::Stream ? "stream" : "memory_mapped";
+}
 
 std::filesystem::path buildSmallMap(const test::ScratchDir& dir, const std::string& name = "small.map",
                                     double maxError = 0.0, bool detail = false)
@@ -37,7 +40,10 @@ std::filesystem::path buildSmallMap(const test::ScratchDir& dir, const std::stri
     return dir / name;
 }
 
-bool mentions(const std::string& message, const std::string& what) { return message.find(what) != std::string::npos; }
+bool mentions(const std::string& message, const std::string& what)
+{
+    return message.find(what) != std::string::npos;
+}
 
 /// zlib's crc32, called directly rather than through the code under test.
 std::uint32_t zlibCrc(std::span<const std::uint8_t> bytes)
@@ -250,11 +256,13 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     for (const Raw& r : raw) {
         if (r.children) {
             auto at = [&](int q) {
-                return std::find_if(byOffset.begin(), byOffset.end(), [&](const Raw& o) { return o.id == r.id.child(q); });
+                return std::find_if(byOffset.begin(), byOffset.end(),
+                                    [&](const Raw& o) { return o.id == r.id.child(q); });
             };
             for (int q = 1; q < 4; ++q) {
                 ASSERT_NE(at(q), byOffset.end());
-                EXPECT_EQ(at(q) - at(q - 1), 1) << "children of " << r.id.toString() << " are not stored together in order";
+                EXPECT_EQ(at(q) - at(q - 1), 1)
+                    << "children of " << r.id.toString() << " are not stored together in order";
             }
         }
     }
@@ -336,7 +344,8 @@ std::map<std::uint64_t, std::vector<std::uint16_t>> decodeHeightsIndependently(c
             for (int x = 0; x < w; ++x) {
                 window[static_cast<std::size_t>(y) * w + x] = test::reflectedCode(
                     [&](std::int64_t gx, std::int64_t gy) {
-                        return inside[static_cast<std::size_t>(gy - firstY) * w + static_cast<std::size_t>(gx - firstX)];
+                        return inside[static_cast<std::size_t>(gy - firstY) * w +
+                                      static_cast<std::size_t>(gx - firstX)];
                     },
                     last, firstX + x, firstY + y);
             }
@@ -371,7 +380,8 @@ TEST(MapFileTest, HeightStreamsDecodeIndependentlyToTheInput)
         for (int j = 0; j < field.height; ++j) {
             for (int i = 0; i < field.width; ++i) {
                 const int n1 = static_cast<int>(h.chunkSize) - 1;
-                const NodeId leaf{static_cast<int>(h.levels) - 1, static_cast<std::uint32_t>(std::min<std::int64_t>(i / n1, leafSide / n1 - 1)),
+                const NodeId leaf{static_cast<int>(h.levels) - 1,
+                                  static_cast<std::uint32_t>(std::min<std::int64_t>(i / n1, leafSide / n1 - 1)),
                                   static_cast<std::uint32_t>(std::min<std::int64_t>(j / n1, leafSide / n1 - 1))};
                 const auto& window = windows.at(leaf.key());
                 const int u = i - static_cast<int>(leaf.x) * n1 + 2, v = j - static_cast<int>(leaf.y) * n1 + 2;
@@ -434,7 +444,8 @@ TEST(MapFileTest, CorruptPayloadByteIsReportedForItsNode)
     const auto path = buildSmallMap(dir);
     const MapParts parts = readParts(path);
     const NodeId victim{2, 1, 2};
-    const auto entry = std::find_if(parts.entries.begin(), parts.entries.end(), [&](const auto& e) { return e.id == victim; });
+    const auto entry =
+        std::find_if(parts.entries.begin(), parts.entries.end(), [&](const auto& e) { return e.id == victim; });
     ASSERT_NE(entry, parts.entries.end());
     struct Case {
         const char* what;
@@ -476,8 +487,9 @@ TEST(MapFileTest, CorruptPayloadByteIsReportedForItsNode)
             EXPECT_TRUE(sibling.ok()) << "damage spread to a sibling: " << sibling.error().message;
             auto problems = verifyMap(*map);
             ASSERT_FALSE(problems.empty());
-            EXPECT_TRUE(std::any_of(problems.begin(), problems.end(), [](const std::string& p) { return mentions(p, "2/1/2"); }))
-                << problems.front();
+            EXPECT_TRUE(std::any_of(problems.begin(), problems.end(), [](const std::string& p) {
+                return mentions(p, "2/1/2");
+            })) << problems.front();
         }
     }
 }
@@ -619,7 +631,8 @@ TEST(MapFileTest, OversizedHeaderFieldsAreRefusedBeforeAllocating)
         {"chunk size 2^31 + 1", {{16, 4, (1ull << 31) + 1}}, "chunk size 2147483649"},
         {"2^32 - 1 levels", {{24, 4, 0xffffffff}}, "level count 4294967295"},
         {"texture size 2^31 + 1", {{28, 4, (1ull << 31) + 1}}, "texture size 2147483649"},
-        {"2^32 - 1 nodes, directory past the end", {{116, 4, allNodes}, {128, 8, allNodes * 48}},
+        {"2^32 - 1 nodes, directory past the end",
+         {{116, 4, allNodes}, {128, 8, allNodes * 48}},
          "directory of 4294967295 nodes"},
         // offset + size wraps around 2^64 to the file's size: would read a 192 GiB directory.
         {"2^32 - 1 nodes, directory offset wrapping to the file's end",
@@ -682,8 +695,9 @@ TEST(MapFileTest, InconsistentDirectoriesAreErrorsNamingTheNode)
     const auto path = buildSmallMap(dir);
     const MapParts parts = readParts(path);
     ASSERT_EQ(parts.entries.size(), 21u);
-    const auto inner = std::find_if(parts.entries.begin(), parts.entries.end(),
-                                    [](const auto& e) { return e.id == NodeId{1, 0, 1}; });
+    const auto inner = std::find_if(parts.entries.begin(), parts.entries.end(), [](const auto& e) {
+        return e.id == NodeId{1, 0, 1};
+    });
     ASSERT_GT(inner->deltaC, 0.0f) << "the detail_delta_c below delta_c case needs delta_c > 0";
     auto at = [](std::vector<DirectoryEntry>& entries, NodeId id) -> DirectoryEntry& {
         return *std::find_if(entries.begin(), entries.end(), [&](const auto& e) { return e.id == id; });
@@ -695,31 +709,103 @@ TEST(MapFileTest, InconsistentDirectoriesAreErrorsNamingTheNode)
     };
     const std::uint64_t nodeAreaEnd = parts.header.directoryOffset;
     const Case cases[] = {
-        {"payload starting at the directory", [&](auto& e) { at(e, {2, 1, 1}).offset = nodeAreaEnd; }, "2/1/1"},
-        {"payload inside the header", [&](auto& e) { at(e, {2, 1, 1}).offset = 10; }, "2/1/1"},
-        {"payload running into the directory", [&](auto& e) { at(e, {2, 1, 1}).textureBytes = 1u << 20; }, "2/1/1"},
+        {"payload starting at the directory",
+         [&](auto& e) {
+             at(e, {2, 1, 1}).offset = nodeAreaEnd;
+         },
+         "2/1/1"},
+        {"payload inside the header",
+         [&](auto& e) {
+             at(e, {2, 1, 1}).offset = 10;
+         },
+         "2/1/1"},
+        {"payload running into the directory",
+         [&](auto& e) {
+             at(e, {2, 1, 1}).textureBytes = 1u << 20;
+         },
+         "2/1/1"},
         {"payload offset that wraps around 2^64",
-         [&](auto& e) { at(e, {2, 1, 1}).offset = std::numeric_limits<std::uint64_t>::max() - 100; }, "2/1/1"},
-        {"payload far beyond the file", [&](auto& e) { at(e, {2, 1, 1}).offset = std::uint64_t{1} << 40; }, "2/1/1"},
-        {"empty height stream", [&](auto& e) { at(e, {2, 1, 1}).heightBytes = 0; }, "2/1/1"},
-        {"level beyond the map", [&](auto& e) { at(e, {2, 1, 1}).id = {3, 1, 1}; }, "3/1/1"},
-        {"position outside its level", [&](auto& e) { at(e, {2, 1, 1}).id = {2, 4, 1}; }, "2/4/1"},
-        {"min code above max code", [&](auto& e) { std::swap(at(e, {1, 0, 1}).minCode, at(e, {1, 0, 1}).maxCode); }, "1/0/1"},
-        {"delta_c below delta_m", [&](auto& e) { at(e, {1, 0, 1}).deltaC = at(e, {1, 0, 1}).deltaM - 1.0f; }, "1/0/1"},
-        {"NaN delta_m", [&](auto& e) { at(e, {1, 0, 1}).deltaM = std::nanf(""); }, "1/0/1"},
-        {"negative delta_m", [&](auto& e) { at(e, {1, 0, 1}).deltaM = -1.0f; }, "1/0/1"},
-        {"deepest-level node with children", [&](auto& e) { at(e, {2, 3, 3}).hasChildren = true; }, "2/3/3"},
-        {"negative detail_delta_c", [&](auto& e) { at(e, {2, 1, 1}).detailDeltaC = -0.5f; }, "2/1/1"},
-        {"NaN detail_delta_c", [&](auto& e) { at(e, {1, 0, 1}).detailDeltaC = std::nanf(""); }, "1/0/1"},
+         [&](auto& e) {
+             at(e, {2, 1, 1}).offset = std::numeric_limits<std::uint64_t>::max() - 100;
+         },
+         "2/1/1"},
+        {"payload far beyond the file",
+         [&](auto& e) {
+             at(e, {2, 1, 1}).offset = std::uint64_t{1} << 40;
+         },
+         "2/1/1"},
+        {"empty height stream",
+         [&](auto& e) {
+             at(e, {2, 1, 1}).heightBytes = 0;
+         },
+         "2/1/1"},
+        {"level beyond the map",
+         [&](auto& e) {
+             at(e, {2, 1, 1}).id = {3, 1, 1};
+         },
+         "3/1/1"},
+        {"position outside its level",
+         [&](auto& e) {
+             at(e, {2, 1, 1}).id = {2, 4, 1};
+         },
+         "2/4/1"},
+        {"min code above max code",
+         [&](auto& e) {
+             std::swap(at(e, {1, 0, 1}).minCode, at(e, {1, 0, 1}).maxCode);
+         },
+         "1/0/1"},
+        {"delta_c below delta_m",
+         [&](auto& e) {
+             at(e, {1, 0, 1}).deltaC = at(e, {1, 0, 1}).deltaM - 1.0f;
+         },
+         "1/0/1"},
+        {"NaN delta_m",
+         [&](auto& e) {
+             at(e, {1, 0, 1}).deltaM = std::nanf("");
+         },
+         "1/0/1"},
+        {"negative delta_m",
+         [&](auto& e) {
+             at(e, {1, 0, 1}).deltaM = -1.0f;
+         },
+         "1/0/1"},
+        {"deepest-level node with children",
+         [&](auto& e) {
+             at(e, {2, 3, 3}).hasChildren = true;
+         },
+         "2/3/3"},
+        {"negative detail_delta_c",
+         [&](auto& e) {
+             at(e, {2, 1, 1}).detailDeltaC = -0.5f;
+         },
+         "2/1/1"},
+        {"NaN detail_delta_c",
+         [&](auto& e) {
+             at(e, {1, 0, 1}).detailDeltaC = std::nanf("");
+         },
+         "1/0/1"},
         {"infinite detail_delta_c",
-         [&](auto& e) { at(e, {1, 0, 1}).detailDeltaC = std::numeric_limits<float>::infinity(); }, "1/0/1"},
+         [&](auto& e) {
+             at(e, {1, 0, 1}).detailDeltaC = std::numeric_limits<float>::infinity();
+         },
+         "1/0/1"},
         {"detail_delta_c below delta_c",
-         [&](auto& e) { at(e, {1, 0, 1}).detailDeltaC = at(e, {1, 0, 1}).deltaC * 0.5f; }, "1/0/1"},
+         [&](auto& e) {
+             at(e, {1, 0, 1}).detailDeltaC = at(e, {1, 0, 1}).deltaC * 0.5f;
+         },
+         "1/0/1"},
         {"root without children flag", [&](auto& e) { at(e, NodeId::root()).hasChildren = false; }, "has no parent"},
-        {"missing child", [&](auto& e) { e.erase(std::find_if(e.begin(), e.end(), [](const auto& x) { return x.id == NodeId{2, 1, 1}; })); },
+        {"missing child",
+         [&](auto& e) {
+             e.erase(std::find_if(e.begin(), e.end(), [](const auto& x) { return x.id == NodeId{2, 1, 1}; }));
+         },
          "2/1/1"},
         {"missing root", [&](auto& e) { e.erase(e.begin()); }, "root"},
-        {"node listed twice", [&](auto& e) { at(e, {2, 1, 1}).id = {2, 0, 1}; }, "2/"},
+        {"node listed twice",
+         [&](auto& e) {
+             at(e, {2, 1, 1}).id = {2, 0, 1};
+         },
+         "2/"},
     };
     for (const Case& c : cases) {
         MapParts damaged = parts;
@@ -843,10 +929,21 @@ TEST(MapFileTest, VerifyCatchesWrongDetailErrors)
         const char* mentions;  ///< the node whose nesting no longer holds
     };
     const Case cases[] = {
-        {"inner node's too large", [&](auto& e) { at(e, {1, 0, 1}).detailDeltaC += 1.0f; }, "1/0/1"},
-        {"inner node's only delta_c", [&](auto& e) { at(e, {1, 1, 0}).detailDeltaC = at(e, {1, 1, 0}).deltaC; },
+        {"inner node's too large",
+         [&](auto& e) {
+             at(e, {1, 0, 1}).detailDeltaC += 1.0f;
+         },
+         "1/0/1"},
+        {"inner node's only delta_c",
+         [&](auto& e) {
+             at(e, {1, 1, 0}).detailDeltaC = at(e, {1, 1, 0}).deltaC;
+         },
          "1/1/0"},
-        {"leaf's raised above its siblings", [&](auto& e) { at(e, {2, 1, 1}).detailDeltaC += 5.0f; }, "1/0/0"},
+        {"leaf's raised above its siblings",
+         [&](auto& e) {
+             at(e, {2, 1, 1}).detailDeltaC += 5.0f;
+         },
+         "1/0/0"},
         {"root's too small", [&](auto& e) { at(e, NodeId::root()).detailDeltaC -= 0.125f; }, "0/0/0"},
     };
     for (const Case& c : cases) {
@@ -857,10 +954,12 @@ TEST(MapFileTest, VerifyCatchesWrongDetailErrors)
         ASSERT_TRUE(map) << c.what;
         auto problems = verifyMap(*map);
         ASSERT_FALSE(problems.empty()) << c.what << " was not noticed";
-        EXPECT_TRUE(std::any_of(problems.begin(), problems.end(), [&](const std::string& p) {
-            return mentions(p, c.mentions) && mentions(p, "detail_delta_c") &&
-                   mentions(p, (dir / "wrong.map").string());
-        })) << c.what << ": " << problems.front();
+        EXPECT_TRUE(std::any_of(problems.begin(), problems.end(),
+                                [&](const std::string& p) {
+                                    return mentions(p, c.mentions) && mentions(p, "detail_delta_c") &&
+                                           mentions(p, (dir / "wrong.map").string());
+                                }))
+            << c.what << ": " << problems.front();
     }
     // The untouched map verifies.
     test::writeFileBytes(dir / "right.map", assemble(parts));

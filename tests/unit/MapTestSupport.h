@@ -10,6 +10,8 @@
 #include "quadtree/MapFile.h"
 #include "quadtree/QuadtreeBuilder.h"
 
+#include <gtest/gtest.h>
+#include <png.h>
 #include <algorithm>
 #include <cmath>
 #include <csetjmp>
@@ -18,12 +20,10 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <gtest/gtest.h>
 #include <limits>
 #include <map>
 #include <memory>
 #include <optional>
-#include <png.h>
 #include <span>
 #include <string>
 #include <utility>
@@ -85,7 +85,8 @@ inline HeightField hillyField(int width, int height, std::uint32_t seed = 1)
 inline HeightField roughField(int width, int height, std::uint32_t seed, int lo, int hi)
 {
     return makeHeightField(width, height, [=](int i, int j) {
-        return static_cast<float>(lo + static_cast<int>(hashNoise(seed, i, j) % static_cast<std::uint32_t>(hi - lo + 1)));
+        return static_cast<float>(lo +
+                                  static_cast<int>(hashNoise(seed, i, j) % static_cast<std::uint32_t>(hi - lo + 1)));
     });
 }
 
@@ -201,7 +202,10 @@ inline std::vector<std::vector<std::uint16_t>> readGray16PngRows(const std::file
 
 // ---- Reference implementations from the format description ----
 
-inline std::uint16_t clampToCode(std::int64_t v) { return static_cast<std::uint16_t>(std::clamp<std::int64_t>(v, 0, 65535)); }
+inline std::uint16_t clampToCode(std::int64_t v)
+{
+    return static_cast<std::uint16_t>(std::clamp<std::int64_t>(v, 0, 65535));
+}
 
 /// Code of a level grid extended beyond [0, last] by point reflection, first along x, then along y
 /// (docs/map-format.md "Grid and nodes"): `inside(gx, gy)` gives the codes of the grid itself.
@@ -227,8 +231,8 @@ inline std::uint16_t reflectedCode(const std::function<std::uint16_t(std::int64_
 /// The Kobbelt 4-point prediction (weights -1/16, 9/16, 9/16, -1/16, tensor product) of child window
 /// sample (cx, cy) of child `quadrant`, evaluated in floating point from the positions the samples stand
 /// at, then rounded half up. Positions are in parent window indices.
-inline std::int64_t referencePrediction(std::span<const std::uint16_t> parent, int size, int chunkSize,
-                                        int quadrant, int cx, int cy)
+inline std::int64_t referencePrediction(std::span<const std::uint16_t> parent, int size, int chunkSize, int quadrant,
+                                        int cx, int cy)
 {
     auto weights = [&](double position) {
         std::vector<std::pair<int, double>> taps;
@@ -285,8 +289,10 @@ inline std::optional<double> heightInTriangles(std::span<const Triangle> triangl
 {
     constexpr double kTolerance = 1e-9;
     for (const Triangle& t : triangles) {
-        if (px < std::min({t.x[0], t.x[1], t.x[2]}) - kTolerance || px > std::max({t.x[0], t.x[1], t.x[2]}) + kTolerance ||
-            py < std::min({t.y[0], t.y[1], t.y[2]}) - kTolerance || py > std::max({t.y[0], t.y[1], t.y[2]}) + kTolerance) {
+        if (px < std::min({t.x[0], t.x[1], t.x[2]}) - kTolerance ||
+            px > std::max({t.x[0], t.x[1], t.x[2]}) + kTolerance ||
+            py < std::min({t.y[0], t.y[1], t.y[2]}) - kTolerance ||
+            py > std::max({t.y[0], t.y[1], t.y[2]}) + kTolerance) {
             continue;
         }
         const double det = (t.y[1] - t.y[2]) * (t.x[0] - t.x[2]) + (t.x[2] - t.x[1]) * (t.y[0] - t.y[2]);

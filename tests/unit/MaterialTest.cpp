@@ -17,8 +17,7 @@ namespace {
 
 const std::filesystem::path kMaterials = TERRAIN_MATERIALS_DIR;
 
-Material parseOk(const std::string& text, std::vector<std::string>& warnings,
-                 const std::string& name = "test.mat")
+Material parseOk(const std::string& text, std::vector<std::string>& warnings, const std::string& name = "test.mat")
 {
     auto config = ConfigFile::parse(text, name);
     EXPECT_TRUE(config.ok());
@@ -228,7 +227,8 @@ TEST(Material, BitmapDisplacementNeedsABitmap)
     ASSERT_TRUE(config.ok());
     auto m = parseMaterial(*config, warnings);
     ASSERT_FALSE(m.ok());
-    EXPECT_EQ(m.error().message, "b.mat:2: displacement = bitmap-fbm needs a 'bitmap = file.png' (a square, tileable gray PNG)");
+    EXPECT_EQ(m.error().message,
+              "b.mat:2: displacement = bitmap-fbm needs a 'bitmap = file.png' (a square, tileable gray PNG)");
 }
 
 TEST(Material, BitmapMustBeSquare)
@@ -249,12 +249,14 @@ MaterialSet threeMaterials()
     std::vector<std::string> warnings;
     std::vector<Material> ms;
     ms.push_back(parseOk("name = grass\ndisplacement = fbm\namplitude = 0.5\nwavelength = 20\nseed = 1\n", warnings));
-    ms.push_back(parseOk("name = rock\ndisplacement = ridged\namplitude = 3\nwavelength = 30\nseed = 2\n"
-                         "slope = 30, 90\nslope_blend = 10\n",
-                         warnings));
-    ms.push_back(parseOk("name = snow\ndisplacement = fbm\namplitude = 0.2\nwavelength = 50\nseed = 3\n"
-                         "height = 1000, 9000\nheight_blend = 100\n",
-                         warnings));
+    ms.push_back(
+        parseOk("name = rock\ndisplacement = ridged\namplitude = 3\nwavelength = 30\nseed = 2\n"
+                "slope = 30, 90\nslope_blend = 10\n",
+                warnings));
+    ms.push_back(
+        parseOk("name = snow\ndisplacement = fbm\namplitude = 0.2\nwavelength = 50\nseed = 3\n"
+                "height = 1000, 9000\nheight_blend = 100\n",
+                warnings));
     return MaterialSet(std::move(ms));
 }
 
@@ -325,7 +327,7 @@ TEST(Material, GridBitIdenticalToPointAndSkipsUnusedMaterials)
     std::vector<float> slope(n * n);
     std::vector<float> height(n * n);
     for (int k = 0; k < n * n; ++k) {
-        slope[k] = static_cast<float>(15.0 + 30.0 * (k % n) / n);  // grass to rock across the window
+        slope[k] = static_cast<float>(15.0 + 30.0 * (k % n) / n);     // grass to rock across the window
         height[k] = static_cast<float>(900.0 + 200.0 * (k / n) / n);  // and into snow
     }
     std::vector<float> grid(n * n);

@@ -5,14 +5,14 @@
 #include "MapTestSupport.h"
 #include "apps/DetailSetup.h"
 #include "heightfield/HeightFieldIo.h"
-#include "synthesis/DetailRecipeSetup.h"
 #include "heightfield/Image.h"
+#include "synthesis/DetailRecipeSetup.h"
 
-#include <csignal>
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <csignal>
 
 namespace terrain {
 namespace {
@@ -22,14 +22,18 @@ using test::RunResult;
 const std::string kPrep = TERRAIN_PREP_EXE;
 const std::string kTool = TERRAIN_TENGINE_TOOL_EXE;
 
-bool mentions(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
+bool mentions(const std::string& text, const std::string& what)
+{
+    return text.find(what) != std::string::npos;
+}
 
 /// Runs `tengine-tool height` and parses the printed metres; NaN (and a test failure) if it did not work.
 double toolHeight(const std::filesystem::path& map, double x, double y)
 {
     auto result = test::runProgram(kTool, {"height", map.string(), std::to_string(x), std::to_string(y)});
     if (result.exitCode != 0) {
-        ADD_FAILURE() << "tengine-tool height " << x << " " << y << ": exit " << result.exitCode << ": " << result.output;
+        ADD_FAILURE() << "tengine-tool height " << x << " " << y << ": exit " << result.exitCode << ": "
+                      << result.output;
         return std::nan("");
     }
     return std::stod(result.output);
@@ -49,9 +53,9 @@ double heightBitsPerSample(const MapFile& map)
 /// few inside. Row 0 is north: world y = (H - 1 - r) * spacing.
 std::vector<std::pair<int, int>> probePixels(int w, int h)
 {
-    return {{0, 0},         {w - 1, 0},     {0, h - 1},     {w - 1, h - 1}, {w - 1, h / 2}, {w / 2, 0},
-            {w / 2, h - 1}, {w - 2, 1},     {1, h - 2},     {w - 1, 1},     {1, 0},         {w / 3, h / 3},
-            {123, 45},      {w - 65, h - 65}, {w / 2, h / 2}};
+    return {{0, 0},     {w - 1, 0},     {0, h - 1}, {w - 1, h - 1},   {w - 1, h / 2},
+            {w / 2, 0}, {w / 2, h - 1}, {w - 2, 1}, {1, h - 2},       {w - 1, 1},
+            {1, 0},     {w / 3, h / 3}, {123, 45},  {w - 65, h - 65}, {w / 2, h / 2}};
 }
 
 // ---- Real data: built once for the suite ----
@@ -90,7 +94,8 @@ protected:
             {"jacksboro-e1", jacksboro, {"--max-error", "1"}, 1.0, 0.0, 1.0},
         };
         const RealMap& m = *std::find_if(maps.begin(), maps.end(), [&](const RealMap& r) { return r.name == name; });
-        std::vector<std::string> args = {m.input, "-h", "90", "--threads", "2", "-o", (*sDir / (name + ".map")).string()};
+        std::vector<std::string> args = {
+            m.input, "-h", "90", "--threads", "2", "-o", (*sDir / (name + ".map")).string()};
         args.insert(args.end(), m.options.begin(), m.options.end());
         return sBuilt[name] = {m, test::runProgram(kPrep, args)};
     }
@@ -112,7 +117,8 @@ protected:
         ASSERT_EQ(static_cast<int>(png[0].size()), width);
         const double tolerance = spec.maxError + 1e-6;  // the tool prints 6 decimals
         for (auto [c, r] : probePixels(width, height)) {
-            const double expected = spec.scale * png[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)] + spec.offset;
+            const double expected =
+                spec.scale * png[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)] + spec.offset;
             const double actual = toolHeight(path, c * 90.0, (height - 1 - r) * 90.0);
             if (spec.maxError == 0) {
                 EXPECT_EQ(actual, expected) << name << " PNG pixel (" << c << ", " << r << ")";
@@ -136,17 +142,20 @@ protected:
         for (int r = 0; r < height; ++r) {
             for (int c = 0; c < width; ++c) {
                 const int j = height - 1 - r;
-                const NodeId leaf{static_cast<int>(h.levels) - 1, static_cast<std::uint32_t>(std::min(c / n1, leaves - 1)),
+                const NodeId leaf{static_cast<int>(h.levels) - 1,
+                                  static_cast<std::uint32_t>(std::min(c / n1, leaves - 1)),
                                   static_cast<std::uint32_t>(std::min(j / n1, leaves - 1))};
                 const StaticNode* node = tree->find(leaf);
                 ASSERT_NE(node, nullptr) << leaf.toString();
-                const double stored = h.heightOf(test::windowCode(h, *node, c - static_cast<int>(leaf.x) * n1,
-                                                                  j - static_cast<int>(leaf.y) * n1));
-                const double expected = spec.scale * png[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)] + spec.offset;
+                const double stored = h.heightOf(
+                    test::windowCode(h, *node, c - static_cast<int>(leaf.x) * n1, j - static_cast<int>(leaf.y) * n1));
+                const double expected =
+                    spec.scale * png[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)] + spec.offset;
                 const double error = std::abs(stored - expected);
                 worst = std::max(worst, error);
                 if (error > spec.maxError && ++mismatches <= 5) {
-                    ADD_FAILURE() << name << " PNG pixel (" << c << ", " << r << "): stored " << stored << ", PNG gives " << expected;
+                    ADD_FAILURE() << name << " PNG pixel (" << c << ", " << r << "): stored " << stored
+                                  << ", PNG gives " << expected;
                 }
             }
         }
@@ -200,8 +209,11 @@ TEST_F(PrepRealDataTest, FractionalPositionsInterpolateAlongTheTemplateTriangles
     ASSERT_TRUE(open("trinidad"));
     const auto png = test::readGray16PngRows(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
     ASSERT_EQ(png.size(), 1025u);
-    auto at = [&](int i, int j) -> double { return png[static_cast<std::size_t>(1024 - j)][static_cast<std::size_t>(i)]; };
-    const std::pair<double, double> positions[] = {{100.25, 200.75}, {100.75, 200.25}, {512.5, 512.5}, {1023.9, 0.1}, {0.5, 1023.5}};
+    auto at = [&](int i, int j) -> double {
+        return png[static_cast<std::size_t>(1024 - j)][static_cast<std::size_t>(i)];
+    };
+    const std::pair<double, double> positions[] = {
+        {100.25, 200.75}, {100.75, 200.25}, {512.5, 512.5}, {1023.9, 0.1}, {0.5, 1023.5}};
     for (auto [fx, fy] : positions) {
         const int i0 = static_cast<int>(fx), j0 = static_cast<int>(fy);
         const auto triangles = test::templateTriangles(1, [&](int di, int dj) { return at(i0 + di, j0 + dj); });
@@ -250,13 +262,15 @@ TEST_F(PrepRealDataTest, ToolTextureWritesTheNodeTextureNorthUp)
     for (int row = 0; row < t; ++row) {
         for (int x = 0; x < t; ++x) {
             for (int ch = 0; ch < 3; ++ch) {
-                ASSERT_EQ(image->pixel(x, row)[ch], node->texture[(static_cast<std::size_t>(t - 1 - row) * t + x) * 3 + ch])
+                ASSERT_EQ(image->pixel(x, row)[ch],
+                          node->texture[(static_cast<std::size_t>(t - 1 - row) * t + x) * 3 + ch])
                     << "pixel (" << x << ", " << row << ")";
             }
         }
     }
     for (const char* bad : {"9/9/9", "1/2/0", "abc", "1/0"}) {
-        auto failed = test::runProgram(kTool, {"texture", (*sDir / "jacksboro.map").string(), bad, (*sDir / "bad.png").string()});
+        auto failed =
+            test::runProgram(kTool, {"texture", (*sDir / "jacksboro.map").string(), bad, (*sDir / "bad.png").string()});
         EXPECT_NE(failed.exitCode, 0) << bad;
         EXPECT_FALSE(std::filesystem::exists(*sDir / "bad.png")) << bad;
     }
@@ -341,7 +355,8 @@ TEST(PrepCliTest, BadArgumentsAndInputsAreErrorsNamingTheCulprit)
         EXPECT_NE(result.exitCode, 0) << "prep" << line;
         EXPECT_LT(result.exitCode, 128) << "prep" << line << " crashed: " << result.output;
         EXPECT_TRUE(mentions(result.output, c.mentions))
-            << "prep" << line << ": output does not mention '" << c.mentions << "':\n" << result.output;
+            << "prep" << line << ": output does not mention '" << c.mentions << "':\n"
+            << result.output;
         EXPECT_TRUE(mapsAndTemporaries(dir).empty()) << "prep" << line << " left " << mapsAndTemporaries(dir).front();
     }
 }
@@ -367,7 +382,8 @@ TEST(PrepCliTest, DefaultOutputIsTheInputWithExtensionMap)
     auto verify = test::runProgram(kTool, {"verify", (dir / "terrain.heights.map").string()});
     EXPECT_EQ(verify.exitCode, 0) << verify.output;
 
-    result = test::runProgram(kPrep, {(dir / "terrain.heights.png").string(), "-h", "5", "-o", (dir / "custom.map").string()});
+    result = test::runProgram(kPrep,
+                              {(dir / "terrain.heights.png").string(), "-h", "5", "-o", (dir / "custom.map").string()});
     ASSERT_EQ(result.exitCode, 0) << result.output;
     EXPECT_EQ(dir.list(), (std::vector<std::string>{"custom.map", "terrain.heights.map", "terrain.heights.png"}));
 }
@@ -384,7 +400,8 @@ TEST(PrepCliTest, RefusesToWriteTheMapOverAnyOfItsInputs)
     std::filesystem::create_directory(dir / "sub");
     std::filesystem::create_symlink(dir / "terrain.png", dir / "link.png");
     std::filesystem::create_hard_link(dir / "colour.png", dir / "hard.png");
-    const auto before = std::make_pair(test::readFileBytes(dir / "terrain.png"), test::readFileBytes(dir / "colour.png"));
+    const auto before =
+        std::make_pair(test::readFileBytes(dir / "terrain.png"), test::readFileBytes(dir / "colour.png"));
     const auto weightsBefore = test::readFileBytes(dir / "weights.png");
     const std::string terrain = (dir / "terrain.png").string();
     struct Case {
@@ -413,8 +430,8 @@ TEST(PrepCliTest, RefusesToWriteTheMapOverAnyOfItsInputs)
         EXPECT_EQ(test::readFileBytes(dir / "colour.png"), before.second) << c.what;
         EXPECT_EQ(test::readFileBytes(dir / "weights.png"), weightsBefore) << c.what;
         EXPECT_TRUE(std::filesystem::is_symlink(dir / "link.png")) << c.what;
-        EXPECT_EQ(dir.list(), (std::vector<std::string>{"colour.png", "hard.png", "link.png", "sub", "terrain.png",
-                                                        "weights.png"}))
+        EXPECT_EQ(dir.list(),
+                  (std::vector<std::string>{"colour.png", "hard.png", "link.png", "sub", "terrain.png", "weights.png"}))
             << c.what;
     }
     // A map named after the input with its extension replaced is fine; so is `prep x.map` refused.
@@ -431,7 +448,8 @@ TEST(PrepCliTest, TheMapRecordsWhatItsDetailErrorsAssumeAndDefaultsMatchTheViewe
     const auto input = writeSmallPng(dir, "terrain.png");
     const std::filesystem::path materials = TERRAIN_MATERIALS_DIR;
     // prep's defaults: what the viewer's defaults synthesize (grass.mat alone, Kobbelt, omega 1).
-    auto made = test::runProgram(kPrep, {input.string(), "--chunk", "9", "-h", "10", "-o", (dir / "default.map").string()});
+    auto made =
+        test::runProgram(kPrep, {input.string(), "--chunk", "9", "-h", "10", "-o", (dir / "default.map").string()});
     ASSERT_EQ(made.exitCode, 0) << made.output;
     auto map = MapFile::open(dir / "default.map", ReaderKind::Stream);
     ASSERT_TRUE(map.ok()) << map.error().message;
@@ -449,7 +467,8 @@ TEST(PrepCliTest, TheMapRecordsWhatItsDetailErrorsAssumeAndDefaultsMatchTheViewe
     ASSERT_TRUE(synthesizer.ok() && *synthesizer);
     auto recipe = viewerDetailRecipe(viewer, **synthesizer, materials);
     ASSERT_TRUE(recipe.ok()) << recipe.error().message;
-    EXPECT_EQ(detailRecipeMismatch(header, "default.map", *recipe, detailMaterialFiles(viewer, materials)), std::nullopt)
+    EXPECT_EQ(detailRecipeMismatch(header, "default.map", *recipe, detailMaterialFiles(viewer, materials)),
+              std::nullopt)
         << "prep x.png then tengine x.map agree";
 
     // Other settings: recorded as given, and the viewer's defaults now differ, in one message naming both
@@ -460,23 +479,26 @@ TEST(PrepCliTest, TheMapRecordsWhatItsDetailErrorsAssumeAndDefaultsMatchTheViewe
     ASSERT_EQ(made.exitCode, 0) << made.output;
     auto other = MapFile::open(dir / "other.map", ReaderKind::Stream);
     ASSERT_TRUE(other.ok());
-    const DetailRecipe expected{"kobbelt", 0.5,
+    const DetailRecipe expected{"kobbelt",
+                                0.5,
                                 {{"rock", hashFileContent(materials / "rock.mat").value()},
                                  {"grass", hashFileContent(materials / "grass.mat").value()}}};
     EXPECT_EQ((*other)->header().detailRecipe, expected);
-    auto mismatch = detailRecipeMismatch((*other)->header(), "other.map", *recipe, detailMaterialFiles(viewer, materials));
+    auto mismatch =
+        detailRecipeMismatch((*other)->header(), "other.map", *recipe, detailMaterialFiles(viewer, materials));
     ASSERT_TRUE(mismatch.has_value());
     EXPECT_TRUE(mentions(*mismatch, expected.describe())) << *mismatch;
     EXPECT_TRUE(mentions(*mismatch, recipe->describe())) << *mismatch;
-    EXPECT_TRUE(mentions(*mismatch, "prep HEIGHTFIELD -h 10 --chunk 9 --material " + (materials / "grass.mat").string() +
-                                        " -o other.map"))
+    EXPECT_TRUE(mentions(*mismatch, "prep HEIGHTFIELD -h 10 --chunk 9 --material " +
+                                        (materials / "grass.mat").string() + " -o other.map"))
         << *mismatch;
     // tengine-tool info prints the recipe.
     auto info = test::runProgram(kTool, {"info", (dir / "other.map").string()});
     ASSERT_EQ(info.exitCode, 0) << info.output;
     EXPECT_TRUE(mentions(info.output, "errors estimated for " + expected.describe())) << info.output;
     // Subdivision only, and a contradiction.
-    made = test::runProgram(kPrep, {input.string(), "--chunk", "9", "--no-material", "-o", (dir / "none.map").string()});
+    made =
+        test::runProgram(kPrep, {input.string(), "--chunk", "9", "--no-material", "-o", (dir / "none.map").string()});
     ASSERT_EQ(made.exitCode, 0) << made.output;
     auto none = MapFile::open(dir / "none.map", ReaderKind::Stream);
     ASSERT_TRUE(none.ok() && (*none)->header().detailRecipe);
@@ -501,7 +523,8 @@ TEST(PrepCliTest, FailedWritesLeaveNoMapAndNoTemporary)
     const bool root = ::geteuid() == 0;  // root ignores directory permissions
     if (!root) {
         std::filesystem::create_directory(dir / "readonly");
-        std::filesystem::permissions(dir / "readonly", std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
+        std::filesystem::permissions(dir / "readonly",
+                                     std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
         cases.push_back({"output in a read-only directory", dir / "readonly" / "out.map"});
     }
     for (const Case& c : cases) {
@@ -648,7 +671,8 @@ TEST(PrepCliTest, MaterialsGiveLeafDetailErrorsIndependentOfThreads)
 TEST(TengineToolCliTest, VerifyReportsTheCorruptNodeAndExitsOne)
 {
     test::ScratchDir dir;
-    auto result = test::runProgram(kPrep, {writeSmallPng(dir).string(), "--chunk", "5", "-h", "1", "-o", (dir / "m.map").string()});
+    auto result = test::runProgram(
+        kPrep, {writeSmallPng(dir).string(), "--chunk", "5", "-h", "1", "-o", (dir / "m.map").string()});
     ASSERT_EQ(result.exitCode, 0) << result.output;
     auto map = test::openMap(dir / "m.map");
     ASSERT_TRUE(map);
@@ -672,7 +696,8 @@ TEST(TengineToolCliTest, VerifyReportsTheCorruptNodeAndExitsOne)
 TEST(TengineToolCliTest, ErrorsAndExitCodes)
 {
     test::ScratchDir dir;
-    auto built = test::runProgram(kPrep, {writeSmallPng(dir).string(), "--chunk", "5", "-h", "1", "-o", (dir / "m.map").string()});
+    auto built = test::runProgram(
+        kPrep, {writeSmallPng(dir).string(), "--chunk", "5", "-h", "1", "-o", (dir / "m.map").string()});
     ASSERT_EQ(built.exitCode, 0) << built.output;
     const std::string map = (dir / "m.map").string();
     const std::string missing = (dir / "missing.map").string();

@@ -80,8 +80,14 @@ struct MapCase {
     }
 };
 
-std::string caseName(const ::testing::TestParamInfo<MapCase>& paramInfo) { return paramInfo.param.name; }
-void PrintTo(const MapCase& c, std::ostream* os) { *os << c.name; }
+std::string caseName(const ::testing::TestParamInfo<MapCase>& paramInfo)
+{
+    return paramInfo.param.name;
+}
+void PrintTo(const MapCase& c, std::ostream* os)
+{
+    *os << c.name;
+}
 
 const MapCase kMapCases[] = {
     {"HillyLossless", [] { return test::hillyField(129, 129, 1); }, 17},
@@ -114,8 +120,8 @@ TEST_P(BuilderErrorsTest, DeltaMEqualsBruteForceEvaluationOfTheNodesTriangles)
         }
         ++internal;
         const StaticNode& node = built.node(entry.id);
-        const auto triangles = test::templateTriangles(
-            n - 1, [&](int i, int j) { return h.heightOf(test::windowCode(h, node, i, j)); });
+        const auto triangles =
+            test::templateTriangles(n - 1, [&](int i, int j) { return h.heightOf(test::windowCode(h, node, i, j)); });
         // Every sample of the children's resolution in the node's square, from the input when the map is
         // lossless (independent of the decoder), else from the decoded children.
         const std::uint64_t stride = test::strideAt(h, entry.id.level + 1);
@@ -247,11 +253,13 @@ TEST_P(BuilderErrorsTest, ParentSamplesAreTheChildrensEvenSamplesAndOverlapsAgre
         const auto last = static_cast<std::int64_t>(h.levelGridSize(entry.id.level)) - 1;
         for (int v = -kBorder; v < n + kBorder; ++v) {
             for (int u = -kBorder; u < n + kBorder; ++u) {
-                const std::int64_t gx = std::int64_t{entry.id.x} * (n - 1) + u, gy = std::int64_t{entry.id.y} * (n - 1) + v;
+                const std::int64_t gx = std::int64_t{entry.id.x} * (n - 1) + u,
+                                   gy = std::int64_t{entry.id.y} * (n - 1) + v;
                 if (gx < 0 || gy < 0 || gx > last || gy > last) {
                     continue;
                 }
-                auto [it, inserted] = seen[static_cast<std::size_t>(entry.id.level)].try_emplace({gx, gy}, test::windowCode(h, node, u, v));
+                auto [it, inserted] = seen[static_cast<std::size_t>(entry.id.level)].try_emplace(
+                    {gx, gy}, test::windowCode(h, node, u, v));
                 ASSERT_TRUE(inserted || it->second == test::windowCode(h, node, u, v))
                     << entry.id.toString() << " disagrees with a neighbour at level grid (" << gx << ", " << gy << ")";
             }
@@ -263,7 +271,8 @@ TEST_P(BuilderErrorsTest, ParentSamplesAreTheChildrensEvenSamplesAndOverlapsAgre
         const int qx = entry.id.quadrant() & 1, qy = entry.id.quadrant() >> 1;
         for (int v = 0; v < n; v += 2) {
             for (int u = 0; u < n; u += 2) {
-                ASSERT_EQ(test::windowCode(h, node, u, v), test::windowCode(h, parent, qx * half + u / 2, qy * half + v / 2))
+                ASSERT_EQ(test::windowCode(h, node, u, v),
+                          test::windowCode(h, parent, qx * half + u / 2, qy * half + v / 2))
                     << entry.id.toString() << " sample (" << u << ", " << v << ")";
             }
         }
@@ -283,7 +292,10 @@ struct RoundTripCase {
     double offset = 0.0;
 };
 
-void PrintTo(const RoundTripCase& c, std::ostream* os) { *os << c.name; }
+void PrintTo(const RoundTripCase& c, std::ostream* os)
+{
+    *os << c.name;
+}
 
 class BuilderRoundTripTest : public ::testing::TestWithParam<RoundTripCase> {};
 
@@ -332,7 +344,8 @@ TEST_P(BuilderRoundTripTest, StaticHeightAtEveryInputSample)
     EXPECT_EQ(mismatches, 0);
     if (!lossless) {
         // The bound is used, not just respected: a lossy map is actually lossy.
-        EXPECT_GE(worst, 0.5 * h.maxErrorBound) << "largest error " << worst << " m of a " << h.maxErrorBound << " m bound";
+        EXPECT_GE(worst, 0.5 * h.maxErrorBound)
+            << "largest error " << worst << " m of a " << h.maxErrorBound << " m bound";
     }
 }
 
@@ -369,10 +382,12 @@ TEST_P(BuilderRoundTripTest, FractionalPositionsFollowTheTemplateTriangles)
         std::function<double(int, int)> z = [&](int di, int dj) {
             const std::int64_t gx = std::clamp<std::int64_t>(i0 - 1 + di, 0, field.width - 1);
             const std::int64_t gy = std::clamp<std::int64_t>(j0 - 1 + dj, 0, field.height - 1);
-            return lossless ? c.scale * field.at(static_cast<int>(gx), static_cast<int>(gy)) + c.offset : storedAt(gx, gy);
+            return lossless ? c.scale * field.at(static_cast<int>(gx), static_cast<int>(gy)) + c.offset
+                            : storedAt(gx, gy);
         };
         const auto triangles = test::templateTriangles(3, z);
-        auto expected = test::heightInTriangles(triangles, fx - static_cast<double>(i0 - 1), fy - static_cast<double>(j0 - 1));
+        auto expected =
+            test::heightInTriangles(triangles, fx - static_cast<double>(i0 - 1), fy - static_cast<double>(j0 - 1));
         ASSERT_TRUE(expected);
         auto sample = staticHeightAt(*built.map, fx * 2.0, fy * 2.0);
         ASSERT_TRUE(sample.ok()) << sample.error().message;
@@ -383,21 +398,22 @@ TEST_P(BuilderRoundTripTest, FractionalPositionsFollowTheTemplateTriangles)
 
 INSTANTIATE_TEST_SUITE_P(
     , BuilderRoundTripTest,
-    ::testing::Values(RoundTripCase{"HillyLossless", [] { return test::hillyField(65, 65, 6); }},
-                      RoundTripCase{"RoughScaledOffset", [] { return test::roughField(65, 65, 7, 0, 5000); }, 9, 0.0, 2.0, 100.0},
-                      RoundTripCase{"RoughPadded70x41", [] { return test::roughField(70, 41, 8, 0, 1000); }},
-                      RoundTripCase{"RoughPadded41x70", [] { return test::roughField(41, 70, 9, 0, 1000); }},
-                      // The last valid column / row lies on a node edge, so a node beside it is padding only.
-                      RoundTripCase{"RoughEdgeOnNodeBoundary33x40", [] { return test::roughField(33, 40, 10, 0, 1000); }},
-                      RoundTripCase{"RoughEdgeOnNodeBoundary40x33", [] { return test::roughField(40, 33, 11, 0, 1000); }},
-                      RoundTripCase{"Smallest2x2", [] { return test::roughField(2, 2, 12, 0, 1000); }, 3},
-                      RoundTripCase{"TwoRows5x2", [] { return test::roughField(5, 2, 13, 0, 1000); }, 3},
-                      RoundTripCase{"ConstantHeight", [] { return test::makeHeightField(33, 33, [](int, int) { return 77.0f; }); }},
-                      RoundTripCase{"MaxErrorBelowOneStepIsLossless", [] { return test::roughField(33, 33, 14, 0, 1000); }, 17, 0.9},
-                      RoundTripCase{"RoughLossyE2", [] { return test::roughField(65, 65, 15, 0, 3000); }, 17, 2.0},
-                      RoundTripCase{"RoughLossyE7Scaled", [] { return test::roughField(65, 65, 16, 0, 3000); }, 9, 7.0, 0.5, 3.0},
-                      RoundTripCase{"FractionalLossless", [] { return test::fractionalField(65, 65, 17); }},
-                      RoundTripCase{"FractionalLossyE1", [] { return test::fractionalField(65, 65, 18); }, 17, 1.0}),
+    ::testing::Values(
+        RoundTripCase{"HillyLossless", [] { return test::hillyField(65, 65, 6); }},
+        RoundTripCase{"RoughScaledOffset", [] { return test::roughField(65, 65, 7, 0, 5000); }, 9, 0.0, 2.0, 100.0},
+        RoundTripCase{"RoughPadded70x41", [] { return test::roughField(70, 41, 8, 0, 1000); }},
+        RoundTripCase{"RoughPadded41x70", [] { return test::roughField(41, 70, 9, 0, 1000); }},
+        // The last valid column / row lies on a node edge, so a node beside it is padding only.
+        RoundTripCase{"RoughEdgeOnNodeBoundary33x40", [] { return test::roughField(33, 40, 10, 0, 1000); }},
+        RoundTripCase{"RoughEdgeOnNodeBoundary40x33", [] { return test::roughField(40, 33, 11, 0, 1000); }},
+        RoundTripCase{"Smallest2x2", [] { return test::roughField(2, 2, 12, 0, 1000); }, 3},
+        RoundTripCase{"TwoRows5x2", [] { return test::roughField(5, 2, 13, 0, 1000); }, 3},
+        RoundTripCase{"ConstantHeight", [] { return test::makeHeightField(33, 33, [](int, int) { return 77.0f; }); }},
+        RoundTripCase{"MaxErrorBelowOneStepIsLossless", [] { return test::roughField(33, 33, 14, 0, 1000); }, 17, 0.9},
+        RoundTripCase{"RoughLossyE2", [] { return test::roughField(65, 65, 15, 0, 3000); }, 17, 2.0},
+        RoundTripCase{"RoughLossyE7Scaled", [] { return test::roughField(65, 65, 16, 0, 3000); }, 9, 7.0, 0.5, 3.0},
+        RoundTripCase{"FractionalLossless", [] { return test::fractionalField(65, 65, 17); }},
+        RoundTripCase{"FractionalLossyE1", [] { return test::fractionalField(65, 65, 18); }, 17, 1.0}),
     [](const auto& paramInfo) { return std::string(paramInfo.param.name); });
 
 // ---- Determinism ----
@@ -476,14 +492,16 @@ TEST(QuadtreeBuilderTest, OddSizedInputsArePaddedByReplicatingTheLastRowAndColum
             const StaticNode& node = built.node(id);
             const auto last = static_cast<std::int64_t>(h.levelGridSize(id.level)) - 1;
             auto inside = [&](std::int64_t gx, std::int64_t gy) {
-                const double native = test::paddedNative(field, gx * static_cast<std::int64_t>(stride), gy * static_cast<std::int64_t>(stride));
+                const double native = test::paddedNative(field, gx * static_cast<std::int64_t>(stride),
+                                                         gy * static_cast<std::int64_t>(stride));
                 return static_cast<std::uint16_t>(std::lround((native - h.heightOffset) / h.heightStep));
             };
             for (int v = -kBorder; v < n + kBorder; ++v) {
                 for (int u = -kBorder; u < n + kBorder; ++u) {
-                    const auto expected =
-                        test::reflectedCode(inside, last, std::int64_t{id.x} * (n - 1) + u, std::int64_t{id.y} * (n - 1) + v);
-                    ASSERT_EQ(test::windowCode(h, node, u, v), expected) << id.toString() << " window (" << u << ", " << v << ")";
+                    const auto expected = test::reflectedCode(inside, last, std::int64_t{id.x} * (n - 1) + u,
+                                                              std::int64_t{id.y} * (n - 1) + v);
+                    ASSERT_EQ(test::windowCode(h, node, u, v), expected)
+                        << id.toString() << " window (" << u << ", " << v << ")";
                 }
             }
         }
@@ -590,7 +608,8 @@ TEST(QuadtreeBuilderTest, WeightMapBlackLeftWhiteRightRefinesOnlyTheRight)
     // Columns 0..63 black, 64..128 white: a node keeps children exactly when its closed square reaches x = 64.
     test::ScratchDir dir;
     const HeightField field = test::roughField(129, 129, 23, 0, 2000);
-    Image weights{129, 129, 1, grayPixels(129, 129, [](int x, int) { return static_cast<std::uint8_t>(x >= 64 ? 255 : 0); })};
+    Image weights{129, 129, 1,
+                  grayPixels(129, 129, [](int x, int) { return static_cast<std::uint8_t>(x >= 64 ? 255 : 0); })};
     ASSERT_TRUE(writePngImage(dir / "weights.png", weights).ok());
     BuildOptions options = test::testOptions(17);
     options.weights = dir / "weights.png";
@@ -738,7 +757,10 @@ struct TextureCase {
     bool halfWeights;  ///< prune the west half with a weight map
 };
 
-void PrintTo(const TextureCase& c, std::ostream* os) { *os << c.name; }
+void PrintTo(const TextureCase& c, std::ostream* os)
+{
+    *os << c.name;
+}
 
 class BuilderTextureTest : public ::testing::TestWithParam<TextureCase> {};
 
@@ -757,8 +779,9 @@ TEST_P(BuilderTextureTest, NeighboursOfOneLevelShareTheirEdgeTexels)
         options.texture = dir / "texture.png";
     }
     if (c.halfWeights) {
-        Image weights{c.width, c.height, 1,
-                      grayPixels(c.width, c.height, [&](int x, int) { return static_cast<std::uint8_t>(x >= c.width / 2 ? 255 : 0); })};
+        Image weights{c.width, c.height, 1, grayPixels(c.width, c.height, [&](int x, int) {
+                          return static_cast<std::uint8_t>(x >= c.width / 2 ? 255 : 0);
+                      })};
         ASSERT_TRUE(writePngImage(dir / "weights.png", weights).ok());
         options.weights = dir / "weights.png";
     }
@@ -774,7 +797,8 @@ TEST_P(BuilderTextureTest, NeighboursOfOneLevelShareTheirEdgeTexels)
     for (const DirectoryEntry& entry : built.map->directory()) {
         const StaticNode& a = built.node(entry.id);
         for (int direction = 0; direction < 2; ++direction) {  // 0: east neighbour, 1: north neighbour
-            const NodeId b{entry.id.level, entry.id.x + (direction == 0 ? 1u : 0u), entry.id.y + (direction == 1 ? 1u : 0u)};
+            const NodeId b{entry.id.level, entry.id.x + (direction == 0 ? 1u : 0u),
+                           entry.id.y + (direction == 1 ? 1u : 0u)};
             const std::uint32_t side = 1u << b.level;
             const StaticNode* nb = b.x < side && b.y < side ? built.tree.find(b) : nullptr;
             if (!nb) {
@@ -824,7 +848,8 @@ TEST(QuadtreeBuilderTest, BadOptionsAndInputsAreErrorsThatLeaveNoFile)
         {"chunk 64", test::hillyField(65, 65), [](BuildOptions& o) { o.chunkSize = 64; }, "chunk size 64"},
         {"chunk 1", test::hillyField(65, 65), [](BuildOptions& o) { o.chunkSize = 1; }, "chunk size 1"},
         {"chunk 2049", test::hillyField(65, 65), [](BuildOptions& o) { o.chunkSize = 2049; }, "chunk size 2049"},
-        {"texture size 100", test::hillyField(65, 65), [](BuildOptions& o) { o.textureSize = 100; }, "texture size 100"},
+        {"texture size 100", test::hillyField(65, 65), [](BuildOptions& o) { o.textureSize = 100; },
+         "texture size 100"},
         {"texture size 2", test::hillyField(65, 65), [](BuildOptions& o) { o.textureSize = 2; }, "texture size 2"},
         {"threads 0", test::hillyField(65, 65), [](BuildOptions& o) { o.threads = 0; }, "thread count 0"},
         {"negative max error", test::hillyField(65, 65), [](BuildOptions& o) { o.maxError = -1; }, "error -1"},
@@ -836,7 +861,8 @@ TEST(QuadtreeBuilderTest, BadOptionsAndInputsAreErrorsThatLeaveNoFile)
         {"1x1 input", test::hillyField(1, 1), [](BuildOptions&) {}, "1x1"},
         {"1x40 input", test::hillyField(1, 40), [](BuildOptions&) {}, "1x40"},
         {"0x0 input", HeightField{}, [](BuildOptions&) {}, "0x0"},
-        {"all NaN", test::makeHeightField(9, 9, [&](int, int) { return nan; }), [](BuildOptions&) {}, "no valid sample"},
+        {"all NaN", test::makeHeightField(9, 9, [&](int, int) { return nan; }), [](BuildOptions&) {},
+         "no valid sample"},
         {"missing weight map", test::hillyField(65, 65), [](BuildOptions& o) { o.weights = "/nonexistent/w.png"; },
          "/nonexistent/w.png"},
         {"missing texture", test::hillyField(65, 65), [](BuildOptions& o) { o.texture = "/nonexistent/t.png"; },
@@ -887,11 +913,11 @@ TEST(HeightQueryTest, PositionsOutsideTheValidRegionAreErrorsNamingTheMap)
         bool inside;
     };
     const Case cases[] = {
-        {100.0, 200.0, true},          // south-west corner sample
+        {100.0, 200.0, true},                    // south-west corner sample
         {100.0 + 69 * 2, 200.0 + 40 * 2, true},  // north-east corner sample
-        {99.999, 250.0, false},        // just west
+        {99.999, 250.0, false},                  // just west
         {100.0 + 69 * 2 + 0.001, 250.0, false},  // just east of the last column
-        {150.0, 199.99, false},        // just south
+        {150.0, 199.99, false},                  // just south
         {150.0, 200.0 + 40 * 2 + 0.01, false},   // just north of the last row, inside the padded grid
         {100.0 + 100 * 2, 200.0, false},         // in the padding
         {std::nan(""), 250.0, false},

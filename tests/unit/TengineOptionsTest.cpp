@@ -121,9 +121,11 @@ const std::vector<ValidCase>& validCases()
         {"detail_subdivision_factor=2", [](const O& o) { return o.detailSubdivisionFactor == 2.0; }},
         {"detail_add_material=no", [](const O& o) { return !o.detailAddMaterial; }},
         {"detail_material_type=1", [](const O& o) { return o.detailMaterialType == 1; }},
-        {"detail_subdivision_scheme=catmull-clark", [](const O& o) { return o.detailSubdivisionScheme == "catmull-clark"; }},
+        {"detail_subdivision_scheme=catmull-clark",
+         [](const O& o) { return o.detailSubdivisionScheme == "catmull-clark"; }},
         {"detail_subdivision_scheme=bilinear", [](const O& o) { return o.detailSubdivisionScheme == "bilinear"; }},
-        {"detail_materials=a.mat, /m/b.mat", [](const O& o) {
+        {"detail_materials=a.mat, /m/b.mat",
+         [](const O& o) {
              return o.detailMaterials == std::vector<std::filesystem::path>{"a.mat", "/m/b.mat"};
          }},
         {"material_path=my/materials", [](const O& o) { return o.materialPath == "my/materials"; }},
@@ -678,14 +680,18 @@ TEST(TengineOutputsTest, AnOutputNamingAnInputIsRefusedNamingBoth)
         {"log_file = a config through a link", [&](TengineOptions& o) { o.logFile = dir / "link.cfg"; }, "config file"},
         {"log_file = a material", [&](TengineOptions& o) { o.logFile = dir / "grass.mat"; }, "material"},
         {"log_file = the camera path", [&](TengineOptions& o) { o.logFile = dir / "demo.path"; }, "camera path"},
-        {"image_path = the map", [&](TengineOptions& o) {
+        {"image_path = the map",
+         [&](TengineOptions& o) {
              o.videoMode = true;
              o.imagePath = dir / "terrain.map";
-         }, "map"},
-        {"a config where video mode writes frames.csv", [&](TengineOptions& o) {
+         },
+         "map"},
+        {"a config where video mode writes frames.csv",
+         [&](TengineOptions& o) {
              o.videoMode = true;
              o.imagePath = dir / "frames";
-         }, "config file"},
+         },
+         "config file"},
         {"recorded keyframes = a config", [&](TengineOptions& o) { o.cameraPath = dir / "demo"; }, ""},
     };
     for (const Case& c : cases) {

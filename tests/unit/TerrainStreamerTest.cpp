@@ -30,11 +30,12 @@ protected:
     /// A low flight across the map and back, looking ahead and a little down.
     CameraPath flight() const
     {
-        auto path = CameraPath::parse("0 200 300 1450 45 -10\n"
-                                      "20 2500 2400 1500 80 -12\n"
-                                      "40 4800 3000 1500 -30 -10\n"
-                                      "60 1000 4700 1600 -150 -20\n",
-                                      "flight.path");
+        auto path = CameraPath::parse(
+            "0 200 300 1450 45 -10\n"
+            "20 2500 2400 1500 80 -12\n"
+            "40 4800 3000 1500 -30 -10\n"
+            "60 1000 4700 1600 -150 -20\n",
+            "flight.path");
         EXPECT_TRUE(path.ok()) << path.error().message;
         return path.value();
     }
@@ -174,7 +175,8 @@ TEST_F(TerrainStreamerTest, MinimumSpacingStopsRefinement)
         return deepest;
     };
     const int deepestFull = deepestSettled(0.0);
-    EXPECT_EQ(deepestFull, static_cast<int>(mMap->header().levels) - 1) << "without the limit the view reaches the leaves";
+    EXPECT_EQ(deepestFull, static_cast<int>(mMap->header().levels) - 1)
+        << "without the limit the view reaches the leaves";
     EXPECT_EQ(deepestSettled(20.0), deepestFull - 1);
     // A minimum between two levels' spacings keeps the coarser one: 15 m allows 20 m nodes, not 10 m ones.
     EXPECT_EQ(deepestSettled(15.0), deepestFull - 1);

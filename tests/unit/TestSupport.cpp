@@ -1,5 +1,9 @@
 #include "TestSupport.h"
 
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -7,14 +11,10 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
-#include <fcntl.h>
 #include <fstream>
 #include <iterator>
 #include <new>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <thread>
-#include <unistd.h>
 
 namespace terrain::test {
 
@@ -184,7 +184,7 @@ LimitedRun runWithMemoryLimit(const std::function<std::string()>& body, std::uin
         return run;
     }
     if (WIFEXITED(run.status) && WEXITSTATUS(run.status) == 0 && !message.empty()) {
-        run.outcome = message[0] == 'R' ? LimitedRun::Outcome::Returned
+        run.outcome = message[0] == 'R'   ? LimitedRun::Outcome::Returned
                       : message[0] == 'B' ? LimitedRun::Outcome::OutOfMemory
                                           : LimitedRun::Outcome::Died;
         run.text = message.substr(1);
@@ -195,12 +195,12 @@ LimitedRun runWithMemoryLimit(const std::function<std::string()>& body, std::uin
 std::string describe(const LimitedRun& run)
 {
     switch (run.outcome) {
-    case LimitedRun::Outcome::Returned:
-        return "returned '" + run.text + "'";
-    case LimitedRun::Outcome::OutOfMemory:
-        return "ran out of memory (std::bad_alloc): it allocated before refusing";
-    case LimitedRun::Outcome::Died:
-        break;
+        case LimitedRun::Outcome::Returned:
+            return "returned '" + run.text + "'";
+        case LimitedRun::Outcome::OutOfMemory:
+            return "ran out of memory (std::bad_alloc): it allocated before refusing";
+        case LimitedRun::Outcome::Died:
+            break;
     }
     return "the child died: " + describeWaitStatus(run.status) + (run.text.empty() ? "" : ", " + run.text);
 }
@@ -211,7 +211,13 @@ std::string readTextFile(const std::filesystem::path& path)
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-std::filesystem::path testDataPath(const std::string& name) { return std::filesystem::path(TERRAIN_TEST_DATA_DIR) / name; }
-std::filesystem::path demoDataPath(const std::string& name) { return std::filesystem::path(TERRAIN_DEMO_DATA_DIR) / name; }
+std::filesystem::path testDataPath(const std::string& name)
+{
+    return std::filesystem::path(TERRAIN_TEST_DATA_DIR) / name;
+}
+std::filesystem::path demoDataPath(const std::string& name)
+{
+    return std::filesystem::path(TERRAIN_DEMO_DATA_DIR) / name;
+}
 
 }  // namespace terrain::test

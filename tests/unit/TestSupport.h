@@ -1,12 +1,12 @@
 // Shared helpers for unit tests: scratch directories, running the apps, test data paths.
 #pragma once
 
+#include <sys/types.h>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
-#include <sys/types.h>
 #include <vector>
 
 namespace terrain::test {
