@@ -23,8 +23,9 @@ Status refuseInputAsOutput(const std::string& outputRole, const std::filesystem:
     for (const InputFile& input : inputs) {
         if (!input.path.empty() && isSameFile(output, input.path)) {
             const bool sameName = output.lexically_normal() == input.path.lexically_normal();
+            const std::string which = sameName ? std::string() : input.path.string();
             return makeError("refusing to write the ", outputRole, " to ", output.string(), ": it is the ", input.role,
-                             sameName ? "" : " " + input.path.string(), sameName ? " itself" : " (the same file)",
+                             sameName ? "" : " ", which, sameName ? " itself" : " (the same file)",
                              "; nothing was written, choose another output path");
         }
     }

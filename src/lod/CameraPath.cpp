@@ -300,18 +300,18 @@ std::vector<TimeSpan> findPathBelowGround(const CameraPath& path,
 
 std::string formatTimeSpans(const std::vector<TimeSpan>& spans, std::size_t most)
 {
-    std::string text;
+    std::ostringstream text;
     for (std::size_t i = 0; i < spans.size() && i < most; ++i) {
-        text += (i ? ", " : "") + formatNumber(std::round(spans[i].begin * 100) / 100);
+        text << (i ? ", " : "") << formatNumber(std::round(spans[i].begin * 100) / 100);
         if (spans[i].end > spans[i].begin) {
-            text += "-" + formatNumber(std::round(spans[i].end * 100) / 100);
+            text << "-" << formatNumber(std::round(spans[i].end * 100) / 100);
         }
-        text += " s";
+        text << " s";
     }
     if (spans.size() > most) {
-        text += " ... (" + std::to_string(spans.size() - most) + " more)";
+        text << " ... (" << spans.size() - most << " more)";
     }
-    return text;
+    return text.str();
 }
 
 }  // namespace terrain

@@ -63,14 +63,17 @@ std::vector<std::uint8_t> encodeDetailRecipe(const DetailRecipe& recipe)
                     "encodeDetailRecipe: scheme of at most 32 bytes, at most kMaxRecipeMaterials materials");
     std::vector<std::uint8_t> bytes;
     ByteWriter w(bytes);
-    w.put(static_cast<std::uint8_t>(recipe.scheme.size()));
-    w.putBytes(reinterpret_cast<const std::uint8_t*>(recipe.scheme.data()), recipe.scheme.size());
+    auto putText = [&](const std::string& text, std::size_t length) {
+        w.put(static_cast<std::uint8_t>(length));
+        for (std::size_t k = 0; k < length; ++k) {
+            w.put(static_cast<std::uint8_t>(text[k]));
+        }
+    };
+    putText(recipe.scheme, recipe.scheme.size());
     w.put(recipe.omega);
     w.put(static_cast<std::uint32_t>(recipe.materials.size()));
     for (const auto& m : recipe.materials) {
-        const std::size_t length = std::min(m.name.size(), kMaxRecipeNameBytes);
-        w.put(static_cast<std::uint8_t>(length));
-        w.putBytes(reinterpret_cast<const std::uint8_t*>(m.name.data()), length);
+        putText(m.name, std::min(m.name.size(), kMaxRecipeNameBytes));
         w.put(m.hash);
     }
     return bytes;

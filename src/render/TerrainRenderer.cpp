@@ -106,7 +106,9 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
             terrainProgram.use();
             glUniform1i(terrainProgram.uniform("uDetail"), 2);
             for (std::size_t k = 0; k < layers.size(); ++k) {
-                const std::string index = "[" + std::to_string(k) + "]";
+                std::string index = "[";
+                index += std::to_string(k);
+                index += ']';
                 glm::vec4 mask(0.0f);
                 mask[layers[k].material] = 1.0f;
                 glUniform4fv(terrainProgram.uniform(("uLayerMaterialMask" + index).c_str()), 1, glm::value_ptr(mask));
