@@ -58,12 +58,7 @@ protected:
     static void SetUpTestSuite()
     {
         sDir = new test::ScratchDir();
-        auto field = readHeightField(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
-        ASSERT_TRUE(field.ok()) << field.error().message;
-        BuildOptions options;
-        options.spacing = 90.0;
-        options.threads = 2;
-        auto built = buildMap(std::move(field.value()), options, map());
+        auto built = test::buildDemoMap(map());
         ASSERT_TRUE(built.ok()) << built.error().message;
         // Up a valley from the south-west, over a ridge, then a steep look down in the north-east.
         std::ofstream(flight()) << "0 15000 12000 2496 47.7 -8\n"

@@ -1,5 +1,11 @@
 #include "GlTestSupport.h"
 
+#include "TestSupport.h"
+#include "heightfield/HeightFieldIo.h"
+#include "quadtree/QuadtreeBuilder.h"
+#include "synthesis/DetailRecipeSetup.h"
+#include "synthesis/LeafErrorEstimator.h"
+
 #include <glm/geometric.hpp>
 
 #include <cmath>
@@ -7,6 +13,32 @@
 #include <sstream>
 
 namespace terrain::test {
+
+Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::filesystem::path>& materials)
+{
+    auto field = readHeightField(demoDataPath("trinidad_co_srtm3_crop_1025.png"));
+    TERRAIN_TRY(field);
+    BuildOptions options;
+    options.spacing = 90.0;
+    options.threads = 2;
+    std::unique_ptr<const DetailSynthesizer> synthesizer;
+    if (!materials.empty()) {
+        std::vector<std::string> warnings;
+        auto set = loadDetailMaterials(materials, warnings);
+        TERRAIN_TRY(set);
+        const DetailSettings settings{"kobbelt", 1.0, std::move(set).value()};
+        auto made = DetailSynthesizer::create(65, settings);
+        TERRAIN_TRY(made);
+        synthesizer = std::move(made).value();
+        auto recipe = makeDetailRecipe(settings, materials);
+        TERRAIN_TRY(recipe);
+        options.leafDetailError = leafDetailErrorFunction(*synthesizer);
+        options.detailRecipe = std::move(recipe).value();
+    }
+    auto built = buildMap(std::move(field.value()), options, path);
+    TERRAIN_TRY(built);
+    return {};
+}
 
 bool mustHitTerrain(const Camera& camera, const MapHeader& header, double zMin, int px, int py)
 {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/Camera.h"
+#include "core/Expected.h"
 #include "quadtree/MapFormat.h"
 
 #include <cstdint>
@@ -27,6 +28,11 @@ inline bool isHole(const std::uint8_t* p)
 /// (with a margin for the rasteriser's edges). The terrain lies at or above zMin everywhere there, so such
 /// a ray crosses the surface first, and a clear-colour pixel there is a hole.
 bool mustHitTerrain(const Camera& camera, const MapHeader& header, double zMin, int px, int py);
+
+/// Builds the bundled terrain (demos/data, 90 m spacing, 2 threads) into a map at `path`, as prep does:
+/// with `materials` (.mat files, the first the ground), the leaves' detail errors for them and the recipe
+/// saying so; without, no detail errors and no recipe. The shared fixture of the GL tests.
+Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::filesystem::path>& materials = {});
 
 /// Rows of a video's frames.csv as maps from column name to value.
 std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& file);

@@ -120,27 +120,12 @@ protected:
     static void SetUpTestSuite()
     {
         sDir = new test::ScratchDir();
-        auto field = readHeightField(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
-        ASSERT_TRUE(field.ok()) << field.error().message;
-        BuildOptions options;
-        options.spacing = 90.0;
-        options.threads = 2;
-        auto built = buildMap(std::move(field.value()), options, *sDir / "trinidad.map");
+        auto built = test::buildDemoMap(*sDir / "trinidad.map");
         ASSERT_TRUE(built.ok()) << built.error().message;
         // The same terrain with detail errors estimated for grass.mat alone, and the recipe saying so.
-        auto grass = loadDetailMaterials({std::filesystem::path(TERRAIN_MATERIALS_DIR) / "grass.mat"}, sWarnings);
+        auto grass =
+            test::buildDemoMap(*sDir / "grass.map", {std::filesystem::path(TERRAIN_MATERIALS_DIR) / "grass.mat"});
         ASSERT_TRUE(grass.ok()) << grass.error().message;
-        DetailSettings settings{"kobbelt", 1.0, *grass};
-        auto synthesizer = DetailSynthesizer::create(65, settings);
-        ASSERT_TRUE(synthesizer.ok()) << synthesizer.error().message;
-        auto recipe = makeDetailRecipe(settings, {std::filesystem::path(TERRAIN_MATERIALS_DIR) / "grass.mat"});
-        ASSERT_TRUE(recipe.ok()) << recipe.error().message;
-        BuildOptions detail = options;
-        detail.leafDetailError = leafDetailErrorFunction(**synthesizer);
-        detail.detailRecipe = *recipe;
-        auto again = readHeightField(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
-        ASSERT_TRUE(again.ok());
-        ASSERT_TRUE(buildMap(std::move(again.value()), detail, *sDir / "grass.map").ok());
         std::ofstream path(*sDir / "flight.path");
         path << "0 15000 12000 2496 47.7 -8\n"
                 "8 36000 33000 2700 41.6 -10\n";
@@ -164,11 +149,9 @@ protected:
     }
 
     static test::ScratchDir* sDir;
-    static std::vector<std::string> sWarnings;
 };
 
 test::ScratchDir* InteractionGLTest::sDir = nullptr;
-std::vector<std::string> InteractionGLTest::sWarnings;
 
 TEST_F(InteractionGLTest, RecordingStoppedBySignalKeepsEveryFrameItMade)
 {

@@ -105,21 +105,9 @@ protected:
     static void SetUpTestSuite()
     {
         sDir = new test::ScratchDir();
-        auto field = readHeightField(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
-        ASSERT_TRUE(field.ok()) << field.error().message;
         // The bundled terrain with the detail errors of the shipped materials below its leaves (3.4.1), as
         // prep --material makes it.
-        std::vector<std::string> warnings;
-        auto materials = MaterialSet::load(materialFiles(), warnings);
-        ASSERT_TRUE(materials.ok()) << materials.error().message;
-        auto synthesizer = DetailSynthesizer::create(
-            65, {"kobbelt", 1.0, std::make_shared<const MaterialSet>(std::move(materials).value())});
-        ASSERT_TRUE(synthesizer.ok()) << synthesizer.error().message;
-        BuildOptions options;
-        options.spacing = 90.0;
-        options.threads = 2;
-        options.leafDetailError = leafDetailErrorFunction(**synthesizer);
-        auto built = buildMap(std::move(field.value()), options, mapPath());
+        auto built = test::buildDemoMap(mapPath(), materialFiles());
         ASSERT_TRUE(built.ok()) << built.error().message;
     }
     static void TearDownTestSuite()

@@ -33,23 +33,11 @@ protected:
     static void SetUpTestSuite()
     {
         sDir = new test::ScratchDir();
-        auto field = readHeightField(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
-        ASSERT_TRUE(field.ok()) << field.error().message;
-        BuildOptions options;
-        options.spacing = 90.0;
-        options.threads = 2;
-        auto built = buildMap(field.value(), options, *sDir / "trinidad.map");
+        auto built = test::buildDemoMap(*sDir / "trinidad.map");
         ASSERT_TRUE(built.ok()) << built.error().message;
         // The same terrain with the detail errors of the shipped materials below its leaves (3.4.1), as
         // prep --material makes it.
-        std::vector<std::string> warnings;
-        auto materials = MaterialSet::load(detailMaterials(), warnings);
-        ASSERT_TRUE(materials.ok()) << materials.error().message;
-        auto synthesizer = DetailSynthesizer::create(
-            65, {"kobbelt", 1.0, std::make_shared<const MaterialSet>(std::move(materials).value())});
-        ASSERT_TRUE(synthesizer.ok()) << synthesizer.error().message;
-        options.leafDetailError = leafDetailErrorFunction(**synthesizer);
-        auto detailed = buildMap(std::move(field.value()), options, *sDir / "trinidad-detail.map");
+        auto detailed = test::buildDemoMap(*sDir / "trinidad-detail.map", detailMaterials());
         ASSERT_TRUE(detailed.ok()) << detailed.error().message;
         // A slow low flight (10 m/s, 30 m above a hillside) where dynamic nodes reach a few centimetres.
         std::ofstream low(*sDir / "low.path");
