@@ -144,7 +144,24 @@ public:
             camera.position.z = *lowest;
         }
     }
-    double& speed() { return mSpeed; }
+    /// A key press with an effect per press: 1/2 double or halve the speed, l toggles wireframe, k appends
+    /// the camera's pose at `seconds` to `recordPath`.
+    void pressed(int key, const Camera& camera, SceneStyle& style, double seconds,
+                 const std::filesystem::path& recordPath, Log& log)
+    {
+        if (key == GLFW_KEY_1) {
+            mSpeed *= 2.0;
+        } else if (key == GLFW_KEY_2) {
+            mSpeed /= 2.0;
+        } else if (key == GLFW_KEY_L) {
+            style.wireframe = !style.wireframe;
+            log(style.wireframe ? "wireframe on" : "wireframe off");
+        } else if (key == GLFW_KEY_K) {
+            const CameraKeyframe keyframe{seconds, camera.position, camera.yaw, camera.pitch};
+            auto appended = appendKeyframe(recordPath, keyframe);
+            log(appended.ok() ? "camera keyframe appended to " + recordPath.string() : appended.error().message);
+        }
+    }
 
 private:
     GLFWwindow* mWindow;
@@ -375,6 +392,21 @@ private:
     std::uint64_t mHits = 0, mMisses = 0, mRequested = 0, mCompleted = 0, mFailed = 0;
 };
 
+/// Video mode's recorder settings from the options: `frames` frames, progress in place on a terminal.
+VideoRecorderOptions recorderOptions(const TengineOptions& o, std::size_t frames, Log& log)
+{
+    VideoRecorderOptions recording;
+    recording.directory = o.imagePath;
+    recording.frames = frames;
+    recording.framesPerSecond = o.framesPerSecond;
+    recording.saveEvery = o.videoSaveEvery;
+    recording.ffmpeg = o.videoFfmpeg;
+    recording.csvHeader = kCsvHeader;
+    recording.progressInPlace = ::isatty(STDERR_FILENO) != 0;
+    recording.log = [&log](const std::string& message) { log(message); };
+    return recording;
+}
+
 int run(const ParsedCommandLine& parsed, const StopSignals& stop)
 {
     const TengineOptions& o = parsed.options;
@@ -422,16 +454,7 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
                           : lastVideoFrame + 1;
     std::unique_ptr<VideoRecorder> recorder;
     if (video) {
-        VideoRecorderOptions recording;
-        recording.directory = o.imagePath;
-        recording.frames = videoFrames;
-        recording.framesPerSecond = o.framesPerSecond;
-        recording.saveEvery = o.videoSaveEvery;
-        recording.ffmpeg = o.videoFfmpeg;
-        recording.csvHeader = kCsvHeader;
-        recording.progressInPlace = ::isatty(STDERR_FILENO) != 0;
-        recording.log = [&log](const std::string& message) { log(message); };
-        auto created = VideoRecorder::create(std::move(recording));
+        auto created = VideoRecorder::create(recorderOptions(o, videoFrames, log));
         if (!created.ok()) {
             log(created.error().message);
             return 1;
@@ -455,21 +478,9 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         bool quit = false;
         for (int key : keys.take()) {
             quit = quit || key == GLFW_KEY_ESCAPE;
-            if (!flight) {
-                continue;
-            }
-            if (key == GLFW_KEY_1) {
-                flight->speed() *= 2.0;
-            } else if (key == GLFW_KEY_2) {
-                flight->speed() /= 2.0;
-            } else if (key == GLFW_KEY_L) {
-                style.wireframe = !style.wireframe;
-                log(style.wireframe ? "wireframe on" : "wireframe off");
-            } else if (key == GLFW_KEY_K) {
-                CameraKeyframe keyframe{std::chrono::duration<double>(now - start).count(), camera.position, camera.yaw,
-                                        camera.pitch};
-                auto appended = appendKeyframe(recordPath, keyframe);
-                log(appended.ok() ? "camera keyframe appended to " + recordPath.string() : appended.error().message);
+            if (flight) {
+                flight->pressed(key, camera, style, std::chrono::duration<double>(now - start).count(), recordPath,
+                                log);
             }
         }
         if (scene->window->shouldClose() || quit) {
