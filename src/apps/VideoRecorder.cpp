@@ -3,10 +3,11 @@
 #include "core/Check.h"
 #include "core/Subprocess.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <regex>
+#include <string_view>
 
 namespace terrain {
 
@@ -35,8 +36,13 @@ std::string VideoRecorder::frameFileName(std::size_t index)
 
 bool VideoRecorder::isRecorderFileName(const std::string& name)
 {
-    static const std::regex frame("frame_[0-9]{5,}\\.png");
-    return name == kCsvName || name == kVideoName || name == kPartialVideoName || std::regex_match(name, frame);
+    // frame_ + at least five digits + .png (frameFileName's pattern)
+    constexpr std::string_view kPrefix = "frame_", kSuffix = ".png";
+    const std::string_view n = name;
+    const bool frame =
+        n.size() >= kPrefix.size() + 5 + kSuffix.size() && n.starts_with(kPrefix) && n.ends_with(kSuffix) &&
+        std::all_of(n.begin() + kPrefix.size(), n.end() - kSuffix.size(), [](char c) { return c >= '0' && c <= '9'; });
+    return name == kCsvName || name == kVideoName || name == kPartialVideoName || frame;
 }
 
 Expected<std::unique_ptr<VideoRecorder>> VideoRecorder::create(VideoRecorderOptions options)
