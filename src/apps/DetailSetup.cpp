@@ -33,12 +33,18 @@ Expected<std::unique_ptr<const DetailSynthesizer>> makeDetailSynthesizer(const T
     return DetailSynthesizer::create(chunkSize, std::move(settings));
 }
 
+std::vector<std::filesystem::path> synthesizedMaterialFiles(const TengineOptions& options,
+                                                            const DetailSynthesizer& synthesizer,
+                                                            const std::filesystem::path& builtInDirectory)
+{
+    return synthesizer.settings().materials ? detailMaterialFiles(options, builtInDirectory)
+                                            : std::vector<std::filesystem::path>{};
+}
+
 Expected<DetailRecipe> viewerDetailRecipe(const TengineOptions& options, const DetailSynthesizer& synthesizer,
                                           const std::filesystem::path& builtInDirectory)
 {
-    const bool materials = synthesizer.settings().materials != nullptr;
-    return makeDetailRecipe(synthesizer.settings(), materials ? detailMaterialFiles(options, builtInDirectory)
-                                                              : std::vector<std::filesystem::path>{});
+    return makeDetailRecipe(synthesizer.settings(), synthesizedMaterialFiles(options, synthesizer, builtInDirectory));
 }
 
 std::optional<std::string> detailRecipeMismatch(const MapHeader& header, const std::string& mapName,

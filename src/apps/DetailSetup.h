@@ -26,6 +26,12 @@ Expected<std::unique_ptr<const DetailSynthesizer>> makeDetailSynthesizer(const T
                                                                          const std::filesystem::path& builtInDirectory,
                                                                          std::vector<std::string>& warnings);
 
+/// The material files `synthesizer` (made by makeDetailSynthesizer from `options`) displaces with, in
+/// order; empty with detail_add_material off.
+std::vector<std::filesystem::path> synthesizedMaterialFiles(const TengineOptions& options,
+                                                            const DetailSynthesizer& synthesizer,
+                                                            const std::filesystem::path& builtInDirectory);
+
 /// The recipe of what the viewer synthesizes (3.4.1): scheme, omega and the materials detailMaterialFiles()
 /// names (none with detail_add_material off). Errors name an unreadable material file.
 Expected<DetailRecipe> viewerDetailRecipe(const TengineOptions& options, const DetailSynthesizer& synthesizer,

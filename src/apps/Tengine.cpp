@@ -7,7 +7,6 @@
 #include "TengineOptions.h"
 #include "VideoRecorder.h"
 
-#include "core/AtomicFile.h"
 #include "core/Memory.h"
 #include "core/StopSignals.h"
 #include "lod/CameraPath.h"
@@ -233,8 +232,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
         if (!recipe.ok()) {
             return fail(recipe.error().message);
         }
-        const auto files = scene->synthesizer->settings().materials ? detailMaterialFiles(o, TERRAIN_MATERIALS_DIR)
-                                                                    : std::vector<std::filesystem::path>{};
+        const auto files = synthesizedMaterialFiles(o, *scene->synthesizer, TERRAIN_MATERIALS_DIR);
         if (auto mismatch = detailRecipeMismatch(header, scene->map->name(), *recipe, files)) {
             log("warning: " + *mismatch);
         }

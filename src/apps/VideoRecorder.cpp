@@ -73,7 +73,7 @@ VideoRecorder::VideoRecorder(VideoRecorderOptions options, std::FILE* csv)
     mWriter = std::thread([this] { writerLoop(); });
 }
 
-VideoRecorder::~VideoRecorder()
+void VideoRecorder::stopWriter()
 {
     {
         std::lock_guard lock(mMutex);
@@ -83,6 +83,11 @@ VideoRecorder::~VideoRecorder()
     if (mWriter.joinable()) {
         mWriter.join();
     }
+}
+
+VideoRecorder::~VideoRecorder()
+{
+    stopWriter();
     if (mCsv) {
         std::fclose(mCsv);
     }
@@ -187,14 +192,7 @@ std::size_t VideoRecorder::framesWritten() const
 
 Status VideoRecorder::finish(bool interrupted)
 {
-    {
-        std::lock_guard lock(mMutex);
-        mClosing = true;
-    }
-    mChanged.notify_all();
-    if (mWriter.joinable()) {
-        mWriter.join();
-    }
+    stopWriter();
     if (mShowedInPlace) {
         std::fprintf(stderr, "\n");
     }

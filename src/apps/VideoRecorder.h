@@ -77,6 +77,8 @@ private:
         std::string row;
     };
     void writerLoop();
+    /// Lets the writer finish the queued frames and joins it (idempotent).
+    void stopWriter();
     void report(std::size_t done);
     void say(const std::string& message) const;
     Status makeVideo(std::size_t frames);

@@ -132,6 +132,18 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
             glUniform4fv(terrainProgram.uniform("uMaterialTintColumns"), 3, glm::value_ptr(tintColumns[0]));
         }
     }
+    // Per-node uniform locations of each variant, and the layer that fades out last.
+    for (ShaderProgram& program : r->mPrograms) {
+        NodeUniforms l{program.uniform("uOrigin"),     program.uniform("uSpacing"),      program.uniform("uMorph"),
+                       program.uniform("uSkirtDepth"), program.uniform("uParentOffset"), {}};
+        for (std::size_t k = 0; k < r->mLayerSize.size(); ++k) {
+            l.layerOrigin.push_back(program.uniform(("uLayerOrigin[" + std::to_string(k) + "]").c_str()));
+        }
+        r->mLocations.push_back(std::move(l));
+    }
+    if (!r->mLayerSize.empty()) {
+        r->mCoarsestLayer = *std::max_element(r->mLayerSize.begin(), r->mLayerSize.end());
+    }
     auto sky = ShaderProgram::load(shaderDirectory, "sky");
     TERRAIN_TRY(sky);
     r->mSky = std::move(sky.value());
@@ -287,21 +299,6 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
                     static_cast<float>(valid.w + slack));
     }
     glBindVertexArray(mTemplateVao.name());
-    // Per-node uniform locations of each program variant (kNear, kFar).
-    struct Locations {
-        GLint origin, spacing, morph, skirt, parentOffset;
-        std::vector<GLint> layerOrigin;
-    };
-    std::vector<Locations> locations;
-    for (ShaderProgram& program : mPrograms) {
-        Locations l{program.uniform("uOrigin"),     program.uniform("uSpacing"),      program.uniform("uMorph"),
-                    program.uniform("uSkirtDepth"), program.uniform("uParentOffset"), {}};
-        for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
-            l.layerOrigin.push_back(program.uniform(("uLayerOrigin[" + std::to_string(k) + "]").c_str()));
-        }
-        locations.push_back(std::move(l));
-    }
-    const double coarsestLayer = mLayerSize.empty() ? 0.0 : *std::max_element(mLayerSize.begin(), mLayerSize.end());
     std::size_t current = mPrograms.size();
     for (const SelectedNode& selected : streamer.selection().nodes) {
         NodePtr node = streamer.node(selected.id);
@@ -326,12 +323,12 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
         // The fragment shader fades each layer out by 40 repeats away (shaders/terrain.frag): a node wholly
         // beyond that for every layer (the coarsest fades last) is drawn by the variant without the layers.
         const std::size_t variant =
-            mPrograms.size() > 1 && selected.distance >= kDetailFadeRepeats * coarsestLayer ? kFar : kNear;
+            mPrograms.size() > 1 && selected.distance >= kDetailFadeRepeats * mCoarsestLayer ? kFar : kNear;
         if (variant != current) {
             mPrograms[variant].use();
             current = variant;
         }
-        const Locations& at = locations[variant];
+        const NodeUniforms& at = mLocations[variant];
         if (variant == kNear && !mLayerSize.empty()) {
             // The node's corner in repeats of each layer, reduced to [0, 1) in double: texture coordinates
             // stay small and exact however far from the origin the node is.

@@ -81,6 +81,13 @@ private:
     std::vector<ShaderProgram> mPrograms;
     static constexpr std::size_t kNear = 0;
     static constexpr std::size_t kFar = 1;
+    /// Uniform locations set per node, one entry per program variant.
+    struct NodeUniforms {
+        GLint origin, spacing, morph, skirt, parentOffset;
+        std::vector<GLint> layerOrigin;  ///< uLayerOrigin[k]
+    };
+    std::vector<NodeUniforms> mLocations;
+    double mCoarsestLayer = 0.0;  ///< metres per repeat of the detail layer that fades out last
     ShaderProgram mSky;
     gl::VertexArray mTemplateVao;
     gl::Buffer mTemplateVertices;

@@ -199,14 +199,6 @@ std::pair<float, float> minMax(const HeightField& field)
     return {*lo, *hi};
 }
 
-#define EXPECT_ERROR_MENTIONS(result, path, text)                                                      \
-    do {                                                                                               \
-        ASSERT_FALSE((result).ok()) << "expected an error mentioning: " << (text);                     \
-        EXPECT_NE((result).error().message.find((path).filename().string()), std::string::npos)        \
-            << (result).error().message;                                                               \
-        EXPECT_NE((result).error().message.find(text), std::string::npos) << (result).error().message; \
-    } while (false)
-
 // ---- PNG ----
 
 TEST(HeightFieldIoTest, ReadsTheBundledDemoTerrain)

@@ -95,14 +95,6 @@ Image makeImage(int width, int height, int channels, Bytes pixels)
     return image;
 }
 
-#define EXPECT_ERROR_MENTIONS(result, path, text)                                                      \
-    do {                                                                                               \
-        ASSERT_FALSE((result).ok()) << "expected an error mentioning: " << (text);                     \
-        EXPECT_NE((result).error().message.find((path).filename().string()), std::string::npos)        \
-            << (result).error().message;                                                               \
-        EXPECT_NE((result).error().message.find(text), std::string::npos) << (result).error().message; \
-    } while (false)
-
 TEST(ImageTest, WriteThenReadIsExactForEveryChannelCount)
 {
     // 3x2 with distinct bytes everywhere, so a swapped row, column or channel shows.

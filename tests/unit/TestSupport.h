@@ -79,3 +79,13 @@ std::filesystem::path testDataPath(const std::string& name);  ///< tests/data/<n
 std::filesystem::path demoDataPath(const std::string& name);  ///< demos/data/<name>
 
 }  // namespace terrain::test
+
+/// In a gtest body: `result` (an Expected or Status) is an error whose message names `path`'s file name and
+/// contains `text`.
+#define EXPECT_ERROR_MENTIONS(result, path, text)                                                      \
+    do {                                                                                               \
+        ASSERT_FALSE((result).ok()) << "expected an error mentioning: " << (text);                     \
+        EXPECT_NE((result).error().message.find((path).filename().string()), std::string::npos)        \
+            << (result).error().message;                                                               \
+        EXPECT_NE((result).error().message.find(text), std::string::npos) << (result).error().message; \
+    } while (false)
