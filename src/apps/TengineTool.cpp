@@ -1,5 +1,6 @@
 // tengine-tool: inspect (info), check (verify) and query (height) terrain maps.
 #include "apps/DetailSetup.h"
+#include "apps/ErrorCommand.h"
 #include "core/Memory.h"
 #include "core/Parse.h"
 #include "heightfield/Image.h"
@@ -44,6 +45,13 @@ constexpr const char* kUsage = R"(usage: tengine-tool COMMAND FILE.map [argument
                  [--size 1280x720] [--fov 60] [--fast]
                           replay a camera path through the selector, cache and loader in real time (or
                           as fast as possible) and print loading and selection figures
+
+  error FILE.map [CONFIG.cfg...] (--camera X,Y,Z,YAW,PITCH | --path FILE.path) [--tau T] [--size WxH]
+               [--fov DEG] [--fps F] [--set key=value]...
+                          measure the screen-space error the viewer draws: its options (configs and --set,
+                          applied in order), materials and morph, every frame loaded to completion, against
+                          the tree refined until a level changes the surface by < tau/8 px (static-only
+                          maps: the input data); one line per frame, then the summary
 
 Options: --reader stream|memory_mapped (default stream)
 )";
@@ -194,27 +202,8 @@ Expected<ViewOptions> parseViewOptions(const std::vector<std::string>& args, std
             return v;
         };
         if (arg == "--camera") {
-            std::vector<double> parts;
-            std::size_t start = 0;
-            while (start <= value.size()) {
-                auto comma = value.find(',', start);
-                auto piece =
-                    parseDouble(value.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
-                if (!piece.ok()) {
-                    return makeError("--camera: '", value, "' is not X,Y,Z,YAW,PITCH");
-                }
-                parts.push_back(*piece);
-                if (comma == std::string::npos) {
-                    break;
-                }
-                start = comma + 1;
-            }
-            if (parts.size() != 5 || std::abs(parts[4]) > 90) {
-                return makeError("--camera: '", value, "' is not X,Y,Z,YAW,PITCH (degrees, pitch in [-90, 90])");
-            }
-            view.camera.position = {parts[0], parts[1], parts[2]};
-            view.camera.yaw = degrees(parts[3]);
-            view.camera.pitch = degrees(parts[4]);
+            auto parsed = parseCameraArgument(value, view.camera);
+            TERRAIN_TRY(parsed);
             haveCamera = true;
         } else if (arg == "--tau") {
             auto v = number(0.01, 1000);
@@ -266,8 +255,7 @@ Expected<ViewOptions> parseViewOptions(const std::vector<std::string>& args, std
 
 std::uint64_t trianglesPerNode(const MapHeader& h)
 {
-    const std::uint64_t cells = h.chunkSize - 1;
-    return 2 * cells * cells + 4 * 2 * cells;  // surface plus skirts
+    return static_cast<std::uint64_t>(trianglesPerChunk(static_cast<int>(h.chunkSize)));
 }
 
 int select(const MapFile& map, const ViewOptions& view)
@@ -392,7 +380,7 @@ int main(int argc, char** argv)
     }
     const std::string& command = args[0];
     if (command != "info" && command != "verify" && command != "height" && command != "texture" &&
-        command != "select" && command != "stream") {
+        command != "select" && command != "stream" && command != "error") {
         std::fprintf(stderr, "tengine-tool: unknown command '%s'\n%s", command.c_str(), kUsage);
         return 2;
     }
@@ -405,6 +393,13 @@ int main(int argc, char** argv)
     }
     if (command == "verify") {
         return verify(**map);
+    }
+    if (command == "error") {
+        auto parsed = parseErrorCommand(args[1], std::vector<std::string>(args.begin() + 2, args.end()));
+        if (!parsed.ok()) {
+            return fail("error: " + parsed.error().message);
+        }
+        return runErrorCommand(**map, *parsed, TERRAIN_MATERIALS_DIR, stdout, stderr);
     }
     if (command == "select" || command == "stream") {
         auto view = parseViewOptions(args, 2, command == "stream");

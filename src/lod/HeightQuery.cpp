@@ -113,16 +113,11 @@ Expected<HeightSample> surfaceHeightAt(const MapFile& map, TerrainNodeSource& so
     return HeightSample{h.heightOffset + z, node->id};
 }
 
-namespace {
-
-/// The node's surface at world (x, y), interpolated along the template triangulation (metres above the
-/// map's height offset); the point is clamped into the node's square.
-double nodeSurfaceAt(const NodeData& node, const QuadtreeExtent& extent, int chunkSize, double x, double y)
+double nodeSurfaceAt(const NodeData& node, int chunkSize, double lx, double ly)
 {
-    const double size = extent.nodeSize(node.id.level);
     const double n1 = chunkSize - 1.0;
-    const double lx = std::clamp((x - extent.originX - node.id.x * size) / size * n1, 0.0, n1);
-    const double ly = std::clamp((y - extent.originY - node.id.y * size) / size * n1, 0.0, n1);
+    lx = std::clamp(lx, 0.0, n1);
+    ly = std::clamp(ly, 0.0, n1);
     const int ix = std::min(static_cast<int>(lx), static_cast<int>(n1) - 1);
     const int iy = std::min(static_cast<int>(ly), static_cast<int>(n1) - 1);
     const int w = node.heights.size;
@@ -130,6 +125,18 @@ double nodeSurfaceAt(const NodeData& node, const QuadtreeExtent& extent, int chu
         return node.heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
     };
     return interpolateQuad(at(ix, iy), at(ix + 1, iy), at(ix, iy + 1), at(ix + 1, iy + 1), lx - ix, ly - iy);
+}
+
+namespace {
+
+/// The node's surface at world (x, y) (metres above the map's height offset); the point is clamped into
+/// the node's square.
+double nodeSurfaceAt(const NodeData& node, const QuadtreeExtent& extent, int chunkSize, double x, double y)
+{
+    const double size = extent.nodeSize(node.id.level);
+    const double n1 = chunkSize - 1.0;
+    return nodeSurfaceAt(node, chunkSize, (x - extent.originX - node.id.x * size) / size * n1,
+                         (y - extent.originY - node.id.y * size) / size * n1);
 }
 
 }  // namespace

@@ -28,6 +28,11 @@ Expected<HeightSample> staticHeightAt(const MapFile& map, double x, double y);
 /// share one code path. Fails outside the input's valid region and when a node cannot be read.
 Expected<HeightSample> surfaceHeightAt(const MapFile& map, TerrainNodeSource& source, double x, double y, int depth);
 
+/// The surface of `node` (N = `chunkSize` samples a side) at local grid position (lx, ly), in samples east
+/// and north of its south-west corner (clamped to [0, N - 1]), interpolated along the template triangulation:
+/// metres above the map's height offset.
+double nodeSurfaceAt(const NodeData& node, int chunkSize, double lx, double ly);
+
 class TerrainStreamer;
 
 /// Height of the surface the viewer draws this frame at world (x, y) metres: the selected node containing

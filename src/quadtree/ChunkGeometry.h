@@ -39,4 +39,12 @@ constexpr int windowSize(int chunkSize)
     return chunkSize + 2 * kBorder;
 }
 
+/// Triangles the renderer draws per node of chunk size N: the (N - 1)^2 quads as two triangles each and a
+/// skirt of two triangles under each of the 4 (N - 1) edge segments (the template mesh, 3.2.6, 3.2.9).
+constexpr std::int64_t trianglesPerChunk(int chunkSize)
+{
+    const std::int64_t cells = chunkSize - 1;
+    return 2 * cells * cells + 8 * cells;
+}
+
 }  // namespace terrain

@@ -1,0 +1,314 @@
+#include "apps/ErrorCommand.h"
+
+#include "apps/DetailSetup.h"
+#include "core/Parse.h"
+#include "lod/CameraPath.h"
+#include "lod/ErrorMeter.h"
+#include "lod/HeightQuery.h"
+#include "lod/TerrainNodeSource.h"
+#include "lod/TerrainStreamer.h"
+#include "quadtree/ChunkGeometry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace terrain {
+
+namespace {
+
+constexpr double kDegrees = std::numbers::pi / 180.0;
+
+}  // namespace
+
+Status parseCameraArgument(const std::string& value, Camera& camera)
+{
+    std::vector<double> parts;
+    std::size_t start = 0;
+    while (true) {
+        const auto comma = value.find(',', start);
+        auto piece = parseDouble(value.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+        if (!piece.ok() || !std::isfinite(*piece)) {
+            return makeError("--camera: '", value, "' is not X,Y,Z,YAW,PITCH");
+        }
+        parts.push_back(*piece);
+        if (comma == std::string::npos) {
+            break;
+        }
+        start = comma + 1;
+    }
+    if (parts.size() != 5 || std::abs(parts[4]) > 90) {
+        return makeError("--camera: '", value, "' is not X,Y,Z,YAW,PITCH (metres and degrees, pitch in [-90, 90])");
+    }
+    camera.position = {parts[0], parts[1], parts[2]};
+    camera.yaw = parts[3] * kDegrees;
+    camera.pitch = parts[4] * kDegrees;
+    return {};
+}
+
+namespace {
+
+/// Errors in pixels over many frames, binned finely enough for a percentile: 1/1000 px up to 100 px.
+class PixelHistogram {
+public:
+    void add(float px)
+    {
+        const auto bin = static_cast<std::size_t>(std::min<double>(px * kBinsPerPixel, kBins - 1));
+        ++mCounts[bin];
+        ++mTotal;
+    }
+    /// The value below which a share `p` of the points lies (bin upper edge); 0 when empty.
+    double percentile(double p) const
+    {
+        const auto wanted = static_cast<std::uint64_t>(std::ceil(p * static_cast<double>(mTotal)));
+        std::uint64_t seen = 0;
+        for (std::size_t b = 0; b < kBins; ++b) {
+            seen += mCounts[b];
+            if (seen >= wanted && seen > 0) {
+                return static_cast<double>(b + 1) / kBinsPerPixel;
+            }
+        }
+        return 0.0;
+    }
+
+private:
+    static constexpr double kBinsPerPixel = 1000.0;
+    static constexpr std::size_t kBins = 100000;
+    std::vector<std::uint64_t> mCounts = std::vector<std::uint64_t>(kBins, 0);
+    std::uint64_t mTotal = 0;
+};
+
+}  // namespace
+
+Expected<ErrorCommand> parseErrorCommand(const std::filesystem::path& mapFile, const std::vector<std::string>& args)
+{
+    ErrorCommand command;
+    std::vector<std::string> viewerArgs;
+    std::optional<double> tau, fov, fps;
+    std::optional<std::pair<int, int>> size;
+    for (std::size_t i = 0; i < args.size(); ++i) {
+        const std::string& arg = args[i];
+        if (!arg.starts_with("--")) {
+            if (!arg.ends_with(".cfg")) {
+                return makeError("'", arg, "' is neither a CONFIG.cfg nor an option (the map comes first)");
+            }
+            viewerArgs.push_back(arg);
+            continue;
+        }
+        if (i + 1 >= args.size()) {
+            return makeError(arg, " needs a value");
+        }
+        const std::string& value = args[++i];
+        auto number = [&](double lo, double hi) -> Expected<double> {
+            auto v = parseDouble(value);
+            if (!v.ok() || !(*v >= lo && *v <= hi)) {
+                return makeError(arg, ": '", value, "' is not a number in [", lo, ", ", hi, "]");
+            }
+            return v;
+        };
+        if (arg == "--set") {
+            viewerArgs.push_back(arg);
+            viewerArgs.push_back(value);
+        } else if (arg == "--camera") {
+            Camera camera;
+            auto parsed = parseCameraArgument(value, camera);
+            TERRAIN_TRY(parsed);
+            command.camera = camera;
+        } else if (arg == "--path") {
+            command.path = value;
+        } else if (arg == "--tau") {
+            auto v = number(0.01, 1000);
+            TERRAIN_TRY(v);
+            tau = *v;
+        } else if (arg == "--fov") {
+            auto v = number(1, 179);
+            TERRAIN_TRY(v);
+            fov = *v;
+        } else if (arg == "--fps") {
+            auto v = number(0.001, 1000);
+            TERRAIN_TRY(v);
+            fps = *v;
+        } else if (arg == "--size") {
+            unsigned w = 0, h = 0;
+            char tail = 0;
+            if (std::sscanf(value.c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 16384 ||
+                h > 16384) {
+                return makeError("--size: '", value, "' is not WIDTHxHEIGHT (16 to 16384 pixels each)");
+            }
+            size = {static_cast<int>(w), static_cast<int>(h)};
+        } else {
+            return makeError("unknown option '", arg, "'");
+        }
+    }
+    if (command.camera.has_value() == !command.path.empty()) {
+        return makeError("give exactly one of --camera X,Y,Z,YAW,PITCH and --path FILE.path");
+    }
+    viewerArgs.push_back(mapFile.string());
+    auto parsed = parseTengineCommandLine(viewerArgs);
+    TERRAIN_TRY(parsed);
+    command.options = std::move(parsed->options);
+    command.warnings = std::move(parsed->warnings);
+    TengineOptions& o = command.options;
+    if (tau) {
+        o.lodError = *tau;
+    }
+    if (fov) {
+        o.cameraFov = *fov;
+    }
+    if (size) {
+        o.windowWidth = size->first;
+        o.windowHeight = size->second;
+    }
+    command.fps = fps ? *fps : static_cast<double>(o.framesPerSecond);
+    command.lens.viewportWidth = o.windowWidth;
+    command.lens.viewportHeight = o.windowHeight;
+    command.lens.verticalFov = o.cameraFov * kDegrees;
+    command.lens.nearPlane = o.cameraZNear;
+    command.lens.farPlane = o.cameraZFar;
+    return command;
+}
+
+int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::filesystem::path& builtInMaterials,
+                    std::FILE* out, std::FILE* err)
+{
+    auto fail = [&](const std::string& message) {
+        std::fprintf(err, "tengine-tool: error: %s\n", message.c_str());
+        return 1;
+    };
+    const TengineOptions& o = command.options;
+    const MapHeader& header = map.header();
+    for (const auto& warning : command.warnings) {
+        std::fprintf(err, "tengine-tool: warning: %s\n", warning.c_str());
+    }
+    std::vector<std::string> warnings;
+    auto synthesizer = makeDetailSynthesizer(o, static_cast<int>(header.chunkSize), builtInMaterials, warnings);
+    for (const auto& warning : warnings) {
+        std::fprintf(err, "tengine-tool: warning: %s\n", warning.c_str());
+    }
+    if (!synthesizer.ok()) {
+        return fail(synthesizer.error().message);
+    }
+    if (*synthesizer && header.hasDetailErrors()) {
+        auto recipe = viewerDetailRecipe(o, **synthesizer, builtInMaterials);
+        if (!recipe.ok()) {
+            return fail(recipe.error().message);
+        }
+        const auto files = synthesizedMaterialFiles(o, **synthesizer, builtInMaterials);
+        if (auto mismatch = detailRecipeMismatch(header, map.name(), *recipe, files)) {
+            std::fprintf(err, "tengine-tool: warning: %s\n", mismatch->c_str());
+        }
+    }
+    std::optional<CameraPath> path;
+    if (!command.path.empty()) {
+        auto loaded = CameraPath::load(command.path);
+        if (!loaded.ok()) {
+            return fail(loaded.error().message);
+        }
+        path = std::move(loaded).value();
+    }
+
+    TerrainNodeSource source(map, {synthesizer->get(), o.lodMinimumSpacing});
+    StreamerOptions streamerOptions;
+    streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);
+    streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
+    streamerOptions.workers = o.workerThreads;
+    streamerOptions.velocityLimit = 0.0;  // the loader runs to completion every frame
+    auto streamer = TerrainStreamer::create(source, extentOf(header), streamerOptions);
+    if (!streamer.ok()) {
+        return fail(streamer.error().message);
+    }
+    std::string loadError;
+    (*streamer)->onLoadError([&](const std::string& message) {
+        if (loadError.empty()) {
+            loadError = message;
+        }
+    });
+    const double tau = o.lodError;
+    ErrorMeter meter(header, source, {tau / 8.0, 1024, 16});
+
+    const std::size_t frames =
+        path ? static_cast<std::size_t>(std::floor(path->duration() * command.fps + 1e-9)) + 1 : std::size_t{1};
+    const auto trianglesPerNode = static_cast<std::uint64_t>(trianglesPerChunk(static_cast<int>(header.chunkSize)));
+    PixelHistogram histogram;
+    std::vector<std::uint64_t> triangles;
+    double worst = 0.0, sum = 0.0;
+    std::uint64_t points = 0, refined = 0, refinedWithinTau = 0;
+    std::size_t framesOverTau = 0, framesShort = 0;
+    std::fprintf(out, "# tau %g px, %dx%d, fov %g deg, detail %s; reference: refined until a level changes it by "
+                      "< %g px\n",
+                 tau, command.lens.viewportWidth, command.lens.viewportHeight, o.cameraFov,
+                 *synthesizer ? "on" : "off", tau / 8.0);
+    std::fprintf(out, "# frame  time(s)  max(px)  p99(px)  mean(px)  triangles  nodes  refined  within-tau  "
+                      "worst: node, metres\n");
+    for (std::size_t frame = 0; frame < frames; ++frame) {
+        Camera camera = command.lens;
+        double t = 0.0;
+        if (path) {
+            t = path->startTime() + static_cast<double>(frame) / command.fps;
+            path->evaluate(t).applyTo(camera);
+        } else {
+            camera.position = command.camera->position;
+            camera.yaw = command.camera->yaw;
+            camera.pitch = command.camera->pitch;
+        }
+        if (auto ground = staticHeightAt(map, camera.position.x, camera.position.y); !ground.ok()) {
+            return fail((path ? command.path.string() + ": frame " + std::to_string(frame) + " (t = " +
+                                    std::to_string(t) + " s): "
+                              : std::string("--camera: ")) +
+                        "the camera is not over the terrain: " + ground.error().message);
+        }
+        FrameStats stats;
+        for (int round = 0; round < 256; ++round) {
+            stats = (*streamer)->update(camera, tau, 0.0);
+            if (stats.requested == stats.deferred || !loadError.empty()) {
+                break;
+            }
+            (*streamer)->drain();
+        }
+        if (!loadError.empty()) {
+            return fail(loadError);
+        }
+        framesShort += stats.deferred > 0 ? 1 : 0;
+        const TerrainStreamer& s = **streamer;
+        auto measured = meter.measure(
+            s.selection(), [&s](const NodeId& id) { return s.node(id); }, camera, tau);
+        if (!measured.ok()) {
+            return fail(measured.error().message);
+        }
+        const FrameError& e = *measured;
+        for (float px : e.pixels) {
+            histogram.add(px);
+        }
+        worst = std::max(worst, e.maxPixels);
+        sum += e.meanPixels * static_cast<double>(e.points);
+        points += e.points;
+        refined += e.refined;
+        refinedWithinTau += e.refinedWithinTau;
+        framesOverTau += e.maxPixels > tau ? 1 : 0;
+        triangles.push_back(e.nodes * trianglesPerNode);
+        std::fprintf(out, "%7zu %8.2f %8.3f %8.3f %9.4f %10llu %6zu %8zu %11zu  %s %.3f\n", frame, t, e.maxPixels,
+                     e.p99Pixels, e.meanPixels, static_cast<unsigned long long>(triangles.back()), e.nodes, e.refined,
+                     e.refinedWithinTau, e.worstNode.toString().c_str(), e.maxMetres);
+        std::fflush(out);
+    }
+    if (framesShort > 0) {
+        std::fprintf(err,
+                     "tengine-tool: warning: in %zu frame%s quad_cache_size (%d) had no room for every node the "
+                     "selection wanted; measured what the viewer draws then\n",
+                     framesShort, framesShort == 1 ? "" : "s", o.quadCacheSize);
+    }
+    std::vector<std::uint64_t> sorted = triangles;
+    std::sort(sorted.begin(), sorted.end());
+    const std::uint64_t median = sorted[(sorted.size() - 1) / 2];
+    std::fprintf(out, "frames over tau: %zu of %zu\n", framesOverTau, frames);
+    std::fprintf(out, "refinements that bought nothing: %llu of %llu refined nodes (%.1f%%)\n",
+                 static_cast<unsigned long long>(refinedWithinTau), static_cast<unsigned long long>(refined),
+                 refined ? 100.0 * static_cast<double>(refinedWithinTau) / static_cast<double>(refined) : 0.0);
+    std::fprintf(out, "reference: %llu node groups made\n", static_cast<unsigned long long>(meter.groupsMade()));
+    std::fprintf(out, "error: max %.3f px, p99 %.3f px, mean %.4f px over %zu frames; triangles median %llu, max %llu\n",
+                 worst, histogram.percentile(0.99), points ? sum / static_cast<double>(points) : 0.0, frames,
+                 static_cast<unsigned long long>(median), static_cast<unsigned long long>(sorted.back()));
+    return 0;
+}
+
+}  // namespace terrain

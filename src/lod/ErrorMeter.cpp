@@ -1,0 +1,270 @@
+#include "lod/ErrorMeter.h"
+
+#include "core/Check.h"
+#include "core/Frustum.h"
+#include "lod/HeightQuery.h"
+#include "quadtree/ChunkGeometry.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace terrain {
+
+VerticalSegmentProjector::VerticalSegmentProjector(const Camera& camera)
+    : mMatrix(camera.projection() * camera.viewRotation()),
+      mEye(camera.position),
+      mHalfWidth(0.5 * camera.viewportWidth),
+      mHalfHeight(0.5 * camera.viewportHeight),
+      mNear(camera.nearPlane)
+{
+}
+
+double VerticalSegmentProjector::pixels(double x, double y, double z, double dz) const
+{
+    const glm::dvec4 a = mMatrix * glm::dvec4(x - mEye.x, y - mEye.y, z - mEye.z, 1.0);
+    if (!(a.w > 0.0) || std::abs(a.x) > a.w || std::abs(a.y) > a.w || std::abs(a.z) > a.w) {
+        return -1.0;
+    }
+    glm::dvec4 b = a + dz * mMatrix[2];  // the clip position is linear in z
+    if (b.w < mNear) {
+        // The segment leaves through the near plane (a.w >= near inside the frustum): clip it there.
+        const double t = (a.w - mNear) / (a.w - b.w);
+        b = a + t * (b - a);
+    }
+    const double dx = (b.x / b.w - a.x / a.w) * mHalfWidth;
+    const double dy = (b.y / b.w - a.y / a.w) * mHalfHeight;
+    return std::sqrt(dx * dx + dy * dy);
+}
+
+ErrorMeter::ErrorMeter(const MapHeader& header, NodeSource& source, const ErrorMeterOptions& options)
+    : mHeader(header), mExtent(extentOf(header)), mSource(source), mOptions(options)
+{
+    TERRAIN_EXPECTS(options.convergencePixels > 0.0, "the reference's convergence threshold must be > 0 pixels");
+    TERRAIN_EXPECTS(options.maxDepthBelow >= 0, "maxDepthBelow must be >= 0");
+}
+
+Expected<const ChildNodes*> ErrorMeter::children(const NodeData& parent)
+{
+    const std::uint64_t key = parent.id.key();
+    auto it = mCache.find(key);
+    if (it == mCache.end()) {
+        auto group = mSource.loadChildren(parent);
+        TERRAIN_TRY(group);
+        ++mGroupsMade;
+        it = mCache.emplace(key, CachedGroup{std::move(group).value(), 0}).first;
+    }
+    it->second.used = mStamp;
+    return &it->second.nodes;
+}
+
+void ErrorMeter::trimCache()
+{
+    if (mCache.size() <= mOptions.cachedGroups) {
+        return;
+    }
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> byUse;  // (last use, key)
+    byUse.reserve(mCache.size());
+    for (const auto& [key, group] : mCache) {
+        byUse.emplace_back(group.used, key);
+    }
+    const std::size_t excess = mCache.size() - mOptions.cachedGroups;
+    std::nth_element(byUse.begin(), byUse.begin() + static_cast<std::ptrdiff_t>(excess), byUse.end());
+    for (std::size_t k = 0; k < excess; ++k) {
+        mCache.erase(byUse[k].second);
+    }
+}
+
+namespace {
+
+/// Where a descendant's samples fall in an ancestor's local grid: sample (i, j) of `node` is at
+/// (offsetX + i * scale, offsetY + j * scale) in the ancestor's samples. Exact (dyadic).
+struct LocalMap {
+    double offsetX = 0.0, offsetY = 0.0, scale = 1.0;
+
+    static LocalMap of(const NodeId& node, const NodeId& ancestor, int chunkSize)
+    {
+        const int k = node.level - ancestor.level;
+        TERRAIN_ASSERT(k >= 0);
+        const double n1 = chunkSize - 1.0;
+        const double scale = std::ldexp(1.0, -k);
+        const double dx = static_cast<double>(node.x) - std::ldexp(static_cast<double>(ancestor.x), k);
+        const double dy = static_cast<double>(node.y) - std::ldexp(static_cast<double>(ancestor.y), k);
+        return {dx * n1 * scale, dy * n1 * scale, scale};
+    }
+};
+
+/// A refined node being checked for "bought nothing".
+struct RefinedNode {
+    NodePtr node;
+    double worst = 0.0;
+    bool measured = false;
+};
+
+}  // namespace
+
+Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const ResidentNodeLookup& drawn,
+                                         const Camera& camera, double tauPixels)
+{
+    TERRAIN_EXPECTS(tauPixels > 0.0, "tau must be > 0 pixels");
+    camera.expectValid();
+    const VerticalSegmentProjector projector(camera);
+    const Frustum frustum = Frustum::fromCamera(camera);
+    const int n = static_cast<int>(mHeader.chunkSize);
+    const int w = windowSize(n);
+    const double offset = mHeader.heightOffset;
+    const double threshold = mOptions.convergencePixels;
+
+    FrameError out;
+    out.nodes = selection.nodes.size();
+    double sum = 0.0;
+    std::unordered_map<std::uint64_t, RefinedNode> refined;
+    std::vector<NodePtr> leaves;
+    std::vector<std::pair<NodePtr, int>> stack;  // (node, levels below the selected node)
+    std::vector<RefinedNode*> ancestors;
+    std::vector<LocalMap> inAncestors;
+
+    auto worldX = [&](const NodeId& id, int i) {
+        const double size = mExtent.nodeSize(id.level);
+        return mExtent.originX + (static_cast<double>(id.x) + static_cast<double>(i) / (n - 1)) * size;
+    };
+    auto worldY = [&](const NodeId& id, int j) {
+        const double size = mExtent.nodeSize(id.level);
+        return mExtent.originY + (static_cast<double>(id.y) + static_cast<double>(j) / (n - 1)) * size;
+    };
+    // Largest projected change from `parent`'s surface to `child`'s over the child's samples in view.
+    auto change = [&](const NodeData& child, const NodeData& parent) {
+        const LocalMap local = LocalMap::of(child.id, parent.id, n);
+        double worst = 0.0;
+        for (int j = 0; j < n; ++j) {
+            const double y = worldY(child.id, j);
+            for (int i = 0; i < n; ++i) {
+                const double zc = child.heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
+                const double zp =
+                    nodeSurfaceAt(parent, n, local.offsetX + i * local.scale, local.offsetY + j * local.scale);
+                const double px = projector.pixels(worldX(child.id, i), y, offset + zc, zp - zc);
+                worst = std::max(worst, px);
+            }
+        }
+        return worst;
+    };
+
+    for (const SelectedNode& selected : selection.nodes) {
+        ++mStamp;
+        const NodePtr node = drawn(selected.id);
+        TERRAIN_EXPECTS(node != nullptr, "every selected node must be resident");
+        NodePtr parent;
+        const bool morphs = !selected.id.isRoot() && selected.morph < 1.0f;
+        if (morphs) {
+            parent = drawn(selected.id.parent());
+            TERRAIN_EXPECTS(parent != nullptr, "a morphing node's parent must be resident");
+        }
+        // The reference leaves below the selected node.
+        leaves.clear();
+        stack.clear();
+        stack.emplace_back(node, 0);
+        while (!stack.empty()) {
+            auto [at, depth] = stack.back();
+            stack.pop_back();
+            if (!at->hasChildren || depth >= mOptions.maxDepthBelow) {
+                leaves.push_back(at);
+                continue;
+            }
+            auto group = children(*at);
+            TERRAIN_TRY(group);
+            for (const NodePtr& child : **group) {
+                if (!frustum.intersects(mExtent.box(child->id, child->zMin, child->zMax))) {
+                    continue;
+                }
+                // Static levels are the data: always followed. Dynamic ones until they stop changing.
+                const bool leaf = !child->hasChildren || (!child->isStatic && change(*child, *at) < threshold);
+                if (leaf) {
+                    leaves.push_back(child);
+                } else {
+                    stack.emplace_back(child, depth + 1);
+                }
+            }
+        }
+        out.referenceNodes += leaves.size();
+
+        // The refined nodes above it, checked while they may still be within tau.
+        ancestors.clear();
+        for (NodeId up = selected.id; !up.isRoot();) {
+            up = up.parent();
+            auto [it, inserted] = refined.try_emplace(up.key());
+            if (inserted) {
+                it->second.node = drawn(up);
+            }
+            if (it->second.node && it->second.worst <= tauPixels) {
+                ancestors.push_back(&it->second);
+            }
+        }
+
+        const float f = selected.morph;
+        for (const NodePtr& leaf : leaves) {
+            out.deepestReference = std::max(out.deepestReference, leaf->id.level);
+            const LocalMap inNode = LocalMap::of(leaf->id, selected.id, n);
+            const LocalMap inParent = morphs ? LocalMap::of(leaf->id, parent->id, n) : LocalMap{};
+            inAncestors.clear();
+            for (RefinedNode* a : ancestors) {
+                inAncestors.push_back(LocalMap::of(leaf->id, a->node->id, n));
+            }
+            for (int j = 0; j < n; ++j) {
+                const double y = worldY(leaf->id, j);
+                const double ly = inNode.offsetY + j * inNode.scale;
+                for (int i = 0; i < n; ++i) {
+                    const double x = worldX(leaf->id, i);
+                    const double ref = leaf->heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
+                    const double lx = inNode.offsetX + i * inNode.scale;
+                    double z = nodeSurfaceAt(*node, n, lx, ly);
+                    if (morphs) {
+                        const double zp = nodeSurfaceAt(*parent, n, inParent.offsetX + i * inParent.scale,
+                                                        inParent.offsetY + j * inParent.scale);
+                        z = f * z + (1.0 - f) * zp;
+                    }
+                    const double px = projector.pixels(x, y, offset + z, ref - z);
+                    if (px < 0.0) {
+                        continue;  // outside the view frustum
+                    }
+                    out.pixels.push_back(static_cast<float>(px));
+                    sum += px;
+                    if (px > out.maxPixels || out.points == 0) {
+                        out.maxPixels = px;
+                        out.maxMetres = std::abs(ref - z);
+                        out.worstNode = selected.id;
+                        out.worstX = x;
+                        out.worstY = y;
+                    }
+                    ++out.points;
+                    for (std::size_t k = 0; k < ancestors.size(); ++k) {
+                        RefinedNode* a = ancestors[k];
+                        if (a->worst > tauPixels) {
+                            continue;
+                        }
+                        const LocalMap& inA = inAncestors[k];
+                        const double za = nodeSurfaceAt(*a->node, n, inA.offsetX + i * inA.scale,
+                                                        inA.offsetY + j * inA.scale);
+                        a->worst = std::max(a->worst, projector.pixels(x, y, offset + za, ref - za));
+                        a->measured = true;
+                    }
+                }
+            }
+        }
+        trimCache();
+    }
+    for (const auto& [key, r] : refined) {
+        if (r.node && r.measured) {
+            ++out.refined;
+            out.refinedWithinTau += r.worst <= tauPixels ? 1 : 0;
+        }
+    }
+    if (out.points > 0) {
+        out.meanPixels = sum / static_cast<double>(out.points);
+        std::vector<float> sorted = out.pixels;
+        const auto at = static_cast<std::size_t>(0.99 * static_cast<double>(sorted.size() - 1));
+        std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(at), sorted.end());
+        out.p99Pixels = sorted[at];
+    }
+    return out;
+}
+
+}  // namespace terrain
