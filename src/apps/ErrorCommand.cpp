@@ -88,11 +88,19 @@ Expected<ErrorCommand> parseErrorCommand(const std::filesystem::path& mapFile, c
     std::optional<std::pair<int, int>> size;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& arg = args[i];
+        if (arg.starts_with("--set=")) {  // tengine's other spelling of --set key=value
+            viewerArgs.push_back(arg);
+            continue;
+        }
         if (!arg.starts_with("--")) {
             if (!arg.ends_with(".cfg")) {
                 return makeError("'", arg, "' is neither a CONFIG.cfg nor an option (the map comes first)");
             }
             viewerArgs.push_back(arg);
+            continue;
+        }
+        if (arg == "--levels") {
+            command.levels = true;
             continue;
         }
         if (i + 1 >= args.size()) {
@@ -234,12 +242,22 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
     double worst = 0.0, sum = 0.0;
     std::uint64_t points = 0, refined = 0, refinedWithinTau = 0;
     std::size_t framesOverTau = 0, framesShort = 0;
-    std::fprintf(out, "# tau %g px, %dx%d, fov %g deg, detail %s; reference: refined until a level changes it by "
-                      "< %g px\n",
-                 tau, command.lens.viewportWidth, command.lens.viewportHeight, o.cameraFov,
-                 *synthesizer ? "on" : "off", tau / 8.0);
-    std::fprintf(out, "# frame  time(s)  max(px)  p99(px)  mean(px)  triangles  nodes  refined  within-tau  "
-                      "worst: node, metres\n");
+    struct LevelFigures {
+        std::size_t nodes = 0, held = 0, dynamicNodes = 0;
+        double sumBound = 0.0, sumMeasured = 0.0, worstRatio = 0.0;
+        NodeId worst;
+        std::vector<double> ratios;
+    };
+    std::vector<LevelFigures> levels(NodeId::kMaxLevel + 1);
+    LodSelection unmorphed;
+    std::fprintf(out,
+                 "# tau %g px, %dx%d, fov %g deg, detail %s; reference: refined until a level changes it by "
+                 "< %g px\n",
+                 tau, command.lens.viewportWidth, command.lens.viewportHeight, o.cameraFov, *synthesizer ? "on" : "off",
+                 tau / 8.0);
+    std::fprintf(out,
+                 "# frame  time(s)  max(px)  p99(px)  mean(px)  triangles  nodes  refined  within-tau  "
+                 "worst: node, metres\n");
     for (std::size_t frame = 0; frame < frames; ++frame) {
         Camera camera = command.lens;
         double t = 0.0;
@@ -252,8 +270,8 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
             camera.pitch = command.camera->pitch;
         }
         if (auto ground = staticHeightAt(map, camera.position.x, camera.position.y); !ground.ok()) {
-            return fail((path ? command.path.string() + ": frame " + std::to_string(frame) + " (t = " +
-                                    std::to_string(t) + " s): "
+            return fail((path ? command.path.string() + ": frame " + std::to_string(frame) +
+                                    " (t = " + std::to_string(t) + " s): "
                               : std::string("--camera: ")) +
                         "the camera is not over the terrain: " + ground.error().message);
         }
@@ -270,8 +288,16 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
         }
         framesShort += stats.deferred > 0 ? 1 : 0;
         const TerrainStreamer& s = **streamer;
+        const LodSelection* drawn = &s.selection();
+        if (!o.geomorph) {  // the renderer then draws every node at its own detail
+            unmorphed = s.selection();
+            for (SelectedNode& node : unmorphed.nodes) {
+                node.morph = 1.0f;
+            }
+            drawn = &unmorphed;
+        }
         auto measured = meter.measure(
-            s.selection(), [&s](const NodeId& id) { return s.node(id); }, camera, tau);
+            *drawn, [&s](const NodeId& id) { return s.node(id); }, camera, tau);
         if (!measured.ok()) {
             return fail(measured.error().message);
         }
@@ -285,6 +311,20 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
         refined += e.refined;
         refinedWithinTau += e.refinedWithinTau;
         framesOverTau += e.maxPixels > tau ? 1 : 0;
+        for (const auto& b : e.bounds) {
+            LevelFigures& l = levels[static_cast<std::size_t>(b.id.level)];
+            ++l.nodes;
+            l.dynamicNodes += b.isStatic ? 0 : 1;
+            l.held += b.measured <= b.deltaC ? 1 : 0;
+            l.sumBound += b.deltaC;
+            l.sumMeasured += b.measured;
+            const double ratio = b.deltaC > 0.0f ? b.measured / b.deltaC : (b.measured > 0.0 ? 1e9 : 0.0);
+            if (ratio > l.worstRatio) {
+                l.worstRatio = ratio;
+                l.worst = b.id;
+            }
+            l.ratios.push_back(ratio);
+        }
         triangles.push_back(e.nodes * trianglesPerNode);
         std::fprintf(out, "%7zu %8.2f %8.3f %8.3f %9.4f %10llu %6zu %8zu %11zu  %s %.3f\n", frame, t, e.maxPixels,
                      e.p99Pixels, e.meanPixels, static_cast<unsigned long long>(triangles.back()), e.nodes, e.refined,
@@ -297,6 +337,26 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
                      "selection wanted; measured what the viewer draws then\n",
                      framesShort, framesShort == 1 ? "" : "s", o.quadCacheSize);
     }
+    if (command.levels) {
+        std::fprintf(out,
+                     "# selected nodes per level: bound delta_c against the measured distance of the node's own "
+                     "surface from the reference\n");
+        std::fprintf(out,
+                     "# level  nodes  dynamic  mean bound(m)  mean measured(m)  measured/bound: median, max  "
+                     "bound held  worst node\n");
+        for (std::size_t level = 0; level < levels.size(); ++level) {
+            LevelFigures& l = levels[level];
+            if (l.nodes == 0) {
+                continue;
+            }
+            std::sort(l.ratios.begin(), l.ratios.end());
+            std::fprintf(out, "%7zu %6zu %8zu %14.4f %17.4f %15.3f %6.3f %8.1f%%  %s\n", level, l.nodes, l.dynamicNodes,
+                         l.sumBound / static_cast<double>(l.nodes), l.sumMeasured / static_cast<double>(l.nodes),
+                         l.ratios[(l.ratios.size() - 1) / 2], l.worstRatio,
+                         100.0 * static_cast<double>(l.held) / static_cast<double>(l.nodes),
+                         l.worst.toString().c_str());
+        }
+    }
     std::vector<std::uint64_t> sorted = triangles;
     std::sort(sorted.begin(), sorted.end());
     const std::uint64_t median = sorted[(sorted.size() - 1) / 2];
@@ -305,7 +365,8 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
                  static_cast<unsigned long long>(refinedWithinTau), static_cast<unsigned long long>(refined),
                  refined ? 100.0 * static_cast<double>(refinedWithinTau) / static_cast<double>(refined) : 0.0);
     std::fprintf(out, "reference: %llu node groups made\n", static_cast<unsigned long long>(meter.groupsMade()));
-    std::fprintf(out, "error: max %.3f px, p99 %.3f px, mean %.4f px over %zu frames; triangles median %llu, max %llu\n",
+    std::fprintf(out,
+                 "error: max %.3f px, p99 %.3f px, mean %.4f px over %zu frames; triangles median %llu, max %llu\n",
                  worst, histogram.percentile(0.99), points ? sum / static_cast<double>(points) : 0.0, frames,
                  static_cast<unsigned long long>(median), static_cast<unsigned long long>(sorted.back()));
     return 0;

@@ -5,9 +5,9 @@
 #include "core/Parse.h"
 #include "heightfield/HeightFieldIo.h"
 #include "quadtree/QuadtreeBuilder.h"
+#include "synthesis/DetailErrorModel.h"
 #include "synthesis/DetailRecipeSetup.h"
 #include "synthesis/DetailSynthesizer.h"
-#include "synthesis/LeafErrorEstimator.h"
 
 #include <unistd.h>
 #include <csignal>
@@ -286,6 +286,7 @@ int main(int argc, char** argv)
     }
     if (*synthesizer) {
         args->build.leafDetailError = leafDetailErrorFunction(**synthesizer);
+        args->build.detailDisplacementRange = detailDisplacementRange(**synthesizer);
     }
     auto field = readHeightField(args->input, args->read);
     if (!field.ok()) {
@@ -328,10 +329,10 @@ int main(int argc, char** argv)
     std::printf("            textures %s (%.2f bits per input sample)\n", formatBytes(report->textureBytes).c_str(),
                 8.0 * static_cast<double>(report->textureBytes) / inputSamples);
     std::printf(
-        "  detail    leaf error max %.3f m, mean %.3f m over %llu leaves (3.4.1; per leaf %d descents of %d "
-        "synthesized levels)\n",
+        "  detail    leaf error max %.3f m, mean %.3f m over %llu leaves (3.4.1, the synthesis model: "
+        "synthesis/DetailErrorModel.h)\n",
         static_cast<double>(report->maxLeafDetailError), report->meanLeafDetailError,
-        static_cast<unsigned long long>(report->leaves), kLeafErrorDescents, kLeafErrorDepth);
+        static_cast<unsigned long long>(report->leaves));
     std::printf("            for %s; %.2f s estimating (summed over threads)\n",
                 h.detailRecipe ? h.detailRecipe->describe().c_str() : "no recipe", report->leafDetailSeconds);
     std::printf("  time      %.2f s, %.1f million input samples per second (%d threads)\n", report->seconds,

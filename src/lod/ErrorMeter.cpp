@@ -200,6 +200,7 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
         }
 
         const float f = selected.morph;
+        double ownWorst = -1.0;  // metres, own surface; stays < 0 without a point in view
         for (const NodePtr& leaf : leaves) {
             out.deepestReference = std::max(out.deepestReference, leaf->id.level);
             const LocalMap inNode = LocalMap::of(leaf->id, selected.id, n);
@@ -216,6 +217,7 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
                     const double ref = leaf->heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
                     const double lx = inNode.offsetX + i * inNode.scale;
                     double z = nodeSurfaceAt(*node, n, lx, ly);
+                    const double own = std::abs(ref - z);
                     if (morphs) {
                         const double zp = nodeSurfaceAt(*parent, n, inParent.offsetX + i * inParent.scale,
                                                         inParent.offsetY + j * inParent.scale);
@@ -225,6 +227,7 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
                     if (px < 0.0) {
                         continue;  // outside the view frustum
                     }
+                    ownWorst = std::max(ownWorst, own);
                     out.pixels.push_back(static_cast<float>(px));
                     sum += px;
                     if (px > out.maxPixels || out.points == 0) {
@@ -241,13 +244,16 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
                             continue;
                         }
                         const LocalMap& inA = inAncestors[k];
-                        const double za = nodeSurfaceAt(*a->node, n, inA.offsetX + i * inA.scale,
-                                                        inA.offsetY + j * inA.scale);
+                        const double za =
+                            nodeSurfaceAt(*a->node, n, inA.offsetX + i * inA.scale, inA.offsetY + j * inA.scale);
                         a->worst = std::max(a->worst, projector.pixels(x, y, offset + za, ref - za));
                         a->measured = true;
                     }
                 }
             }
+        }
+        if (ownWorst >= 0.0) {
+            out.bounds.push_back({selected.id, node->isStatic, node->deltaC, ownWorst});
         }
         trimCache();
     }

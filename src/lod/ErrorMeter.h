@@ -56,6 +56,15 @@ struct FrameError {
     double worstX = 0.0, worstY = 0.0;
     /// Every point's error in pixels (for the caller's statistics over many frames).
     std::vector<float> pixels;
+    /// Per selected node with a point in view: its bound (deltaC) against the largest vertical distance of
+    /// its own surface (morph 1) from the reference, in metres. The bound holds where measured <= deltaC.
+    struct BoundCheck {
+        NodeId id;
+        bool isStatic = true;
+        float deltaC = 0.0f;
+        double measured = 0.0;
+    };
+    std::vector<BoundCheck> bounds;
 };
 
 /// The drawn nodes' data: the streamer's resident nodes (TerrainStreamer::node). Null when not resident.

@@ -53,6 +53,32 @@ double lodDistanceFactor(const Camera& camera, double tauPixels)
            (2.0 * tauPixels * std::abs(std::tan(camera.verticalFov * 0.5)));
 }
 
+double verticalErrorFactor(const Camera& camera)
+{
+    camera.expectValid();
+    const double tanV = std::abs(std::tan(camera.verticalFov * 0.5));
+    const double tanH = tanV * camera.aspect();
+    const double sp = std::sin(camera.pitch), cp = std::cos(camera.pitch);
+    double k = 0.0;
+    for (double x : {-tanH, tanH}) {
+        for (double y : {-tanV, tanV}) {
+            const double a = x * sp, b = cp - y * sp;
+            k = std::max(k, std::sqrt(a * a + b * b));
+        }
+    }
+    return k;
+}
+
+double lodDistance(const Camera& camera, double k, const Aabb& box)
+{
+    const glm::dvec3 f = camera.forward();
+    // The smallest of f . (corner - eye) over the box's corners: per axis the end that f points away from.
+    const glm::dvec3 nearest{f.x >= 0.0 ? box.lo.x : box.hi.x, f.y >= 0.0 ? box.lo.y : box.hi.y,
+                             f.z >= 0.0 ? box.lo.z : box.hi.z};
+    const double depth = glm::dot(f, nearest - camera.position);
+    return std::max(depth, camera.nearPlane) / k;
+}
+
 namespace {
 
 struct Selector {
@@ -62,38 +88,42 @@ struct Selector {
     Frustum frustum;
     glm::dvec3 eye;
     double c = 0.0;
+    const Camera& camera;
+    double k = 1.0;
     LodSelection& out;
 
-    void select(const NodeId& id, double d, double dm, double dmParent, bool isRoot)
+    /// `d`: metres to the node's box; `ld`: its lodDistance.
+    void select(const NodeId& id, double d, double ld, double dm, double dmParent, bool isRoot)
     {
         float morph = 1.0f;
         if (!isRoot && dmParent > dm) {
-            morph = static_cast<float>(std::clamp(1.0 - (d - dm) / (dmParent - dm), 0.0, 1.0));
+            morph = static_cast<float>(std::clamp(1.0 - (ld - dm) / (dmParent - dm), 0.0, 1.0));
         }
         double size = extent.nodeSize(id.level);
         glm::dvec3 origin{extent.originX + static_cast<double>(id.x) * size,
                           extent.originY + static_cast<double>(id.y) * size, 0.0};
-        out.nodes.push_back({id, morph, d, origin - eye, size});
+        out.nodes.push_back({id, morph, d, ld, origin - eye, size});
     }
 
-    /// `id` passed culling; `d` is its distance, `info` its information.
-    void visit(const NodeId& id, const NodeInfo& info, double d, double dmParent, bool isRoot)
+    /// `id` passed culling; `d` is its distance, `ld` its lodDistance, `info` its information.
+    void visit(const NodeId& id, const NodeInfo& info, double d, double ld, double dmParent, bool isRoot)
     {
         ++out.visitedNodes;
         double dm = static_cast<double>(info.deltaC) * c;
-        if (!(d < dm) || !info.hasChildren) {
-            select(id, d, dm, dmParent, isRoot);
+        if (!(ld < dm) || !info.hasChildren) {
+            select(id, d, ld, dm, dmParent, isRoot);
             return;
         }
         if (resident && !resident(id)) {
             out.requests.push_back({id, d});
-            select(id, d, dm, dmParent, isRoot);
+            select(id, d, ld, dm, dmParent, isRoot);
             return;
         }
         struct Child {
             NodeId id;
             NodeInfo info;
             double d;
+            double ld;
         };
         Child children[4];
         int count = 0;
@@ -106,7 +136,7 @@ struct Selector {
                 continue;
             }
             // Insertion sort by distance; strict < keeps quadrant order among equal distances.
-            Child entry{child, childInfo, distanceToAabb(eye, box)};
+            Child entry{child, childInfo, distanceToAabb(eye, box), lodDistance(camera, k, box)};
             int at = count;
             while (at > 0 && entry.d < children[at - 1].d) {
                 children[at] = children[at - 1];
@@ -115,8 +145,8 @@ struct Selector {
             children[at] = entry;
             ++count;
         }
-        for (int k = 0; k < count; ++k) {
-            visit(children[k].id, children[k].info, children[k].d, dm, false);
+        for (int i = 0; i < count; ++i) {
+            visit(children[i].id, children[i].info, children[i].d, children[i].ld, dm, false);
         }
     }
 };
@@ -136,6 +166,8 @@ void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, co
                Frustum::fromCamera(camera),
                camera.position,
                lodDistanceFactor(camera, tauPixels),
+               camera,
+               verticalErrorFactor(camera),
                out};
     TERRAIN_EXPECTS(s.extent.rootSize > 0.0, "the quadtree's root size must be > 0");
     NodeId root = NodeId::root();
@@ -145,7 +177,7 @@ void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, co
         ++out.culledNodes;
         return;
     }
-    s.visit(root, info, distanceToAabb(camera.position, box), 0.0, true);
+    s.visit(root, info, distanceToAabb(camera.position, box), lodDistance(camera, s.k, box), 0.0, true);
 }
 
 }  // namespace terrain

@@ -67,8 +67,9 @@ using ChildrenResident = std::function<bool(const NodeId& parent)>;
 /// One node to draw this frame.
 struct SelectedNode {
     NodeId id;
-    float morph = 1.0f;     ///< eq. 3.5 morph factor in [0, 1]: 0 looks like the parent, 1 the node's own detail
-    double distance = 0.0;  ///< metres from the camera to the node's bounding box
+    float morph = 1.0f;        ///< eq. 3.5 morph factor in [0, 1]: 0 looks like the parent, 1 the node's own detail
+    double distance = 0.0;     ///< metres from the camera to the node's bounding box
+    double lodDistance = 0.0;  ///< the distance the error test and the morph use (lodDistance())
     glm::dvec3 cameraRelativeOrigin{
         0.0};           ///< metres: the node's south-west corner at height 0, minus the camera position
     double size = 0.0;  ///< metres: side of the node's square
@@ -92,15 +93,31 @@ struct LodSelection {
 /// d < deltaC * C. `tauPixels` > 0.
 double lodDistanceFactor(const Camera& camera, double tauPixels);
 
+/// K: the most a vertical segment at eye depth z can cover on screen, in units of its length / z times
+/// S / (2 tan(fov / 2)) pixels, anywhere in the image. A vertical step moves a point at normalized image
+/// position (x', y') by (-x' sin p, cos p - y' sin p) / z (p the camera's pitch), whose length is largest at
+/// an image corner: K = max over x' = +-tan(hfov / 2), y' = +-tan(vfov / 2). 1 for a level camera; it
+/// grows with the pitch, and looking down it shrinks towards the bottom of the image (unused here).
+double verticalErrorFactor(const Camera& camera);
+
+/// The distance eq. 3.3 and eq. 3.5 use (issue 12: a pixel bound everywhere in the image): the smallest eye
+/// depth of `box` (its corners against the view direction, at least the near plane) divided by K =
+/// verticalErrorFactor(camera). A vertical error of delta metres anywhere in the box then covers at most
+/// delta * S / (2 tan(fov / 2)) / lodDistance pixels, so lodDistance >= delta * C keeps it within tau. The
+/// distance to the box instead (the paper's) lets errors at the image's edges reach 1 / cos(angle off
+/// axis) times tau: measured up to 1.45 tau with tengine-tool error.
+double lodDistance(const Camera& camera, double k, const Aabb& box);
+
 /// Listing 3.7 with culling (listing 3.4): from the root, skip nodes whose bounding box is outside the
 /// camera's frustum (Frustum::intersects, conservative); refine a node when d < deltaC * C and it has
-/// children; if its children are not all resident, select it and request them. Otherwise select it.
+/// children (d = lodDistance()); if its children are not all resident, select it and request them.
+/// Otherwise select it.
 ///
 /// Guarantees, for a tree with nested boxes and errors:
 /// - the selected nodes are disjoint, and they are exactly the nodes of the unculled selection (same
 ///   rules without culling: a partition of the terrain square) whose boxes pass the frustum test;
 /// - order: a depth-first traversal that visits the unculled children of a refined node by
-///   non-decreasing distance (ties: quadrant order). So nodes under a nearer sibling come before nodes
+///   non-decreasing distance to their boxes (ties: quadrant order). So nodes under a nearer sibling come before nodes
 ///   under a farther one; the whole list is NOT sorted by distance;
 /// - morph (eq. 3.5): f = clamp(1 - (d - d_m) / (d_mp - d_m), 0, 1) with d_m = deltaC * C and
 ///   d_mp = deltaC(parent) * C. The root has no coarser level to morph to: f = 1. Where d_mp <= d_m the

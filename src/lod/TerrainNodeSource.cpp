@@ -20,6 +20,9 @@ TerrainNodeSource::TerrainNodeSource(const MapFile& map, DetailPolicy policy) : 
             }
         }
     }
+    if (policy.synthesizer) {
+        mErrorModel = std::make_unique<const DetailErrorModel>(*policy.synthesizer, map.header().spacingAt(0));
+    }
 }
 
 WindowPlacement TerrainNodeSource::placement(const NodeId& id) const
@@ -63,8 +66,8 @@ Expected<NodePtr> TerrainNodeSource::loadStatic(const NodeId& id, const NodeData
     }
     if (detail) {
         const WindowPlacement where = placement(id);
-        mPolicy.synthesizer->displace(where, parent && parent->heights.hasDisplacement() ? &parent->heights : nullptr,
-                                      id.isRoot() ? 0 : id.quadrant(), map);
+        // Static nodes measure their own placement (DetailSynthesizer::displace): every sample is evaluated.
+        mPolicy.synthesizer->displace(where, nullptr, 0, map);
         data->materialWeights = mPolicy.synthesizer->materialWeights(map, where);
     }
     data->texture = std::move(node->texture);
@@ -82,10 +85,13 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     data->isStatic = false;
     data->hasStaticChildren = false;
     data->hasChildren = childrenAllowed(id, false);
-    data->deltaC = parent.deltaC * 0.5f;  // 3.4.1: "half the error of their parent"
     data->spacing = where.spacing;
     data->heights = synthesizer.synthesizeChild(parent.heights, quadrant, where);
     data->materialWeights = synthesizer.materialWeights(data->heights, where);
+    // The synthesis model's bound from the node's own data (DetailErrorModel.h), instead of 3.4.1's "half the
+    // error of their parent"; at most the parent's / kErrorNesting, so errors nest with a geomorph range.
+    data->deltaC =
+        std::min(parent.deltaC / kErrorNesting, mErrorModel->bound(data->heights, data->materialWeights, id.level));
     data->texture = upsampleTexture(parent.texture, static_cast<int>(h.textureSize), quadrant);
     // The box: the node's base samples plus whatever displacement its descendants may add, kept inside the
     // parent's so boxes stay nested (3.2.12).

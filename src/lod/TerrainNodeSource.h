@@ -6,7 +6,10 @@
 
 #include "lod/NodeData.h"
 #include "quadtree/MapFile.h"
+#include "synthesis/DetailErrorModel.h"
 #include "synthesis/DetailSynthesizer.h"
+
+#include <memory>
 
 namespace terrain {
 
@@ -34,6 +37,8 @@ public:
     WindowPlacement placement(const NodeId& id) const;
     /// The most the displacement moves the surface, metres (the bounding boxes grow by it).
     double displacementBound() const { return mDisplacementBound; }
+    /// The model of a dynamic node's error (synthesis/DetailErrorModel.h); null without a synthesizer.
+    const DetailErrorModel* errorModel() const { return mErrorModel.get(); }
 
 private:
     Expected<NodePtr> loadStatic(const NodeId& id, const NodeData* parent) const;
@@ -43,6 +48,7 @@ private:
     const MapFile& mMap;
     DetailPolicy mPolicy;
     double mDisplacementBound = 0.0;
+    std::unique_ptr<const DetailErrorModel> mErrorModel;
 };
 
 }  // namespace terrain

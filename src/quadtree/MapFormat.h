@@ -22,8 +22,14 @@ namespace terrain {
 
 inline constexpr std::array<std::uint8_t, 8> kMapMagic = {0x89, 'T', 'M', 'A', 'P', '\r', '\n', 0x1a};
 /// Version written. 2 added detail_delta_c to the directory entries (3.4.1); 3 the detail recipe block
-/// after the header (what those errors were estimated for). Versions 1 and 2 are still read.
-inline constexpr std::uint32_t kMapVersion = 3;
+/// after the header (what those errors were estimated for); 4 (same layout) measured errors: delta_c is the
+/// largest distance to the leaves below, nested with max, and the leaves' detail errors come from the
+/// synthesis model (issue 12). Versions 1 to 3 are still read.
+inline constexpr std::uint32_t kMapVersion = 4;
+/// Version 4 errors nest as delta_c(node) = max(measured, kErrorNesting x the children's largest): a parent's
+/// error stays a quarter above its children's, so every split has a geomorph range (eq. 3.5 morphs a node
+/// in between its own distance and its parent's); with plain max they could coincide and the split pop.
+inline constexpr float kErrorNesting = 1.25f;
 /// Oldest version read.
 inline constexpr std::uint32_t kMinMapVersion = 1;
 inline constexpr std::size_t kHeaderBytes = 256;

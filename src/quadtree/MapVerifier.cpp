@@ -1,6 +1,7 @@
 #include "quadtree/MapVerifier.h"
 
 #include "quadtree/SimplificationError.h"
+#include "quadtree/TemplateTriangulation.h"
 
 #include <algorithm>
 #include <array>
@@ -29,7 +30,8 @@ public:
             mProblems.push_back(root.error().message);
             return mProblems;
         }
-        visit(*root);
+        std::vector<StaticNode> leaves;
+        visit(*root, leaves);
         return mProblems;
     }
 
@@ -39,8 +41,40 @@ private:
         mProblems.push_back(mMap.name() + ": node " + id.toString() + ": " + what);
     }
 
-    // Returns the subtree's nested bounds and error, or nothing if the node could not be decoded.
-    std::optional<Checked> visit(const StaticNode& node)
+    /// The largest vertical distance in codes from `node`'s surface to the samples of `leaves` (all below it).
+    double directError(const StaticNode& node, const std::vector<StaticNode>& leaves) const
+    {
+        const int n = static_cast<int>(mMap.header().chunkSize);
+        const int w = mMap.window().size();
+        auto code = [&](const StaticNode& at, int i, int j) -> double {
+            return at.heights[static_cast<std::size_t>(j + kBorder) * w + i + kBorder];
+        };
+        double worst = 0.0;
+        for (const StaticNode& leaf : leaves) {
+            const int k = leaf.id.level - node.id.level;
+            const std::int64_t dx = (std::int64_t{leaf.id.x} - (std::int64_t{node.id.x} << k)) * (n - 1);
+            const std::int64_t dy = (std::int64_t{leaf.id.y} - (std::int64_t{node.id.y} << k)) * (n - 1);
+            const double scale = std::ldexp(1.0, -k);
+            for (int j = 0; j < n; ++j) {
+                const std::int64_t v = dy + j;
+                const int iy = static_cast<int>(std::min<std::int64_t>(v >> k, n - 2));
+                const double fy = static_cast<double>(v - (std::int64_t{iy} << k)) * scale;
+                for (int i = 0; i < n; ++i) {
+                    const std::int64_t u = dx + i;
+                    const int ix = static_cast<int>(std::min<std::int64_t>(u >> k, n - 2));
+                    const double fx = static_cast<double>(u - (std::int64_t{ix} << k)) * scale;
+                    const double surface = interpolateQuad(code(node, ix, iy), code(node, ix + 1, iy),
+                                                           code(node, ix, iy + 1), code(node, ix + 1, iy + 1), fx, fy);
+                    worst = std::max(worst, std::abs(code(leaf, i, j) - surface));
+                }
+            }
+        }
+        return worst;
+    }
+
+    // Returns the subtree's nested bounds and error, or nothing if the node could not be decoded; appends the
+    // subtree's leaves to `leaves`.
+    std::optional<Checked> visit(const StaticNode& node, std::vector<StaticNode>& leaves)
     {
         const DirectoryEntry& entry = *mMap.find(node.id);
         const bool detail = mMap.header().hasDetailErrors();  // version 1 maps carry no detail errors
@@ -58,8 +92,10 @@ private:
         if (mProgress) {
             mProgress(static_cast<double>(mDone) / static_cast<double>(mMap.directory().size()));
         }
+        const bool measured = mMap.header().version >= 4;  // errors measured directly (issue 12)
         if (entry.hasChildren) {
             std::array<StaticNode, 4> children;
+            std::vector<StaticNode> below;
             float worst = 0.0f;
             float worstDetail = 0.0f;
             for (int q = 0; q < 4; ++q) {
@@ -69,7 +105,7 @@ private:
                     return std::nullopt;
                 }
                 children[q] = std::move(child.value());
-                auto sub = visit(children[q]);
+                auto sub = visit(children[q], below);
                 if (!sub) {
                     return std::nullopt;
                 }
@@ -89,16 +125,42 @@ private:
                 problem(node.id, "delta_m is " + std::to_string(entry.deltaM) + " m but the decoded heights give " +
                                      std::to_string(deltaM) + " m");
             }
-            float nested = worst + entry.deltaM;
-            if (std::abs(nested - entry.deltaC) > 1e-4f * std::max(1.0f, nested)) {
-                problem(node.id, "delta_c is " + std::to_string(entry.deltaC) + " m but its children's nest to " +
-                                     std::to_string(nested) + " m (eq. 3.1)");
+            if (measured) {
+                // delta_c = max(children's, the measured distance to the leaves' samples).
+                const float direct = static_cast<float>(mMap.header().heightStep * directError(node, below));
+                const float nested = std::max(kErrorNesting * worst, direct);
+                if (std::abs(nested - entry.deltaC) > 1e-4f * std::max(1.0f, nested)) {
+                    problem(node.id, "delta_c is " + std::to_string(entry.deltaC) +
+                                         " m but the larger of its children's (x kErrorNesting) and the measured "
+                                         "distance to the leaves below is " +
+                                         std::to_string(nested) + " m");
+                }
+                float leafDetail = 0.0f;
+                for (const StaticNode& leaf : below) {
+                    leafDetail = std::max(leafDetail, mMap.find(leaf.id)->detailDeltaC);
+                }
+                const float least = std::max(kErrorNesting * worstDetail, direct + leafDetail);
+                if (detail && entry.detailDeltaC < least * (1.0f - 1e-5f)) {
+                    problem(node.id, "detail_delta_c is " + std::to_string(entry.detailDeltaC) +
+                                         " m, below its children's or its measured error plus the leaves' detail "
+                                         "errors below (" +
+                                         std::to_string(least) + " m)");
+                }
+            } else {
+                float nested = worst + entry.deltaM;
+                if (std::abs(nested - entry.deltaC) > 1e-4f * std::max(1.0f, nested)) {
+                    problem(node.id, "delta_c is " + std::to_string(entry.deltaC) + " m but its children's nest to " +
+                                         std::to_string(nested) + " m (eq. 3.1)");
+                }
+                float nestedDetail = worstDetail + entry.deltaM;
+                if (detail && std::abs(nestedDetail - entry.detailDeltaC) > 1e-4f * std::max(1.0f, nestedDetail)) {
+                    problem(node.id, "detail_delta_c is " + std::to_string(entry.detailDeltaC) +
+                                         " m but its children's nest to " + std::to_string(nestedDetail) +
+                                         " m (eq. 3.1 over the estimated leaf detail errors, 3.4.1)");
+                }
             }
-            float nestedDetail = worstDetail + entry.deltaM;
-            if (detail && std::abs(nestedDetail - entry.detailDeltaC) > 1e-4f * std::max(1.0f, nestedDetail)) {
-                problem(node.id, "detail_delta_c is " + std::to_string(entry.detailDeltaC) +
-                                     " m but its children's nest to " + std::to_string(nestedDetail) +
-                                     " m (eq. 3.1 over the estimated leaf detail errors, 3.4.1)");
+            for (StaticNode& leaf : below) {
+                leaves.push_back(std::move(leaf));
             }
         } else if (entry.deltaM != 0.0f || entry.deltaC != 0.0f) {
             problem(node.id, "a leaf has a non-zero error");
@@ -113,6 +175,9 @@ private:
             problem(node.id, "bounding box codes " + std::to_string(entry.minCode) + ".." +
                                  std::to_string(entry.maxCode) + " differ from the decoded subtree's " +
                                  std::to_string(checked.minCode) + ".." + std::to_string(checked.maxCode));
+        }
+        if (!entry.hasChildren) {
+            leaves.push_back(node);
         }
         checked.deltaC = entry.deltaC;
         checked.detailDeltaC = entry.detailDeltaC;

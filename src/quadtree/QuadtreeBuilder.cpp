@@ -104,7 +104,8 @@ struct NodeSummary {
     bool hasFilledNoData = false;  ///< the node's square holds input samples that were no-data
     float deltaM = 0.0f;
     float deltaC = 0.0f;
-    float detailDeltaC = 0.0f;  ///< deltaC over the leaves' estimated detail errors (3.4.1)
+    float detailDeltaC = 0.0f;  ///< the error with the detail synthesized below the leaves (3.4.1)
+    float leafDetail = 0.0f;    ///< the largest leaf detail error in the subtree
     std::uint16_t minCode = 0;
     std::uint16_t maxCode = 0;
     std::vector<std::uint8_t> texture;
@@ -163,6 +164,7 @@ public:
             summary.texture = texturePyramid(id);
             summary.hasFilledNoData = containsFilledSample(id);
             summary.detailDeltaC = leafDetailError(id, window);
+            summary.leafDetail = summary.detailDeltaC;
             ++mDone;
             return summary;
         }
@@ -182,13 +184,24 @@ public:
                  children[q], out);
             worstChild = std::max(worstChild, children[q].deltaC);
             worstChildDetail = std::max(worstChildDetail, children[q].detailDeltaC);
+            summary.leafDetail = std::max(summary.leafDetail, children[q].leafDetail);
             summary.hasFilledNoData = summary.hasFilledNoData || children[q].hasFilledNoData;
             summary.minCode = std::min(summary.minCode, children[q].minCode);
             summary.maxCode = std::max(summary.maxCode, children[q].maxCode);
         }
         summary.deltaM = static_cast<float>(simplificationErrorCodes(mGrid, mHeader, id) * mHeader.heightStep);
-        summary.deltaC = worstChild + summary.deltaM;  // eq. 3.1
-        summary.detailDeltaC = worstChildDetail + summary.deltaM;
+        // The measured distance to the finest data, nested with max and a margin for the geomorph
+        // (kErrorNesting; issue 12: eq. 3.1 summed delta_m over the levels, an upper bound of this that grows
+        // with every level).
+        const float direct = static_cast<float>(
+            directErrorCodes(mGrid, mHeader, id, [this](const NodeId& n) { return mShape.hasChildren(n); }) *
+            mHeader.heightStep);
+        summary.deltaC = std::max(kErrorNesting * worstChild, direct);
+        summary.detailDeltaC =
+            mOptions.leafDetailError
+                ? std::max(kErrorNesting * worstChildDetail,
+                           direct + summary.leafDetail + static_cast<float>(mOptions.detailDisplacementRange))
+                : summary.deltaC;
         summary.texture.resize(std::size_t{mHeader.textureSize} * mHeader.textureSize * 3);
         downsampleChildTextures({children[0].texture, children[1].texture, children[2].texture, children[3].texture},
                                 static_cast<int>(mHeader.textureSize), summary.texture);

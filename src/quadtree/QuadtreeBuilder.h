@@ -29,9 +29,14 @@ struct BuildOptions {
     /// the map's header (quantization, spacing, origin) and the leaf's window of W x W height codes (W = N +
     /// 4, rows south to north, metres = heightOffset + heightStep * code). Called once for every leaf, from
     /// the builder's worker threads at once: must be thread-safe, and must depend on its arguments only for
-    /// the map not to depend on the thread count. The builder nests the results into detailDeltaC (eq. 3.1).
-    /// Unset: no detail below the leaves, detailDeltaC = deltaC.
+    /// the map not to depend on the thread count. Unset: no detail below the leaves, detailDeltaC = deltaC.
+    /// Above the leaves, detailDeltaC = max(children's, the node's measured error + the largest leaf detail
+    /// error below it + detailDisplacementRange): the node's data against the leaves', the leaves' against
+    /// what is synthesized below them, and the node's own displacement against the leaves' (docs/design.md).
     std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailError;
+    /// Metres: how far the displacement of a static node can differ from the displacement synthesized below
+    /// the leaves (its placement follows its own slopes): 2 x the largest material amplitude. >= 0.
+    double detailDisplacementRange = 0.0;
     /// What leafDetailError estimates for (the synthesis settings and materials), stored in the map so the
     /// viewer can tell whether its own settings match. Empty: the map says nothing about it.
     std::optional<DetailRecipe> detailRecipe;

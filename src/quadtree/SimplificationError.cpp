@@ -2,6 +2,9 @@
 #include "quadtree/SimplificationError.h"
 
 #include "core/Check.h"
+#include "quadtree/TemplateTriangulation.h"
+
+#include <vector>
 
 namespace terrain {
 
@@ -15,6 +18,54 @@ double simplificationErrorCodes(const QuantizedGrid& grid, const MapHeader& head
     return simplificationErrorCodes(static_cast<int>(n), [&](int a, int b) -> std::int32_t {
         return grid.at((x0 + static_cast<std::uint64_t>(a)) * stride, (y0 + static_cast<std::uint64_t>(b)) * stride);
     });
+}
+
+double directErrorCodes(const QuantizedGrid& grid, const MapHeader& header, const NodeId& id,
+                        const std::function<bool(const NodeId&)>& hasChildren)
+{
+    const std::uint64_t cells = header.chunkSize - 1;
+    auto strideOf = [&](int level) {
+        return std::uint64_t{1} << (header.levels - 1 - static_cast<std::uint32_t>(level));
+    };
+    const std::uint64_t stride = strideOf(id.level);
+    const std::uint64_t x0 = std::uint64_t{id.x} * cells * stride, y0 = std::uint64_t{id.y} * cells * stride;
+    // The node's surface at finest-grid position (gx, gy) inside its square.
+    auto surface = [&](std::uint64_t gx, std::uint64_t gy) {
+        const std::uint64_t ux = gx - x0, uy = gy - y0;
+        const std::uint64_t ix = std::min(ux / stride, cells - 1), iy = std::min(uy / stride, cells - 1);
+        const double fx = static_cast<double>(ux - ix * stride) / static_cast<double>(stride);
+        const double fy = static_cast<double>(uy - iy * stride) / static_cast<double>(stride);
+        auto code = [&](std::uint64_t i, std::uint64_t j) -> double {
+            return grid.at(x0 + i * stride, y0 + j * stride);
+        };
+        return interpolateQuad(code(ix, iy), code(ix + 1, iy), code(ix, iy + 1), code(ix + 1, iy + 1), fx, fy);
+    };
+    double worst = 0.0;
+    std::vector<NodeId> stack;
+    if (hasChildren(id)) {
+        for (int q = 0; q < 4; ++q) {
+            stack.push_back(id.child(q));
+        }
+    }
+    while (!stack.empty()) {
+        const NodeId at = stack.back();
+        stack.pop_back();
+        if (hasChildren(at)) {
+            for (int q = 0; q < 4; ++q) {
+                stack.push_back(at.child(q));
+            }
+            continue;
+        }
+        const std::uint64_t s = strideOf(at.level);
+        const std::uint64_t lx0 = std::uint64_t{at.x} * cells * s, ly0 = std::uint64_t{at.y} * cells * s;
+        for (std::uint64_t j = 0; j <= cells; ++j) {
+            for (std::uint64_t i = 0; i <= cells; ++i) {
+                const std::uint64_t gx = lx0 + i * s, gy = ly0 + j * s;
+                worst = std::max(worst, std::abs(static_cast<double>(grid.at(gx, gy)) - surface(gx, gy)));
+            }
+        }
+    }
+    return worst;
 }
 
 }  // namespace terrain

@@ -86,30 +86,58 @@ void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightM
                     "the map's window does not match the synthesizer's chunk size");
     if (!addsDisplacement()) {
         map.displacement.clear();
+        map.slope.clear();
         return;
     }
     const std::size_t count = static_cast<std::size_t>(w) * w;
     map.displacement.assign(count, 0.0f);
     // One material covers everything: its weight is 1 whatever the slope and height.
     const bool placed = mSettings.materials->materials().size() > 1;
-    std::vector<float> slope(count), height(count);
-    for (int j = 0; j < w && placed; ++j) {
-        for (int i = 0; i < w; ++i) {
-            const std::size_t k = static_cast<std::size_t>(j) * w + i;
-            if (parent && mNewSamples[k] == 0) {
-                continue;
+    const int half = (chunkSize() - 1) / 2;
+    const int px0 = 1 + (quadrant & 1) * half, py0 = 1 + (quadrant >> 1) * half;
+    if (parent) {
+        TERRAIN_EXPECTS(parent->size == w && parent->displacement.size() == count, "the parent has no displacement");
+        TERRAIN_EXPECTS(!placed || parent->slope.size() == count, "the parent has no placement slopes");
+        TERRAIN_EXPECTS(quadrant >= 0 && quadrant < 4, "quadrant must be 0..3");
+    }
+    std::vector<float> height;
+    if (placed) {
+        // The placement slope: a node without a parent measures its own base (central differences); a child
+        // interpolates its parent's slopes linearly (even samples copy them, odd ones average the two or four
+        // around them), so below a static node the placement, and hence every sample's displacement, is the
+        // same at every depth: the slope field of the deepest static level, continued smoothly.
+        map.slope.assign(count, 0.0f);
+        height.resize(count);
+        for (int j = 0; j < w; ++j) {
+            for (int i = 0; i < w; ++i) {
+                const std::size_t k = static_cast<std::size_t>(j) * w + i;
+                height[k] = static_cast<float>(where.heightOffset + map.base[k]);
+                if (!parent) {
+                    map.slope[k] = static_cast<float>(slopeDegrees(map, i, j, where.spacing));
+                    continue;
+                }
+                // Window index c is parent window index p0 + c / 2 (even c) or between that and the next.
+                auto at = [&](int pi, int pj) { return parent->slope[static_cast<std::size_t>(pj) * w + pi]; };
+                const int pi = px0 + i / 2, pj = py0 + j / 2;
+                if (i % 2 == 0 && j % 2 == 0) {
+                    map.slope[k] = at(pi, pj);
+                } else if (j % 2 == 0) {
+                    map.slope[k] = 0.5f * (at(pi, pj) + at(pi + 1, pj));
+                } else if (i % 2 == 0) {
+                    map.slope[k] = 0.5f * (at(pi, pj) + at(pi, pj + 1));
+                } else {
+                    map.slope[k] = 0.25f * ((at(pi, pj) + at(pi + 1, pj)) + (at(pi, pj + 1) + at(pi + 1, pj + 1)));
+                }
             }
-            slope[k] = static_cast<float>(slopeDegrees(map, i, j, where.spacing));
-            height[k] = static_cast<float>(where.heightOffset + map.base[k]);
         }
+    } else {
+        map.slope.clear();
+        height.assign(count, 0.0f);
     }
     std::span<const std::uint8_t> mask;
     if (parent) {
-        TERRAIN_EXPECTS(parent->size == w && parent->displacement.size() == count, "the parent has no displacement");
-        TERRAIN_EXPECTS(quadrant >= 0 && quadrant < 4, "quadrant must be 0..3");
+        // Even samples have the parent's position, slope and height: its displacement, bit for bit.
         mask = mNewSamples;
-        const int half = (chunkSize() - 1) / 2;
-        const int px0 = 1 + (quadrant & 1) * half, py0 = 1 + (quadrant >> 1) * half;
         for (int j = 0; j < w; j += 2) {
             for (int i = 0; i < w; i += 2) {
                 map.displacement[static_cast<std::size_t>(j) * w + i] =
@@ -117,7 +145,12 @@ void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightM
             }
         }
     }
-    mSettings.materials->displacementGrid(where.grid(w), slope, height, map.displacement, mask);
+    std::vector<float> noSlope;
+    if (!placed) {
+        noSlope.assign(count, 0.0f);
+    }
+    mSettings.materials->displacementGrid(where.grid(w), placed ? std::span<const float>(map.slope) : noSlope, height,
+                                          map.displacement, mask);
 }
 
 DualHeightMap DetailSynthesizer::synthesizeChild(const DualHeightMap& parent, int quadrant,
@@ -154,8 +187,9 @@ std::vector<std::uint8_t> DetailSynthesizer::materialWeights(const DualHeightMap
     for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) {
             const int wi = i + kBorder, wj = j + kBorder;
-            const double height = where.heightOffset + map.base[static_cast<std::size_t>(wj) * w + wi];
-            set.weights(slopeDegrees(map, wi, wj, where.spacing), height, weights);
+            const std::size_t k = static_cast<std::size_t>(wj) * w + wi;
+            const double height = where.heightOffset + map.base[k];
+            set.weights(map.slope.empty() ? slopeDegrees(map, wi, wj, where.spacing) : map.slope[k], height, weights);
             std::uint8_t* px = out.data() + (static_cast<std::size_t>(j) * n + i) * 4;
             for (std::size_t m = 0; m < set.materials().size(); ++m) {
                 px[m] = static_cast<std::uint8_t>(std::lround(std::clamp(weights[m], 0.0, 1.0) * 255.0));

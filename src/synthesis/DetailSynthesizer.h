@@ -3,13 +3,17 @@
 // is added on top (DualHeightMap.h). Static nodes get the same displacement, so a static leaf and the
 // dynamic children below it nest exactly.
 //
-// Nesting and seams. The displacement of a window sample is defined where the sample first appears in
-// the quadtree: a sample that is also a parent sample (even window position) copies the parent's value;
-// a new (odd) sample evaluates the materials at its world position (SampleGrid), weighted by the slope and
-// height of the base there. So (1) a child's even samples equal its parent's samples, base and
-// displacement, and geomorphing to the parent's surface is exact; (2) two neighbouring nodes compute
-// every shared sample from the same inputs with the same operations: bit-identical edges, no seams;
-// (3) the result depends only on the node, not on the thread or the order of requests.
+// Nesting and seams. A sample's displacement is the materials' fractals at its world position (SampleGrid),
+// weighted by placement (slope and height, Material.h). The placement slope of a static node (displaced
+// without a parent) is measured on its own base; a dynamic child interpolates its parent's slopes, so
+// below the static leaves every sample keeps one placement at every depth and the synthesized surface
+// converges to one continuous function (no sample carries weights from a coarser slope than its
+// neighbours: issue 12 measured such spikes of up to 3 m of rock in grass). A dynamic child's even
+// samples therefore copy the parent's displacement (the same inputs give the same value) and the others
+// are evaluated. So (1) a dynamic child's even samples equal its parent's samples, base and displacement,
+// and geomorphing to the parent's surface is exact; (2) two neighbouring nodes compute every shared sample
+// from the same inputs with the same operations: bit-identical edges, no seams; (3) the result depends
+// only on the node, not on the thread or the order of requests.
 #pragma once
 
 #include "core/Expected.h"
@@ -69,10 +73,18 @@ public:
     const DetailSettings& settings() const { return mSettings; }
     bool addsDisplacement() const { return mSettings.materials != nullptr; }
 
-    /// Sets map.displacement from map.base (W x W): with `parent` (the parent's map; this node is its child
-    /// `quadrant`), samples at even window positions copy the parent's displacement and the others are
-    /// evaluated; without (the root), every sample is evaluated. Clears it when no materials are set.
+    /// Sets map.displacement (and with several materials map.slope) from map.base (W x W): with `parent`
+    /// (a dynamic child: the parent's map, this node its child `quadrant`), the placement slopes are the
+    /// parent's interpolated and samples at even window positions copy the parent's displacement, the others
+    /// are evaluated; without (a static node), slopes come from map.base and every sample is evaluated.
+    /// Clears both when no materials are set.
     void displace(const WindowPlacement& where, const DualHeightMap* parent, int quadrant, DualHeightMap& map) const;
+
+    /// Child `quadrant`'s base heights from its parent's (W x W each): the subdivision step alone.
+    void subdivideBase(std::span<const float> parent, int quadrant, std::span<float> child) const
+    {
+        mSubdivider->subdivide(parent, quadrant, child);
+    }
 
     /// Dynamic child `quadrant` (0..3) of `parent`: base subdivided, then displace(). `where` places the child.
     DualHeightMap synthesizeChild(const DualHeightMap& parent, int quadrant, const WindowPlacement& where) const;

@@ -16,6 +16,9 @@ struct DualHeightMap {
     int size = 0;                     ///< W: samples per side of the window (N + 4, border included)
     std::vector<float> base;          ///< W x W metres above the map's height offset, rows south to north
     std::vector<float> displacement;  ///< W x W metres, or empty: no displacement anywhere
+    /// W x W placement slopes in degrees, where several materials blend by slope (DetailSynthesizer::displace),
+    /// else empty.
+    std::vector<float> slope;
 
     bool hasDisplacement() const { return !displacement.empty(); }
     /// The surface height of window sample k = j * W + i: base + displacement (3.3.1).

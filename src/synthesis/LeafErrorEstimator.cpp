@@ -2,6 +2,7 @@
 #include "synthesis/LeafErrorEstimator.h"
 
 #include "core/Check.h"
+#include "core/SplitMix64.h"
 #include "quadtree/TemplateTriangulation.h"
 
 #include <algorithm>
@@ -13,25 +14,6 @@
 namespace terrain {
 
 namespace {
-
-/// splitmix64: a small, fully specified generator, so the choices are the same on every platform.
-class SplitMix64 {
-public:
-    explicit SplitMix64(std::uint64_t seed) : mState(seed) {}
-
-    std::uint64_t next()
-    {
-        std::uint64_t z = (mState += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-    /// Uniform in [0, n) for small n (the bias of a 64-bit modulo is far below anything measurable).
-    int below(int n) { return static_cast<int>(next() % static_cast<std::uint64_t>(n)); }
-
-private:
-    std::uint64_t mState;
-};
 
 /// The leaf's surface (base + displacement) with (0, 0) at its south-west sample, in leaf sample units.
 class LeafSurface {
@@ -132,20 +114,6 @@ float estimateLeafDetailError(DualHeightMap leaf, const WindowPlacement& where, 
         }
     }
     return static_cast<float>(worst);
-}
-
-std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
-    const DetailSynthesizer& synthesizer)
-{
-    return [&synthesizer](const MapHeader& h, const NodeId& id, std::span<const std::uint16_t> codes) {
-        DualHeightMap leaf;
-        leaf.size = h.windowSize();
-        leaf.base.resize(codes.size());
-        for (std::size_t k = 0; k < codes.size(); ++k) {
-            leaf.base[k] = static_cast<float>(h.heightStep * codes[k]);  // as TerrainNodeSource::loadStatic makes it
-        }
-        return estimateLeafDetailError(std::move(leaf), windowPlacement(h, id), synthesizer, id.key());
-    };
 }
 
 }  // namespace terrain

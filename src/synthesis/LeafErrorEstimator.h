@@ -2,8 +2,9 @@
 // detail synthesis adds below a static leaf (dynamic nodes: subdivision plus material displacement,
 // DetailSynthesizer.h) deviates from the leaf's own surface. The exact value would need every descendant
 // down to infinity, so it is estimated as the paper does, by stochastic sampling: a few random detail
-// additions below the leaf, keeping the largest deviation found. prep stores it, nested up the tree, as
-// the map's detail_delta_c (docs/map-format.md), so the LOD selection refines past the static leaves.
+// additions below the leaf, keeping the largest deviation found. prep used it for the map's detail_delta_c
+// until the synthesis model (DetailErrorModel.h, issue 12) replaced it; it stays as an independent
+// reference for that model in the tests.
 #pragma once
 
 #include "synthesis/DetailSynthesizer.h"
@@ -58,12 +59,6 @@ struct LeafErrorSampling {
 /// Thread-safe: the synthesizer is shared read-only.
 float estimateLeafDetailError(DualHeightMap leaf, const WindowPlacement& where, const DetailSynthesizer& synthesizer,
                               std::uint64_t seed, const LeafErrorSampling& sampling = {});
-
-/// QuadtreeBuilder's leafDetailError for `synthesizer` (paper 3.4.1): the leaf's codes as the viewer's
-/// base heights, placed as the viewer places them (windowPlacement), estimated by estimateLeafDetailError
-/// with the node's key as the seed. `synthesizer` must outlive the returned function.
-std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
-    const DetailSynthesizer& synthesizer);
 
 /// Where child `quadrant` (bit 0 east, bit 1 north) of the node placed at `parent` lies: half the spacing,
 /// global sample indices of the next level. `chunkSize` is N.

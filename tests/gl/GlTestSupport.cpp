@@ -3,6 +3,7 @@
 #include "TestSupport.h"
 #include "heightfield/HeightFieldIo.h"
 #include "quadtree/QuadtreeBuilder.h"
+#include "synthesis/DetailErrorModel.h"
 #include "synthesis/DetailRecipeSetup.h"
 #include "synthesis/LeafErrorEstimator.h"
 
@@ -33,6 +34,7 @@ Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::fi
         auto recipe = makeDetailRecipe(settings, materials);
         TERRAIN_TRY(recipe);
         options.leafDetailError = leafDetailErrorFunction(*synthesizer);
+        options.detailDisplacementRange = detailDisplacementRange(*synthesizer);
         options.detailRecipe = std::move(recipe).value();
     }
     auto built = buildMap(std::move(field.value()), options, path);

@@ -257,6 +257,7 @@ TEST_F(TengineGLTest, GeomorphingHidesTheSwitchBetweenDetailLevels)
 {
     // Find two camera positions 2 m apart between which the selection changes (a node splits), on a
     // descent towards the ridge, with every node resident (as video mode draws them).
+    constexpr double kTau = 2.0;
     auto mapFile = MapFile::open(map(), ReaderKind::Stream);
     ASSERT_TRUE(mapFile.ok());
     MapLodTree tree(**mapFile);
@@ -270,7 +271,7 @@ TEST_F(TengineGLTest, GeomorphingHidesTheSwitchBetweenDetailLevels)
     bool found = false;
     for (int step = 0; step < 20000 && !found; ++step) {
         camera.position = {38000 + step * 1.4, 35500 + step * 1.4, 9000 - step * 2.0};
-        selectNodes(tree, camera, 2.0, {}, current);
+        selectNodes(tree, camera, kTau, {}, current);
         if (step > 0 && current.nodes.size() > previous.nodes.size() + 2) {
             before = {38000 + (step - 1) * 1.4, 35500 + (step - 1) * 1.4, 9000 - (step - 1) * 2.0};
             after = camera.position;
@@ -279,9 +280,22 @@ TEST_F(TengineGLTest, GeomorphingHidesTheSwitchBetweenDetailLevels)
         std::swap(previous, current);
     }
     ASSERT_TRUE(found);
+    // Close in on the split: a few centimetres of camera motion either side of it, so that with geomorphing
+    // the frames differ by almost nothing while without it the split shows in full.
+    const std::size_t coarse = [&] {
+        camera.position = before;
+        selectNodes(tree, camera, kTau, {}, current);
+        return current.nodes.size();
+    }();
+    for (int halving = 0; halving < 12; ++halving) {
+        camera.position = 0.5 * (before + after);
+        selectNodes(tree, camera, kTau, {}, current);
+        (current.nodes.size() == coarse ? before : after) = camera.position;
+    }
     test::ScratchDir dir;
     {
         std::ofstream path(dir / "split.path");
+        path.precision(17);
         path << "0 " << before.x << ' ' << before.y << ' ' << before.z << " 40 -25\n"
              << "1 " << after.x << ' ' << after.y << ' ' << after.z << " 40 -25\n";
     }
@@ -291,7 +305,7 @@ TEST_F(TengineGLTest, GeomorphingHidesTheSwitchBetweenDetailLevels)
             {map().string(), "--set", "camera_path=" + (dir / "split.path").string(), "--set", "video_mode=true",
              "--set", "video_ffmpeg=false", "--set", "image_path=" + frames.string(), "--set", "window_width=320",
              "--set", "window_height=180", "--set", "frames_per_second=1", "--set", "draw_user_interface=false",
-             "--set", std::string("geomorph=") + (geomorph ? "true" : "false"),
+             "--set", std::string("geomorph=") + (geomorph ? "true" : "false"), "--set", "lod_error=2",
              // The split was found in the static tree: no dynamic nodes, whose errors differ.
              "--set", "detail_create_new_nodes=false"});
         EXPECT_EQ(run.exitCode, 0) << run.output;
@@ -300,8 +314,8 @@ TEST_F(TengineGLTest, GeomorphingHidesTheSwitchBetweenDetailLevels)
     test::ScratchDir morphed, popped;
     const double smooth = render(morphed.path(), true);
     const double pop = render(popped.path(), false);
-    // Without morphing the split shows as a visible jump; with it the two frames differ only by the 2 m
-    // the camera moved.
+    // Without morphing the split shows as a visible jump; with it the two frames differ only by the few
+    // centimetres the camera moved.
     EXPECT_GT(pop, 4 * smooth) << "morphed " << smooth << ", popping " << pop;
     EXPECT_LT(smooth, 0.5);
     RecordProperty("mean_difference_morphed", std::to_string(smooth));

@@ -178,6 +178,52 @@ TEST(DetailSynthesizer, StaticNodeMeetsTheDynamicChildrenOfItsNeighbourExactly)
     }
 }
 
+TEST(DetailSynthesizer, PlacementSlopesAreMeasuredOnStaticNodesAndInterpolatedBelow)
+{
+    // Issue 12: a dynamic child's placement slopes are its parent's, interpolated (even samples copy, odd
+    // ones average their two or four neighbours), so below a static node every sample keeps one material
+    // weighting at every depth; a node displaced without a parent measures its own base.
+    auto s = synthesizer(grassAndRock());
+    Tree tree(*s);
+    const DualHeightMap& root = tree.node({0, 0, 0});
+    ASSERT_EQ(root.slope.size(), root.base.size());
+    const WindowPlacement rootWhere = placementOf({0, 0, 0});
+    for (int j = 1; j < kW - 1; j += 5) {
+        for (int i = 1; i < kW - 1; i += 3) {
+            EXPECT_EQ(root.slope[static_cast<std::size_t>(j) * kW + i],
+                      static_cast<float>(s->slopeDegrees(root, i, j, rootWhere.spacing)));
+        }
+    }
+    double spread = 0.0;
+    for (int level = 1; level <= 3; ++level) {
+        const Node child{level, 5, 3};
+        const Node parent{level - 1, child.x >> 1, child.y >> 1};
+        const DualHeightMap& c = tree.node(child);
+        const DualHeightMap& p = tree.node(parent);
+        const int px0 = 1 + static_cast<int>(child.x & 1) * (kN - 1) / 2;
+        const int py0 = 1 + static_cast<int>(child.y & 1) * (kN - 1) / 2;
+        auto parentAt = [&](double u, double v) {  // bilinear in the parent's window
+            const int i0 = static_cast<int>(std::floor(u)), j0 = static_cast<int>(std::floor(v));
+            const double fu = u - i0, fv = v - j0;
+            auto at = [&](int i, int j) { return static_cast<double>(p.slope[static_cast<std::size_t>(j) * kW + i]); };
+            return (1 - fv) * ((1 - fu) * at(i0, j0) + fu * at(std::min(i0 + 1, kW - 1), j0)) +
+                   fv * ((1 - fu) * at(i0, std::min(j0 + 1, kW - 1)) +
+                         fu * at(std::min(i0 + 1, kW - 1), std::min(j0 + 1, kW - 1)));
+        };
+        for (int j = 0; j < kW - 1; ++j) {
+            for (int i = 0; i < kW - 1; ++i) {
+                const double expected = parentAt(px0 + i / 2.0, py0 + j / 2.0);
+                const float got = c.slope[static_cast<std::size_t>(j) * kW + i];
+                EXPECT_NEAR(got, expected, 1e-4) << "level " << level << " (" << i << ", " << j << ")";
+                if (i > 0 && j > 0) {
+                    spread = std::max(spread, std::abs(s->slopeDegrees(c, i, j, placementOf(child).spacing) - got));
+                }
+            }
+        }
+    }
+    EXPECT_GT(spread, 0.0) << "the node's own slopes differ from the placement it inherits";
+}
+
 TEST(DetailSynthesizer, DisplacementIsTheMaterialsAtEachNewSamplesWorldPosition)
 {
     auto materials = grassAndRock();
@@ -193,7 +239,7 @@ TEST(DetailSynthesizer, DisplacementIsTheMaterialsAtEachNewSamplesWorldPosition)
                 continue;  // copied from the parent (checked above)
             }
             const std::size_t k = static_cast<std::size_t>(j) * kW + i;
-            const float slope = static_cast<float>(s->slopeDegrees(map, i, j, where.spacing));
+            const float slope = map.slope[k];  // the placement slope (checked below)
             const float height = static_cast<float>(where.heightOffset + map.base[k]);
             const float expected = materials->displacement(where.grid(kW).x(i), where.grid(kW).y(j), slope, height);
             EXPECT_TRUE(bitEqual(map.displacement[k], expected)) << i << ", " << j;

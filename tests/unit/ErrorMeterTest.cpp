@@ -10,6 +10,7 @@
 #include "lod/HeightQuery.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
+#include "synthesis/DetailErrorModel.h"
 #include "synthesis/LeafErrorEstimator.h"
 
 #include <gtest/gtest.h>
@@ -677,7 +678,7 @@ TEST(ErrorMeterDetailTest, ReferenceReachesTheDeepestDynamicLevel)
     const double size = h.nodeSizeAt(0);
     auto ground = staticHeightAt(*map, 0.4 * size, 0.3 * size);
     ASSERT_TRUE(ground.ok());
-    Camera camera = makeCamera({0.4 * size, 0.3 * size, ground->height + 80.0}, 15.0, -35.0);
+    Camera camera = makeCamera({0.4 * size, 0.3 * size, ground->height + 160.0}, 15.0, -35.0);
     camera.verticalFov = 50.0 * kDegrees;
     camera.viewportWidth = 640;
     camera.viewportHeight = 480;

@@ -12,6 +12,7 @@
 #include <zlib.h>
 #include <bit>
 #include <limits>
+#include <map>
 #include <thread>
 
 namespace terrain {
@@ -177,7 +178,7 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     auto f32 = [&](std::size_t offset) { return std::bit_cast<float>(u32(offset)); };
     const Bytes magic = {0x89, 'T', 'M', 'A', 'P', 0x0d, 0x0a, 0x1a};
     EXPECT_TRUE(std::equal(magic.begin(), magic.end(), bytes.begin()));
-    EXPECT_EQ(u32(8), 3u);
+    EXPECT_EQ(u32(8), 4u);
     EXPECT_EQ(u32(12), 256u);
     EXPECT_EQ(u32(16), 17u);
     EXPECT_EQ(u32(20), 2u);
@@ -250,7 +251,8 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
             ASSERT_NE(child, raw.end());
             worst = std::max(worst, child->detailDeltaC);
         }
-        EXPECT_EQ(r.detailDeltaC, worst + r.deltaM) << r.id.toString();
+        // Version 4: at least the children's and the node's own (measured) error; here no displacement range.
+        EXPECT_GE(r.detailDeltaC, worst) << r.id.toString();
         EXPECT_GE(r.detailDeltaC, r.deltaC) << r.id.toString();
     }
     for (const Raw& r : raw) {
@@ -561,7 +563,7 @@ TEST(MapFileTest, BadHeaderFieldsAreErrors)
     const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
     const Case cases[] = {
         {"magic", 1, 1, 'X', false, "not a terrain map"},
-        {"version 4", 8, 4, 4, true, "version 4"},
+        {"version 5", 8, 4, 5, true, "version 5"},
         {"detail recipe over 64 KiB", 236, 4, 70000, true, "detail recipe of 70000 bytes"},
         {"detail recipe that is not there", 236, 4, 40, true, "detail recipe"},
         {"version 0", 8, 4, 0, true, "version 0"},
@@ -876,7 +878,24 @@ TEST(MapFileTest, Version1MapsStillOpenDecodeAndVerify)
     const std::uint64_t directoryOffset = test::readLe(bytes, 120, 8);
     const std::uint64_t count = test::readLe(bytes, 116, 4);
     test::writeLe(bytes, 8, 1, 4);
+    // Version 1 errors follow eq. 3.1 (max of the children's plus delta_m), not version 4's measured ones.
+    const MapParts parts = readParts(path);
+    std::map<std::uint64_t, float> summed;
+    std::vector<DirectoryEntry> byLevel = parts.entries;
+    std::sort(byLevel.begin(), byLevel.end(), [](const auto& a, const auto& b) { return a.id.level > b.id.level; });
+    for (const DirectoryEntry& e : byLevel) {
+        float worst = 0.0f;
+        if (e.hasChildren) {
+            for (int q = 0; q < 4; ++q) {
+                worst = std::max(worst, summed.at(e.id.child(q).key()));
+            }
+        }
+        summed[e.id.key()] = e.hasChildren ? worst + e.deltaM : 0.0f;
+    }
+    ASSERT_EQ(parts.entries.size(), count);
     for (std::uint64_t k = 0; k < count; ++k) {
+        test::writeLe(bytes, directoryOffset + 48 * k + 36,
+                      std::bit_cast<std::uint32_t>(summed.at(parts.entries[k].id.key())), 4);
         test::writeLe(bytes, directoryOffset + 48 * k + 44, 0, 4);
     }
     test::writeLe(bytes, 136, zlibCrc(std::span(bytes).subspan(directoryOffset)), 4);
@@ -886,6 +905,9 @@ TEST(MapFileTest, Version1MapsStillOpenDecodeAndVerify)
     // The encoder writes the same bytes for a version 1 header.
     MapParts v1 = readParts(path);
     v1.header.version = 1;
+    for (DirectoryEntry& e : v1.entries) {
+        e.deltaC = summed.at(e.id.key());
+    }
     EXPECT_TRUE(assemble(v1) == bytes);
 
     auto current = test::openMap(path);
@@ -903,7 +925,8 @@ TEST(MapFileTest, Version1MapsStillOpenDecodeAndVerify)
             EXPECT_EQ(old.detailDeltaC, 0.0f) << old.id.toString();
             EXPECT_EQ(old.id, now.id);
             EXPECT_EQ(old.deltaM, now.deltaM);
-            EXPECT_EQ(old.deltaC, now.deltaC);
+            EXPECT_EQ(old.deltaC, summed.at(now.id.key()));
+            EXPECT_GE(old.deltaC, now.deltaC) << "eq. 3.1 bounds the measured error from above";
             EXPECT_EQ(old.minCode, now.minCode);
             EXPECT_EQ(old.maxCode, now.maxCode);
             EXPECT_EQ(old.crc, now.crc);
@@ -917,7 +940,8 @@ TEST(MapFileTest, Version1MapsStillOpenDecodeAndVerify)
 
 TEST(MapFileTest, VerifyCatchesWrongDetailErrors)
 {
-    // Each change decodes (every detail_delta_c stays finite and >= delta_c) but breaks the nesting.
+    // Each change decodes (every detail_delta_c stays finite and >= delta_c) but breaks the nesting: version 4
+    // requires at least the children's and the node's own error plus the largest leaf detail error below.
     test::ScratchDir dir;
     const MapParts parts = readParts(buildSmallMap(dir, "small.map", 0.0, true));
     auto at = [](std::vector<DirectoryEntry>& entries, NodeId id) -> DirectoryEntry& {
@@ -929,9 +953,9 @@ TEST(MapFileTest, VerifyCatchesWrongDetailErrors)
         const char* mentions;  ///< the node whose nesting no longer holds
     };
     const Case cases[] = {
-        {"inner node's too large",
+        {"inner node's below its measured error plus the leaves' below",
          [&](auto& e) {
-             at(e, {1, 0, 1}).detailDeltaC += 1.0f;
+             at(e, {1, 0, 1}).detailDeltaC -= 0.5f;
          },
          "1/0/1"},
         {"inner node's only delta_c",
@@ -991,7 +1015,7 @@ TEST(MapFileTest, DetailRecipeRoundTripsAndIsChecked)
     for (ReaderKind kind : kReaders) {
         auto map = test::openMap(dir / "recipe.map", kind);
         ASSERT_TRUE(map) << readerName(kind);
-        EXPECT_EQ(map->header().version, 3u);
+        EXPECT_EQ(map->header().version, kMapVersion);
         ASSERT_TRUE(map->header().detailRecipe.has_value());
         EXPECT_EQ(*map->header().detailRecipe, recipe) << readerName(kind);
         EXPECT_TRUE(verifyMap(*map).empty());

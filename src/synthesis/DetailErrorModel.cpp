@@ -1,0 +1,260 @@
+#include "synthesis/DetailErrorModel.h"
+
+#include "core/Check.h"
+#include "core/SplitMix64.h"
+#include "quadtree/NodeId.h"
+#include "quadtree/TemplateTriangulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <mutex>
+
+namespace terrain {
+
+namespace {
+
+/// Probe windows of the one-level change: (kChangeCells + 1)^2 samples at half the level's spacing.
+constexpr int kChangeCells = 32;
+constexpr int kChangeWindows = 24;
+/// Probe windows of the deviation from the fine surface: kDeviationCells^2 cells of the level, each sampled
+/// kDeviationSplit x kDeviationSplit times finer.
+constexpr int kDeviationCells = 8;
+constexpr int kDeviationSplit = 8;
+constexpr int kDeviationWindows = 32;
+
+/// Random window origins, even (so the window's even samples are samples of the coarser level) and far
+/// from the lattice's origin in both directions.
+std::int64_t randomOrigin(SplitMix64& random, std::int64_t multiple)
+{
+    return multiple * (static_cast<std::int64_t>(random.next() % (1u << 20)) - (1 << 19));
+}
+
+/// The largest change one level makes to `fractal` sampled at `spacing`: over probe windows at random places,
+/// the fractal at the samples of spacing / 2 against the triangulated surface of the samples at `spacing`.
+double oneLevelChange(const Fractal& fractal, double spacing, std::uint64_t seed)
+{
+    const int fine = kChangeCells + 1;
+    std::vector<float> values(static_cast<std::size_t>(fine) * fine);
+    SplitMix64 random(seed);
+    double worst = 0.0;
+    for (int window = 0; window < kChangeWindows; ++window) {
+        const std::int64_t gx0 = randomOrigin(random, 2), gy0 = randomOrigin(random, 2);
+        fractal.evaluateGrid({0.0, 0.0, gx0, gy0, spacing * 0.5, fine, fine}, values);
+        auto at = [&](int i, int j) { return static_cast<double>(values[static_cast<std::size_t>(j) * fine + i]); };
+        for (int j = 0; j < fine; ++j) {
+            for (int i = (j & 1) ? 0 : 1; i < fine; i += (j & 1) ? 1 : 2) {
+                double surface = 0.0;
+                if ((i & 1) && (j & 1)) {
+                    surface = 0.5 * (at(i - 1, j - 1) + at(i + 1, j + 1));  // the south-west to north-east diagonal
+                } else if (i & 1) {
+                    surface = 0.5 * (at(i - 1, j) + at(i + 1, j));
+                } else {
+                    surface = 0.5 * (at(i, j - 1) + at(i, j + 1));
+                }
+                worst = std::max(worst, std::abs(at(i, j) - surface));
+            }
+        }
+    }
+    return worst;
+}
+
+/// The largest distance between `fractal` sampled kDeviationSplit times finer than `spacing` and the
+/// triangulated surface of its samples at `spacing`, over probe windows at random places.
+double deviationFromFiner(const Fractal& fractal, double spacing, std::uint64_t seed)
+{
+    const int fine = kDeviationCells * kDeviationSplit + 1;
+    std::vector<float> values(static_cast<std::size_t>(fine) * fine);
+    SplitMix64 random(seed);
+    double worst = 0.0;
+    for (int window = 0; window < kDeviationWindows; ++window) {
+        const std::int64_t gx0 = randomOrigin(random, kDeviationSplit), gy0 = randomOrigin(random, kDeviationSplit);
+        fractal.evaluateGrid({0.0, 0.0, gx0, gy0, spacing / kDeviationSplit, fine, fine}, values);
+        auto at = [&](int i, int j) { return static_cast<double>(values[static_cast<std::size_t>(j) * fine + i]); };
+        for (int cy = 0; cy < kDeviationCells; ++cy) {
+            for (int cx = 0; cx < kDeviationCells; ++cx) {
+                const int i0 = cx * kDeviationSplit, j0 = cy * kDeviationSplit;
+                const double h00 = at(i0, j0), h10 = at(i0 + kDeviationSplit, j0);
+                const double h01 = at(i0, j0 + kDeviationSplit), h11 = at(i0 + kDeviationSplit, j0 + kDeviationSplit);
+                for (int b = 0; b <= kDeviationSplit; ++b) {
+                    for (int a = 0; a <= kDeviationSplit; ++a) {
+                        const double surface = interpolateQuad(h00, h10, h01, h11, a / double(kDeviationSplit),
+                                                               b / double(kDeviationSplit));
+                        worst = std::max(worst, std::abs(at(i0 + a, j0 + b) - surface));
+                    }
+                }
+            }
+        }
+    }
+    return worst;
+}
+
+}  // namespace
+
+DetailErrorModel::DetailErrorModel(const DetailSynthesizer& synthesizer, double rootSpacing) : mSynthesizer(synthesizer)
+{
+    TERRAIN_EXPECTS(rootSpacing > 0.0 && std::isfinite(rootSpacing), "the root spacing must be > 0");
+    if (!synthesizer.settings().materials) {
+        return;
+    }
+    const auto& materials = synthesizer.settings().materials->materials();
+    constexpr int kLevels = NodeId::kMaxLevel + 1;
+    constexpr int kFinerLevels = 3;  // log2(kDeviationSplit): what deviationFromFiner covers
+    static_assert((1 << kFinerLevels) == kDeviationSplit);
+    mDisplacement.assign(materials.size(), std::vector<double>(kLevels, 0.0));
+    for (std::size_t m = 0; m < materials.size(); ++m) {
+        const Material& material = materials[m];
+        if (!material.displacement) {
+            continue;
+        }
+        const double amplitude = material.fractal.amplitude;
+        const std::uint64_t seed = material.fractal.seed * 1000003u;
+        // tail[level]: the one-level changes of `level` and every finer level, summed (a bound on what the
+        // levels below add, since each adds at most its largest change).
+        std::vector<double> tail(kLevels + 1, 0.0);
+        for (int level = kLevels - 1; level >= 0; --level) {
+            const double change = tail[level + 1] < 1e-6 * amplitude && level + 12 < kLevels
+                                      ? 0.0  // far below anything a node can show, and the fractal is smooth there
+                                      : oneLevelChange(*material.displacement, std::ldexp(rootSpacing, -level),
+                                                       seed + static_cast<std::uint64_t>(level));
+            tail[static_cast<std::size_t>(level)] = tail[static_cast<std::size_t>(level) + 1] + change;
+        }
+        for (int level = 0; level < kLevels; ++level) {
+            // The deviation from the surface kDeviationSplit times finer, measured in one piece (not a sum of
+            // per-level maxima, which are reached at different places), plus what the levels below that add.
+            const double spacing = std::ldexp(rootSpacing, -level);
+            const std::size_t below = std::min<std::size_t>(static_cast<std::size_t>(level + kFinerLevels), kLevels);
+            const double deviation =
+                tail[static_cast<std::size_t>(level)] < 1e-7 * amplitude
+                    ? tail[static_cast<std::size_t>(level)]
+                    : deviationFromFiner(*material.displacement, spacing, seed + 7919u * (level + 1)) + tail[below];
+            mDisplacement[m][static_cast<std::size_t>(level)] = std::min(
+                2.0 * amplitude, kDisplacementMargin * std::min(deviation, tail[static_cast<std::size_t>(level)]));
+        }
+    }
+}
+
+double DetailErrorModel::nextSubdivisionChange(const DualHeightMap& heights) const
+{
+    const int n = mSynthesizer.chunkSize();
+    const int w = mSynthesizer.windowSize();
+    TERRAIN_EXPECTS(heights.size == w && heights.base.size() == static_cast<std::size_t>(w) * w,
+                    "the node's window does not match the synthesizer's chunk size");
+    std::vector<float> child(static_cast<std::size_t>(w) * w);
+    const int half = (n - 1) / 2;
+    auto base = [&](int i, int j) {
+        return static_cast<double>(heights.base[static_cast<std::size_t>(j + kBorder) * w + i + kBorder]);
+    };
+    double worst = 0.0;
+    for (int q = 0; q < 4; ++q) {
+        mSynthesizer.subdivideBase(heights.base, q, child);
+        const int x0 = (q & 1) * half, y0 = (q >> 1) * half;
+        // Child sample (a, b) lies at node position (x0 + a / 2, y0 + b / 2).
+        for (int b = 0; b < n; ++b) {
+            for (int a = 0; a < n; ++a) {
+                const int i = x0 + a / 2, j = y0 + b / 2;
+                const int i1 = std::min(i + 1, n - 1), j1 = std::min(j + 1, n - 1);
+                const double surface =
+                    interpolateQuad(base(i, j), base(i1, j), base(i, j1), base(i1, j1), (a & 1) * 0.5, (b & 1) * 0.5);
+                const double z = child[static_cast<std::size_t>(b + kBorder) * w + a + kBorder];
+                worst = std::max(worst, std::abs(z - surface));
+            }
+        }
+    }
+    return worst;
+}
+
+double DetailErrorModel::displacementError(std::size_t m, int level) const
+{
+    TERRAIN_EXPECTS(level >= 0 && level <= NodeId::kMaxLevel, "level out of range");
+    if (m >= mDisplacement.size()) {
+        return 0.0;
+    }
+    return mDisplacement[m][static_cast<std::size_t>(level)];
+}
+
+double DetailErrorModel::worstDisplacementError(int level) const
+{
+    double worst = 0.0;
+    for (std::size_t m = 0; m < mDisplacement.size(); ++m) {
+        worst = std::max(worst, displacementError(m, level));
+    }
+    return worst;
+}
+
+double DetailErrorModel::displacementTerm(std::span<const std::uint8_t> weights, int level) const
+{
+    if (mDisplacement.empty()) {
+        return 0.0;
+    }
+    const std::size_t count = mDisplacement.size();
+    if (count == 1) {
+        return displacementError(0, level);
+    }
+    // Per sample, the materials' errors weighted as the displacement there is; the largest over the node.
+    // Weights are stored rounded to 1/255, so each counts half a step more.
+    std::array<double, kMaxDetailMaterials> error{};
+    for (std::size_t m = 0; m < count; ++m) {
+        error[m] = displacementError(m, level) / 255.0;
+    }
+    double worst = 0.0;
+    for (std::size_t k = 0; k + 3 < weights.size(); k += 4) {
+        double term = 0.0;
+        for (std::size_t m = 0; m < count; ++m) {
+            term += (weights[k + m] + 0.5) * error[m];
+        }
+        worst = std::max(worst, term);
+    }
+    return worst;
+}
+
+float DetailErrorModel::bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level) const
+{
+    return static_cast<float>(kSubdivisionTail * nextSubdivisionChange(heights) + displacementTerm(weights, level));
+}
+
+std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
+    const DetailSynthesizer& synthesizer)
+{
+    struct Shared {
+        std::mutex mutex;
+        double rootSpacing = 0.0;
+        std::shared_ptr<const DetailErrorModel> model;
+    };
+    auto shared = std::make_shared<Shared>();
+    return [&synthesizer, shared](const MapHeader& h, const NodeId& id, std::span<const std::uint16_t> codes) {
+        std::shared_ptr<const DetailErrorModel> model;
+        {
+            std::lock_guard lock(shared->mutex);
+            if (!shared->model || shared->rootSpacing != h.spacingAt(0)) {
+                shared->model = std::make_shared<const DetailErrorModel>(synthesizer, h.spacingAt(0));
+                shared->rootSpacing = h.spacingAt(0);
+            }
+            model = shared->model;
+        }
+        DualHeightMap leaf;
+        leaf.size = h.windowSize();
+        leaf.base.resize(codes.size());
+        for (std::size_t k = 0; k < codes.size(); ++k) {
+            leaf.base[k] = static_cast<float>(h.heightStep * codes[k]);  // as TerrainNodeSource::loadStatic makes it
+        }
+        const WindowPlacement where = windowPlacement(h, id);
+        synthesizer.displace(where, nullptr, 0, leaf);
+        return model->bound(leaf, synthesizer.materialWeights(leaf, where), id.level);
+    };
+}
+
+double detailDisplacementRange(const DetailSynthesizer& synthesizer)
+{
+    double amplitude = 0.0;
+    if (synthesizer.settings().materials) {
+        for (const Material& m : synthesizer.settings().materials->materials()) {
+            if (m.displacement) {
+                amplitude = std::max(amplitude, m.fractal.amplitude);
+            }
+        }
+    }
+    return 2.0 * amplitude;
+}
+
+}  // namespace terrain

@@ -1,0 +1,79 @@
+// The error of synthesized detail from the synthesis model (paper 3.4.1; issue 12, replacing "half the error
+// of the parent"): how far the surface synthesized below a node (DetailSynthesizer.h: subdivision of the base
+// plus material displacement) can lie from the node's own triangulated surface. Two terms, from the node's
+// own data and its materials:
+//
+//   delta = kSubdivisionTail * D1  +  max over the node's samples of  sum_m  w_m * E_m(level)
+//
+// - D1: the largest change the next subdivision makes to the base (every child sample against the node's
+//   surface along the template triangulation), computed from the node's base. Later levels change it less:
+//   the 4-point rule's changes shrink by 1/4 per level on smooth data, so the whole tail is D1 / (1 - 1/4).
+//   (Measured on the bundled terrain with tengine-tool error --levels: the largest distance of a node from
+//   the reference is D1 to 1.0 D1, so 4/3 holds with margin; a contraction of only 1/2 would need 2.)
+// - E_m(level): how far material m's displacement, sampled at the level's spacing and interpolated along the
+//   triangles, can lie from its limit: measured once per material and level on windows of the fractal
+//   itself at random places, as the largest distance of the fractal sampled 8 times finer from the
+//   level's triangles, plus the largest change each level below that makes, times kDisplacementMargin, and
+//   never more than 2 amplitude. It shrinks by the fractal's gain per level while
+//   octaves are finer than the spacing, then by 4 per level once the sampling resolves them all (fBm); a
+//   ridged fractal's creases keep it shrinking by about 2.
+// - w_m: material m's weight at a sample (placement, DetailSynthesizer::materialWeights): the displacement
+//   there is the weighted sum of the materials', so its error is the weighted sum of theirs.
+//
+// The viewer computes it for every dynamic node it makes (lod/TerrainNodeSource.h) and prep for every static
+// leaf (leafDetailErrorFunction), so both follow one model; tengine-tool error measures how tight it is.
+#pragma once
+
+#include "synthesis/DetailSynthesizer.h"
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+namespace terrain {
+
+class DetailErrorModel {
+public:
+    static constexpr double kSubdivisionTail = 4.0 / 3.0;
+    static constexpr double kDisplacementMargin = 1.25;
+
+    /// The model for `synthesizer` (which must outlive it) on a quadtree whose level 0 has sample spacing
+    /// `rootSpacing` metres (level k: rootSpacing / 2^k). Measures E_m for every level; about 0.1 s.
+    DetailErrorModel(const DetailSynthesizer& synthesizer, double rootSpacing);
+
+    /// D1 of a node's base heights (W x W window, metres): the largest distance from the node's surface of the
+    /// base samples its four children get (the synthesizer's own subdivider), over the node's square.
+    double nextSubdivisionChange(const DualHeightMap& heights) const;
+
+    /// E_m at quadtree `level` (metres), material `m` in the synthesizer's order; 0 without materials.
+    double displacementError(std::size_t m, int level) const;
+
+    /// max over samples of sum_m w_m E_m(level) for a node with `weights` (DetailSynthesizer::materialWeights:
+    /// N x N x 4 bytes; empty when there are no materials).
+    double displacementTerm(std::span<const std::uint8_t> weights, int level) const;
+
+    /// The whole bound for a node at `level` with these heights and weights.
+    float bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level) const;
+
+    /// The largest E_m(level) over the materials: the displacement term of a node whose weights are unknown.
+    double worstDisplacementError(int level) const;
+
+private:
+    const DetailSynthesizer& mSynthesizer;
+    /// E_m per level 0..NodeId::kMaxLevel, per material.
+    std::vector<std::vector<double>> mDisplacement;
+};
+
+/// QuadtreeBuilder's leafDetailError for `synthesizer` (paper 3.4.1, with this model): the leaf's codes as
+/// the viewer's base heights, displaced and placed as the viewer does a static node (windowPlacement), and
+/// DetailErrorModel::bound at the leaf's level. Thread-safe; the model is made on the first call for the
+/// map's spacing. `synthesizer` must outlive the returned function.
+std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
+    const DetailSynthesizer& synthesizer);
+
+/// QuadtreeBuilder's detailDisplacementRange: 2 x the largest amplitude of the synthesizer's materials.
+double detailDisplacementRange(const DetailSynthesizer& synthesizer);
+
+}  // namespace terrain
