@@ -4,6 +4,7 @@
 // bundled real terrain (demos/data). Target: median <= 200 us with an 8-octave fBm material.
 // Prints figures, never gates.
 #include "heightfield/HeightFieldIo.h"
+#include "synthesis/DetailErrorModel.h"
 #include "synthesis/DetailSynthesizer.h"
 
 #include <benchmark/benchmark.h>
@@ -74,10 +75,13 @@ std::shared_ptr<const MaterialSet> shippedMaterials()
     return std::make_shared<const MaterialSet>(std::move(set).value());
 }
 
-void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> materials)
+/// `withBound`: also the node's error bound (DetailErrorModel::bound, issue 12), as TerrainNodeSource makes
+/// every dynamic node: the cost the synthesis model adds per node.
+void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> materials, bool withBound)
 {
     auto synthesizer = DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, std::move(materials)}).value();
     const Leaf leaf = makeLeaf(*synthesizer);
+    const DetailErrorModel model(*synthesizer, kSpacing * 16);
     int quadrant = 0;
     for (auto _ : state) {
         WindowPlacement where = leaf.where;
@@ -87,6 +91,9 @@ void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> mat
         DualHeightMap child = synthesizer->synthesizeChild(leaf.map, quadrant, where);
         auto weights = synthesizer->materialWeights(child, where);
         auto texture = upsampleTexture(leaf.texture, kChunk, quadrant);
+        if (withBound) {
+            benchmark::DoNotOptimize(model.bound(child, weights, 5));
+        }
         benchmark::DoNotOptimize(child.base.data());
         benchmark::DoNotOptimize(weights.data());
         benchmark::DoNotOptimize(texture.data());
@@ -96,15 +103,19 @@ void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> mat
         benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 
-BENCHMARK_CAPTURE(dynamicNode, subdivision_only, nullptr)
+BENCHMARK_CAPTURE(dynamicNode, subdivision_only, nullptr, false)
     ->Unit(benchmark::kMicrosecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
-BENCHMARK_CAPTURE(dynamicNode, fbm_8_octaves, fbmMaterial(8))
+BENCHMARK_CAPTURE(dynamicNode, fbm_8_octaves, fbmMaterial(8), false)
     ->Unit(benchmark::kMicrosecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
-BENCHMARK_CAPTURE(dynamicNode, grass_and_rock, shippedMaterials())
+BENCHMARK_CAPTURE(dynamicNode, grass_and_rock, shippedMaterials(), false)
+    ->Unit(benchmark::kMicrosecond)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+BENCHMARK_CAPTURE(dynamicNode, grass_and_rock_with_error_bound, shippedMaterials(), true)
     ->Unit(benchmark::kMicrosecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
