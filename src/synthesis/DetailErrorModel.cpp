@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <mutex>
 
@@ -14,14 +15,16 @@ namespace terrain {
 
 namespace {
 
+constexpr int kLevels = NodeId::kMaxLevel + 1;
+
 /// Probe windows of the one-level change: (kChangeCells + 1)^2 samples at half the level's spacing.
 constexpr int kChangeCells = 32;
 constexpr int kChangeWindows = 24;
 /// Probe windows of the deviation from the fine surface: kDeviationCells^2 cells of the level, each sampled
 /// kDeviationSplit x kDeviationSplit times finer.
-constexpr int kDeviationCells = 8;
-constexpr int kDeviationSplit = 8;
-constexpr int kDeviationWindows = 32;
+constexpr int kDeviationCells = 4;
+constexpr int kDeviationSplit = 16;
+constexpr int kDeviationWindows = 96;
 
 /// Random window origins, even (so the window's even samples are samples of the coarser level) and far
 /// from the lattice's origin in both directions.
@@ -32,7 +35,7 @@ std::int64_t randomOrigin(SplitMix64& random, std::int64_t multiple)
 
 /// The largest change one level makes to `fractal` sampled at `spacing`: over probe windows at random places,
 /// the fractal at the samples of spacing / 2 against the triangulated surface of the samples at `spacing`.
-double oneLevelChange(const Fractal& fractal, double spacing, std::uint64_t seed)
+double oneLevelChange(const Fractal& fractal, double spacing, std::uint64_t seed, double& lowest, double& highest)
 {
     const int fine = kChangeCells + 1;
     std::vector<float> values(static_cast<std::size_t>(fine) * fine);
@@ -42,6 +45,10 @@ double oneLevelChange(const Fractal& fractal, double spacing, std::uint64_t seed
         const std::int64_t gx0 = randomOrigin(random, 2), gy0 = randomOrigin(random, 2);
         fractal.evaluateGrid({0.0, 0.0, gx0, gy0, spacing * 0.5, fine, fine}, values);
         auto at = [&](int i, int j) { return static_cast<double>(values[static_cast<std::size_t>(j) * fine + i]); };
+        for (float v : values) {
+            lowest = std::min(lowest, static_cast<double>(v));
+            highest = std::max(highest, static_cast<double>(v));
+        }
         for (int j = 0; j < fine; ++j) {
             for (int i = (j & 1) ? 0 : 1; i < fine; i += (j & 1) ? 1 : 2) {
                 double surface = 0.0;
@@ -91,50 +98,50 @@ double deviationFromFiner(const Fractal& fractal, double spacing, std::uint64_t 
 
 }  // namespace
 
-DetailErrorModel::DetailErrorModel(const DetailSynthesizer& synthesizer, double rootSpacing) : mSynthesizer(synthesizer)
+DetailErrorModel::DetailErrorModel(const DetailSynthesizer& synthesizer, double rootSpacing)
+    : mSynthesizer(synthesizer), mRootSpacing(rootSpacing)
 {
     TERRAIN_EXPECTS(rootSpacing > 0.0 && std::isfinite(rootSpacing), "the root spacing must be > 0");
     if (!synthesizer.settings().materials) {
         return;
     }
     const auto& materials = synthesizer.settings().materials->materials();
-    constexpr int kLevels = NodeId::kMaxLevel + 1;
-    constexpr int kFinerLevels = 3;  // log2(kDeviationSplit): what deviationFromFiner covers
-    static_assert((1 << kFinerLevels) == kDeviationSplit);
-    mDisplacement.assign(materials.size(), std::vector<double>(kLevels, 0.0));
+    mMaterials.resize(materials.size());
     for (std::size_t m = 0; m < materials.size(); ++m) {
         const Material& material = materials[m];
+        PerMaterial& pm = mMaterials[m];
+        pm.error.assign(kLevels, std::numeric_limits<double>::quiet_NaN());
         if (!material.displacement) {
+            std::fill(pm.error.begin(), pm.error.end(), 0.0);
             continue;
         }
         const double amplitude = material.fractal.amplitude;
         const std::uint64_t seed = material.fractal.seed * 1000003u;
         // tail[level]: the one-level changes of `level` and every finer level, summed (a bound on what the
         // levels below add, since each adds at most its largest change).
-        std::vector<double> tail(kLevels + 1, 0.0);
+        double lowest = amplitude, highest = -amplitude;  // the fractal's values over every probe
+        pm.tail.assign(kLevels + 1, 0.0);
         for (int level = kLevels - 1; level >= 0; --level) {
-            const double change = tail[level + 1] < 1e-6 * amplitude && level + 12 < kLevels
+            const auto l = static_cast<std::size_t>(level);
+            const double change = pm.tail[l + 1] < 1e-6 * amplitude && level + 12 < kLevels
                                       ? 0.0  // far below anything a node can show, and the fractal is smooth there
                                       : oneLevelChange(*material.displacement, std::ldexp(rootSpacing, -level),
-                                                       seed + static_cast<std::uint64_t>(level));
-            tail[static_cast<std::size_t>(level)] = tail[static_cast<std::size_t>(level) + 1] + change;
+                                                       seed + static_cast<std::uint64_t>(level), lowest, highest);
+            pm.tail[l] = pm.tail[l + 1] + change;
         }
-        for (int level = 0; level < kLevels; ++level) {
-            // The deviation from the surface kDeviationSplit times finer, measured in one piece (not a sum of
-            // per-level maxima, which are reached at different places), plus what the levels below that add.
-            const double spacing = std::ldexp(rootSpacing, -level);
-            const std::size_t below = std::min<std::size_t>(static_cast<std::size_t>(level + kFinerLevels), kLevels);
-            const double deviation =
-                tail[static_cast<std::size_t>(level)] < 1e-7 * amplitude
-                    ? tail[static_cast<std::size_t>(level)]
-                    : deviationFromFiner(*material.displacement, spacing, seed + 7919u * (level + 1)) + tail[below];
-            mDisplacement[m][static_cast<std::size_t>(level)] = std::min(
-                2.0 * amplitude, kDisplacementMargin * std::min(deviation, tail[static_cast<std::size_t>(level)]));
-        }
+        // A triangle's interpolation lies within the fractal's range, so no level errs by more than the range
+        // (measured, with the margin; and never more than 2 amplitude, where |f| <= amplitude puts it).
+        pm.range = std::min(2.0 * amplitude, kDisplacementMargin * (highest - lowest));
     }
 }
 
 double DetailErrorModel::nextSubdivisionChange(const DualHeightMap& heights) const
+{
+    std::vector<float> cells;
+    return nextSubdivisionChanges(heights, cells);
+}
+
+double DetailErrorModel::nextSubdivisionChanges(const DualHeightMap& heights, std::vector<float>& cells) const
 {
     const int n = mSynthesizer.chunkSize();
     const int w = mSynthesizer.windowSize();
@@ -145,19 +152,24 @@ double DetailErrorModel::nextSubdivisionChange(const DualHeightMap& heights) con
     auto base = [&](int i, int j) {
         return static_cast<double>(heights.base[static_cast<std::size_t>(j + kBorder) * w + i + kBorder]);
     };
+    cells.assign(static_cast<std::size_t>(n - 1) * (n - 1), 0.0f);
     double worst = 0.0;
     for (int q = 0; q < 4; ++q) {
         mSynthesizer.subdivideBase(heights.base, q, child);
         const int x0 = (q & 1) * half, y0 = (q >> 1) * half;
-        // Child sample (a, b) lies at node position (x0 + a / 2, y0 + b / 2).
+        // Child sample (a, b) lies at node position (x0 + a / 2, y0 + b / 2), in node cell (i, j) (the last
+        // row and column of samples in the cell before them).
         for (int b = 0; b < n; ++b) {
             for (int a = 0; a < n; ++a) {
-                const int i = x0 + a / 2, j = y0 + b / 2;
-                const int i1 = std::min(i + 1, n - 1), j1 = std::min(j + 1, n - 1);
+                const int i = std::min(x0 + a / 2, n - 2), j = std::min(y0 + b / 2, n - 2);
+                const double fx = (x0 + a * 0.5) - i, fy = (y0 + b * 0.5) - j;
                 const double surface =
-                    interpolateQuad(base(i, j), base(i1, j), base(i, j1), base(i1, j1), (a & 1) * 0.5, (b & 1) * 0.5);
+                    interpolateQuad(base(i, j), base(i + 1, j), base(i, j + 1), base(i + 1, j + 1), fx, fy);
                 const double z = child[static_cast<std::size_t>(b + kBorder) * w + a + kBorder];
-                worst = std::max(worst, std::abs(z - surface));
+                const auto change = static_cast<float>(std::abs(z - surface));
+                float& cell = cells[static_cast<std::size_t>(j) * (n - 1) + i];
+                cell = std::max(cell, change);
+                worst = std::max(worst, static_cast<double>(change));
             }
         }
     }
@@ -167,16 +179,35 @@ double DetailErrorModel::nextSubdivisionChange(const DualHeightMap& heights) con
 double DetailErrorModel::displacementError(std::size_t m, int level) const
 {
     TERRAIN_EXPECTS(level >= 0 && level <= NodeId::kMaxLevel, "level out of range");
-    if (m >= mDisplacement.size()) {
+    if (m >= mMaterials.size()) {
         return 0.0;
     }
-    return mDisplacement[m][static_cast<std::size_t>(level)];
+    const PerMaterial& pm = mMaterials[m];
+    const auto l = static_cast<std::size_t>(level);
+    std::lock_guard lock(mMutex);  // levels are measured when first asked for: the same value whoever asks
+    if (std::isnan(pm.error[l])) {
+        const Material& material = mSynthesizer.settings().materials->materials()[m];
+        const double amplitude = material.fractal.amplitude;
+        constexpr int kFinerLevels = 4;  // log2(kDeviationSplit): what deviationFromFiner covers
+        static_assert((1 << kFinerLevels) == kDeviationSplit);
+        // The deviation from the surface kDeviationSplit times finer, measured in one piece (not a sum of
+        // per-level maxima, which are reached at different places), plus what the levels below that add.
+        const std::size_t below = std::min<std::size_t>(l + kFinerLevels, kLevels);
+        const double deviation =
+            pm.tail[l] < 1e-7 * amplitude
+                ? pm.tail[l]
+                : std::min(pm.tail[l], deviationFromFiner(*material.displacement, std::ldexp(mRootSpacing, -level),
+                                                          material.fractal.seed * 1000003u + 7919u * (l + 1)) +
+                                           pm.tail[below]);
+        pm.error[l] = std::min(pm.range, kDisplacementMargin * deviation);
+    }
+    return pm.error[l];
 }
 
 double DetailErrorModel::worstDisplacementError(int level) const
 {
     double worst = 0.0;
-    for (std::size_t m = 0; m < mDisplacement.size(); ++m) {
+    for (std::size_t m = 0; m < mMaterials.size(); ++m) {
         worst = std::max(worst, displacementError(m, level));
     }
     return worst;
@@ -184,10 +215,10 @@ double DetailErrorModel::worstDisplacementError(int level) const
 
 double DetailErrorModel::displacementTerm(std::span<const std::uint8_t> weights, int level) const
 {
-    if (mDisplacement.empty()) {
+    if (mMaterials.empty()) {
         return 0.0;
     }
-    const std::size_t count = mDisplacement.size();
+    const std::size_t count = mMaterials.size();
     if (count == 1) {
         return displacementError(0, level);
     }
@@ -210,7 +241,36 @@ double DetailErrorModel::displacementTerm(std::span<const std::uint8_t> weights,
 
 float DetailErrorModel::bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level) const
 {
-    return static_cast<float>(kSubdivisionTail * nextSubdivisionChange(heights) + displacementTerm(weights, level));
+    // Per cell of the node: the subdivision's change there and the displacement's error at its corners, so
+    // the two terms add where they meet rather than each at its own worst place.
+    std::vector<float> cells;
+    nextSubdivisionChanges(heights, cells);
+    const int n = mSynthesizer.chunkSize();
+    const std::size_t count = mMaterials.size();
+    std::vector<double> sample(static_cast<std::size_t>(n) * n, 0.0);
+    if (count == 1) {
+        std::fill(sample.begin(), sample.end(), displacementError(0, level));
+    } else if (count > 1) {
+        TERRAIN_EXPECTS(weights.size() == sample.size() * 4, "weights must hold N x N x 4 bytes");
+        std::array<double, kMaxDetailMaterials> error{};
+        for (std::size_t m = 0; m < count; ++m) {
+            error[m] = displacementError(m, level) / 255.0;
+        }
+        for (std::size_t k = 0; k < sample.size(); ++k) {
+            for (std::size_t m = 0; m < count; ++m) {
+                sample[k] += (weights[4 * k + m] + 0.5) * error[m];  // half a step: the weights are rounded
+            }
+        }
+    }
+    double worst = 0.0;
+    for (int j = 0; j + 1 < n; ++j) {
+        for (int i = 0; i + 1 < n; ++i) {
+            auto at = [&](int x, int y) { return sample[static_cast<std::size_t>(y) * n + x]; };
+            const double displacement = std::max({at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)});
+            worst = std::max(worst, kSubdivisionTail * cells[static_cast<std::size_t>(j) * (n - 1) + i] + displacement);
+        }
+    }
+    return static_cast<float>(worst);
 }
 
 std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(

@@ -3,18 +3,20 @@
 // plus material displacement) can lie from the node's own triangulated surface. Two terms, from the node's
 // own data and its materials:
 //
-//   delta = kSubdivisionTail * D1  +  max over the node's samples of  sum_m  w_m * E_m(level)
+//   delta = max over the node's cells of  kSubdivisionTail * D1(cell)  +  max over the cell's corners of
+//           sum_m  w_m * E_m(level)
 //
 // - D1: the largest change the next subdivision makes to the base (every child sample against the node's
 //   surface along the template triangulation), computed from the node's base. Later levels change it less:
 //   the 4-point rule's changes shrink by 1/4 per level on smooth data, so the whole tail is D1 / (1 - 1/4).
 //   (Measured on the bundled terrain with tengine-tool error --levels: the largest distance of a node from
-//   the reference is D1 to 1.0 D1, so 4/3 holds with margin; a contraction of only 1/2 would need 2.)
+//   the reference is up to 1.0 D1, so 4/3 holds with margin; a contraction of only 1/2 would need 2.)
 // - E_m(level): how far material m's displacement, sampled at the level's spacing and interpolated along the
 //   triangles, can lie from its limit: measured once per material and level on windows of the fractal
-//   itself at random places, as the largest distance of the fractal sampled 8 times finer from the
+//   itself at random places, as the largest distance of the fractal sampled 16 times finer from the
 //   level's triangles, plus the largest change each level below that makes, times kDisplacementMargin, and
-//   never more than 2 amplitude. It shrinks by the fractal's gain per level while
+//   never more than the fractal's range (measured on the probes, times the margin; at most 2 amplitude). It
+//   shrinks by the fractal's gain per level while
 //   octaves are finer than the spacing, then by 4 per level once the sampling resolves them all (fBm); a
 //   ridged fractal's creases keep it shrinking by about 2.
 // - w_m: material m's weight at a sample (placement, DetailSynthesizer::materialWeights): the displacement
@@ -29,6 +31,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <span>
 #include <vector>
 
@@ -40,12 +43,16 @@ public:
     static constexpr double kDisplacementMargin = 1.25;
 
     /// The model for `synthesizer` (which must outlive it) on a quadtree whose level 0 has sample spacing
-    /// `rootSpacing` metres (level k: rootSpacing / 2^k). Measures E_m for every level; about 0.1 s.
+    /// `rootSpacing` metres (level k: rootSpacing / 2^k). Measures the per-level changes of every material
+    /// (tens of milliseconds); each level's E_m is measured when first asked for (thread-safe).
     DetailErrorModel(const DetailSynthesizer& synthesizer, double rootSpacing);
 
     /// D1 of a node's base heights (W x W window, metres): the largest distance from the node's surface of the
     /// base samples its four children get (the synthesizer's own subdivider), over the node's square.
     double nextSubdivisionChange(const DualHeightMap& heights) const;
+    /// The same, and per cell of the node ((N - 1)^2, rows south to north) the largest change of the child
+    /// samples in it (on its edges included) into `cells`.
+    double nextSubdivisionChanges(const DualHeightMap& heights, std::vector<float>& cells) const;
 
     /// E_m at quadtree `level` (metres), material `m` in the synthesizer's order; 0 without materials.
     double displacementError(std::size_t m, int level) const;
@@ -54,16 +61,24 @@ public:
     /// N x N x 4 bytes; empty when there are no materials).
     double displacementTerm(std::span<const std::uint8_t> weights, int level) const;
 
-    /// The whole bound for a node at `level` with these heights and weights.
+    /// The whole bound for a node at `level` with these heights and weights: the largest over the node's cells
+    /// of kSubdivisionTail x the cell's next subdivision change + the largest displacement error at its
+    /// corners (both terms where they meet, not each at its own worst place).
     float bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level) const;
 
     /// The largest E_m(level) over the materials: the displacement term of a node whose weights are unknown.
     double worstDisplacementError(int level) const;
 
 private:
+    struct PerMaterial {
+        std::vector<double> tail;           ///< per level: the one-level changes of it and every finer level
+        double range = 0.0;                 ///< the largest any level's error can be
+        mutable std::vector<double> error;  ///< E_m per level, NaN until first asked for (under mMutex)
+    };
     const DetailSynthesizer& mSynthesizer;
-    /// E_m per level 0..NodeId::kMaxLevel, per material.
-    std::vector<std::vector<double>> mDisplacement;
+    double mRootSpacing;
+    std::vector<PerMaterial> mMaterials;
+    mutable std::mutex mMutex;
 };
 
 /// QuadtreeBuilder's leafDetailError for `synthesizer` (paper 3.4.1, with this model): the leaf's codes as

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 namespace terrain {
@@ -102,6 +103,8 @@ TEST(DetailErrorModelTest, DisplacementTermBoundsTheFractalAtRandomPoints)
             }
             EXPECT_LE(worst, e) << "level " << level;
             tightest = std::max(tightest, worst / e);
+            std::printf("%s level %2d spacing %9.3f m: E %.4f m, largest at random points %.4f m (%.2f of E)\n",
+                        name.c_str(), level, spacing, e, worst, worst / e);
             if (level >= 13) {
                 const double ratio = model.displacementError(0, level) / model.displacementError(0, level - 1);
                 EXPECT_LT(ratio, name == "grass" ? 0.35 : 0.62) << "level " << level;
