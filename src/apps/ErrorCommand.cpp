@@ -107,13 +107,7 @@ Expected<ErrorCommand> parseErrorCommand(const std::filesystem::path& mapFile, c
             return makeError(arg, " needs a value");
         }
         const std::string& value = args[++i];
-        auto number = [&](double lo, double hi) -> Expected<double> {
-            auto v = parseDouble(value);
-            if (!v.ok() || !(*v >= lo && *v <= hi)) {
-                return makeError(arg, ": '", value, "' is not a number in [", lo, ", ", hi, "]");
-            }
-            return v;
-        };
+        auto number = [&](double lo, double hi) { return parseNumberIn(arg, value, lo, hi); };
         if (arg == "--set") {
             viewerArgs.push_back(arg);
             viewerArgs.push_back(value);

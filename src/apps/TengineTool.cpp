@@ -194,13 +194,7 @@ Expected<ViewOptions> parseViewOptions(const std::vector<std::string>& args, std
             return makeError(arg, " needs a value");
         }
         const std::string& value = args[++i];
-        auto number = [&](double lo, double hi) -> Expected<double> {
-            auto v = parseDouble(value);
-            if (!v.ok() || *v < lo || *v > hi) {
-                return makeError(arg, ": '", value, "' is not a number in [", lo, ", ", hi, "]");
-            }
-            return v;
-        };
+        auto number = [&](double lo, double hi) { return parseNumberIn(arg, value, lo, hi); };
         if (arg == "--camera") {
             auto parsed = parseCameraArgument(value, view.camera);
             TERRAIN_TRY(parsed);

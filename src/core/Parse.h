@@ -33,6 +33,17 @@ inline Expected<long long> parseInteger(std::string_view text)
     return value;
 }
 
+/// `text` as a number in [lo, hi] for command-line option `option`; the error names both ("--tau: 'x' is not
+/// a number in [0.01, 1000]"). NaN is out of every range.
+inline Expected<double> parseNumberIn(std::string_view option, std::string_view text, double lo, double hi)
+{
+    auto v = parseDouble(text);
+    if (!v.ok() || !(*v >= lo && *v <= hi)) {
+        return makeError(option, ": '", text, "' is not a number in [", lo, ", ", hi, "]");
+    }
+    return v;
+}
+
 /// The shortest text that parses back to exactly `value`; plain decimals ("200000", not "2e+05") for
 /// everyday magnitudes (1e-4 <= |value| < 1e15), scientific notation otherwise.
 inline std::string formatNumber(double value)

@@ -213,38 +213,8 @@ double DetailErrorModel::worstDisplacementError(int level) const
     return worst;
 }
 
-double DetailErrorModel::displacementTerm(std::span<const std::uint8_t> weights, int level) const
+std::vector<double> DetailErrorModel::sampleDisplacementErrors(std::span<const std::uint8_t> weights, int level) const
 {
-    if (mMaterials.empty()) {
-        return 0.0;
-    }
-    const std::size_t count = mMaterials.size();
-    if (count == 1) {
-        return displacementError(0, level);
-    }
-    // Per sample, the materials' errors weighted as the displacement there is; the largest over the node.
-    // Weights are stored rounded to 1/255, so each counts half a step more.
-    std::array<double, kMaxDetailMaterials> error{};
-    for (std::size_t m = 0; m < count; ++m) {
-        error[m] = displacementError(m, level) / 255.0;
-    }
-    double worst = 0.0;
-    for (std::size_t k = 0; k + 3 < weights.size(); k += 4) {
-        double term = 0.0;
-        for (std::size_t m = 0; m < count; ++m) {
-            term += (weights[k + m] + 0.5) * error[m];
-        }
-        worst = std::max(worst, term);
-    }
-    return worst;
-}
-
-float DetailErrorModel::bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level) const
-{
-    // Per cell of the node: the subdivision's change there and the displacement's error at its corners, so
-    // the two terms add where they meet rather than each at its own worst place.
-    std::vector<float> cells;
-    nextSubdivisionChanges(heights, cells);
     const int n = mSynthesizer.chunkSize();
     const std::size_t count = mMaterials.size();
     std::vector<double> sample(static_cast<std::size_t>(n) * n, 0.0);
@@ -262,6 +232,23 @@ float DetailErrorModel::bound(const DualHeightMap& heights, std::span<const std:
             }
         }
     }
+    return sample;
+}
+
+double DetailErrorModel::displacementTerm(std::span<const std::uint8_t> weights, int level) const
+{
+    const std::vector<double> sample = sampleDisplacementErrors(weights, level);
+    return *std::max_element(sample.begin(), sample.end());
+}
+
+float DetailErrorModel::bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level) const
+{
+    // Per cell of the node: the subdivision's change there and the displacement's error at its corners, so
+    // the two terms add where they meet rather than each at its own worst place.
+    std::vector<float> cells;
+    nextSubdivisionChanges(heights, cells);
+    const int n = mSynthesizer.chunkSize();
+    const std::vector<double> sample = sampleDisplacementErrors(weights, level);
     double worst = 0.0;
     for (int j = 0; j + 1 < n; ++j) {
         for (int i = 0; i + 1 < n; ++i) {

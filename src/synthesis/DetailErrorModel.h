@@ -70,6 +70,9 @@ public:
     double worstDisplacementError(int level) const;
 
 private:
+    /// Per sample of the node (N x N), sum_m w_m E_m(level).
+    std::vector<double> sampleDisplacementErrors(std::span<const std::uint8_t> weights, int level) const;
+
     struct PerMaterial {
         std::vector<double> tail;           ///< per level: the one-level changes of it and every finer level
         double range = 0.0;                 ///< the largest any level's error can be

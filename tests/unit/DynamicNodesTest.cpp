@@ -23,26 +23,13 @@
 namespace terrain {
 namespace {
 
-const std::filesystem::path kMaterials = TERRAIN_MATERIALS_DIR;
-
-std::unique_ptr<const DetailSynthesizer> makeSynthesizer(int chunkSize)
-{
-    std::vector<std::string> warnings;
-    auto set = MaterialSet::load({kMaterials / "grass.mat", kMaterials / "rock.mat"}, warnings);
-    EXPECT_TRUE(set.ok()) << set.error().message;
-    auto s = DetailSynthesizer::create(chunkSize,
-                                       {"kobbelt", 1.0, std::make_shared<const MaterialSet>(std::move(set).value())});
-    EXPECT_TRUE(s.ok()) << s.error().message;
-    return std::move(s).value();
-}
-
 class DynamicNodesTest : public ::testing::Test {
 protected:
     static constexpr int kChunk = 17;
 
     void SetUp() override
     {
-        mSynthesizer = makeSynthesizer(kChunk);
+        mSynthesizer = test::grassAndRockSynthesizer(kChunk);
         BuildOptions options;
         options.chunkSize = kChunk;
         options.spacing = 10.0;

@@ -636,22 +636,11 @@ TEST_F(ErrorMeterStaticTest, RefinementsThatBoughtNothing)
 
 // ---- With detail synthesis ----
 
-std::unique_ptr<const DetailSynthesizer> makeSynthesizer(int chunkSize)
-{
-    std::vector<std::string> warnings;
-    auto set = MaterialSet::load({kMaterials / "grass.mat", kMaterials / "rock.mat"}, warnings);
-    EXPECT_TRUE(set.ok()) << set.error().message;
-    auto s = DetailSynthesizer::create(chunkSize,
-                                       {"kobbelt", 1.0, std::make_shared<const MaterialSet>(std::move(set).value())});
-    EXPECT_TRUE(s.ok()) << s.error().message;
-    return std::move(s).value();
-}
-
 TEST(ErrorMeterDetailTest, ReferenceReachesTheDeepestDynamicLevel)
 {
     constexpr int kChunk = 17;
     test::ScratchDir dir;
-    const auto synthesizer = makeSynthesizer(kChunk);
+    const auto synthesizer = test::grassAndRockSynthesizer(kChunk);
     BuildOptions options = test::testOptions(kChunk);
     options.spacing = 8.0;
     options.leafDetailError = leafDetailErrorFunction(*synthesizer);

@@ -9,6 +9,7 @@
 #include "heightfield/HeightField.h"
 #include "quadtree/MapFile.h"
 #include "quadtree/QuadtreeBuilder.h"
+#include "synthesis/DetailSynthesizer.h"
 
 #include <gtest/gtest.h>
 #include <png.h>
@@ -361,6 +362,19 @@ inline std::unique_ptr<MapFile> openMap(const std::filesystem::path& path, Reade
         return nullptr;
     }
     return std::move(map.value());
+}
+
+/// The shipped grass and rock materials under Kobbelt subdivision (the viewer's detail), for chunk size N.
+inline std::unique_ptr<const DetailSynthesizer> grassAndRockSynthesizer(int chunkSize)
+{
+    const std::filesystem::path materials = TERRAIN_MATERIALS_DIR;
+    std::vector<std::string> warnings;
+    auto set = MaterialSet::load({materials / "grass.mat", materials / "rock.mat"}, warnings);
+    EXPECT_TRUE(set.ok()) << set.error().message;
+    auto s = DetailSynthesizer::create(chunkSize,
+                                       {"kobbelt", 1.0, std::make_shared<const MaterialSet>(std::move(set).value())});
+    EXPECT_TRUE(s.ok()) << s.error().message;
+    return std::move(s).value();
 }
 
 }  // namespace terrain::test
