@@ -103,6 +103,20 @@ Expected<ErrorCommand> parseErrorCommand(const std::filesystem::path& mapFile, c
             command.levels = true;
             continue;
         }
+        if (arg == "--oracle") {
+            command.oracle = true;
+            continue;
+        }
+        if (arg.starts_with("--oracle=")) {
+            auto blocks = parseNumberIn("--oracle", arg.substr(9), 1.0, 64.0);
+            TERRAIN_TRY(blocks);
+            if (*blocks != std::floor(*blocks)) {
+                return makeError("--oracle=B: '", arg.substr(9), "' is not a whole number of blocks");
+            }
+            command.oracle = true;
+            command.oracleBlocks = static_cast<int>(*blocks);
+            continue;
+        }
         if (i + 1 >= args.size()) {
             return makeError(arg, " needs a value");
         }
@@ -232,7 +246,9 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
         path ? static_cast<std::size_t>(std::floor(path->duration() * command.fps + 1e-9)) + 1 : std::size_t{1};
     const auto trianglesPerNode = static_cast<std::uint64_t>(trianglesPerChunk(static_cast<int>(header.chunkSize)));
     PixelHistogram histogram;
-    std::vector<std::uint64_t> triangles;
+    std::vector<std::uint64_t> triangles, oracleTriangles;
+    double oracleWorst = 0.0;
+    std::uint64_t oracleRefined = 0, oracleRefinedWithinTau = 0;
     double worst = 0.0, sum = 0.0;
     std::uint64_t points = 0, refined = 0, refinedWithinTau = 0;
     std::size_t framesOverTau = 0, framesShort = 0;
@@ -323,6 +339,21 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
         std::fprintf(out, "%7zu %8.2f %8.3f %8.3f %9.4f %10llu %6zu %8zu %11zu  %s %.3f\n", frame, t, e.maxPixels,
                      e.p99Pixels, e.meanPixels, static_cast<unsigned long long>(triangles.back()), e.nodes, e.refined,
                      e.refinedWithinTau, e.worstNode.toString().c_str(), e.maxMetres);
+        if (command.oracle) {
+            auto oracle = meter.oracle(camera, tau, command.oracleBlocks);
+            if (!oracle.ok()) {
+                return fail(oracle.error().message);
+            }
+            oracleTriangles.push_back(oracle->nodes.size() * trianglesPerNode);
+            oracleWorst = std::max(oracleWorst, oracle->maxPixels);
+            oracleRefined += oracle->refined.size();
+            oracleRefinedWithinTau += oracle->refinedWithinTau;
+            std::fprintf(out,
+                         "        oracle: %zu nodes, %llu triangles, max %.3f px, %zu refined, %zu within tau, %zu "
+                         "over tau\n",
+                         oracle->nodes.size(), static_cast<unsigned long long>(oracleTriangles.back()),
+                         oracle->maxPixels, oracle->refined.size(), oracle->refinedWithinTau, oracle->overTau);
+        }
         std::fflush(out);
     }
     if (framesShort > 0) {
@@ -359,6 +390,25 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
                  static_cast<unsigned long long>(refinedWithinTau), static_cast<unsigned long long>(refined),
                  refined ? 100.0 * static_cast<double>(refinedWithinTau) / static_cast<double>(refined) : 0.0);
     std::fprintf(out, "reference: %llu node groups made\n", static_cast<unsigned long long>(meter.groupsMade()));
+    if (command.oracle) {
+        std::vector<std::uint64_t> sortedOracle = oracleTriangles;
+        std::sort(sortedOracle.begin(), sortedOracle.end());
+        const std::uint64_t oracleMedian = sortedOracle[(sortedOracle.size() - 1) / 2];
+        std::fprintf(
+            out,
+            "oracle (%s, morph 1): triangles median %llu, max %llu, max %.3f px; the selection "
+            "draws %.2fx the oracle's median; its refinements that bought nothing: %llu of %llu (%.1f%%)\n",
+            command.oracleBlocks == 0
+                ? "measured errors in pixels"
+                : (std::to_string(command.oracleBlocks) + "x" + std::to_string(command.oracleBlocks) +
+                   " blocks' measured metres at their bound distance")
+                      .c_str(),
+            static_cast<unsigned long long>(oracleMedian), static_cast<unsigned long long>(sortedOracle.back()),
+            oracleWorst, oracleMedian ? static_cast<double>(median) / static_cast<double>(oracleMedian) : 0.0,
+            static_cast<unsigned long long>(oracleRefinedWithinTau), static_cast<unsigned long long>(oracleRefined),
+            oracleRefined ? 100.0 * static_cast<double>(oracleRefinedWithinTau) / static_cast<double>(oracleRefined)
+                          : 0.0);
+    }
     std::fprintf(out,
                  "error: max %.3f px, p99 %.3f px, mean %.4f px over %zu frames; triangles median %llu, max %llu\n",
                  worst, histogram.percentile(0.99), points ? sum / static_cast<double>(points) : 0.0, frames,

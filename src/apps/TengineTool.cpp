@@ -47,11 +47,14 @@ constexpr const char* kUsage = R"(usage: tengine-tool COMMAND FILE.map [argument
                           as fast as possible) and print loading and selection figures
 
   error FILE.map [CONFIG.cfg...] (--camera X,Y,Z,YAW,PITCH | --path FILE.path) [--tau T] [--size WxH]
-               [--fov DEG] [--fps F] [--set key=value]...
+               [--fov DEG] [--fps F] [--set key=value]... [--levels] [--oracle[=B]]
                           measure the screen-space error the viewer draws: its options (configs and --set,
                           applied in order), materials and morph, every frame loaded to completion, against
                           the tree refined until a level changes the surface by < tau/8 px (static-only
-                          maps: the input data); one line per frame, then the summary
+                          maps: the input data); one line per frame, then the summary. --levels: bounds
+                          against measured errors per level; --oracle: the fewest whole nodes within tau by
+                          their measured errors, per frame (the floor for chunked LOD; =B: B x B blocks'
+                          metres projected as the selection projects bounds)
 
 Options: --reader stream|memory_mapped (default stream)
 )";

@@ -10,6 +10,41 @@
 
 namespace terrain {
 
+namespace {
+
+/// Where a descendant's samples fall in an ancestor's local grid: sample (i, j) of `node` is at
+/// (offsetX + i * scale, offsetY + j * scale) in the ancestor's samples. Exact (dyadic).
+struct LocalMap {
+    double offsetX = 0.0, offsetY = 0.0, scale = 1.0;
+
+    static LocalMap of(const NodeId& node, const NodeId& ancestor, int chunkSize)
+    {
+        const int k = node.level - ancestor.level;
+        TERRAIN_ASSERT(k >= 0);
+        const double n1 = chunkSize - 1.0;
+        const double scale = std::ldexp(1.0, -k);
+        const double dx = static_cast<double>(node.x) - std::ldexp(static_cast<double>(ancestor.x), k);
+        const double dy = static_cast<double>(node.y) - std::ldexp(static_cast<double>(ancestor.y), k);
+        return {dx * n1 * scale, dy * n1 * scale, scale};
+    }
+};
+
+/// A refined node being checked for "bought nothing".
+struct RefinedNode {
+    NodePtr node;
+    double worst = 0.0;
+    bool measured = false;
+};
+
+/// Whether `node` is `ancestor` or lies below it.
+bool descends(const NodeId& node, const NodeId& ancestor)
+{
+    const int k = node.level - ancestor.level;
+    return k >= 0 && (node.x >> k) == ancestor.x && (node.y >> k) == ancestor.y;
+}
+
+}  // namespace
+
 VerticalSegmentProjector::VerticalSegmentProjector(const Camera& camera)
     : mMatrix(camera.projection() * camera.viewRotation()),
       mEye(camera.position),
@@ -74,79 +109,105 @@ void ErrorMeter::trimCache()
     }
 }
 
-namespace {
-
-/// Where a descendant's samples fall in an ancestor's local grid: sample (i, j) of `node` is at
-/// (offsetX + i * scale, offsetY + j * scale) in the ancestor's samples. Exact (dyadic).
-struct LocalMap {
-    double offsetX = 0.0, offsetY = 0.0, scale = 1.0;
-
-    static LocalMap of(const NodeId& node, const NodeId& ancestor, int chunkSize)
+/// The frame's projector and frustum with the map's grid.
+struct ErrorMeter::View {
+    View(const MapHeader& header, const QuadtreeExtent& mapExtent, const Camera& camera)
+        : projector(camera),
+          frustum(Frustum::fromCamera(camera)),
+          extent(mapExtent),
+          n(static_cast<int>(header.chunkSize)),
+          w(windowSize(n)),
+          offset(header.heightOffset)
     {
-        const int k = node.level - ancestor.level;
-        TERRAIN_ASSERT(k >= 0);
-        const double n1 = chunkSize - 1.0;
-        const double scale = std::ldexp(1.0, -k);
-        const double dx = static_cast<double>(node.x) - std::ldexp(static_cast<double>(ancestor.x), k);
-        const double dy = static_cast<double>(node.y) - std::ldexp(static_cast<double>(ancestor.y), k);
-        return {dx * n1 * scale, dy * n1 * scale, scale};
     }
+
+    double worldX(const NodeId& id, int i) const
+    {
+        return extent.originX +
+               (static_cast<double>(id.x) + static_cast<double>(i) / (n - 1)) * extent.nodeSize(id.level);
+    }
+    double worldY(const NodeId& id, int j) const
+    {
+        return extent.originY +
+               (static_cast<double>(id.y) + static_cast<double>(j) / (n - 1)) * extent.nodeSize(id.level);
+    }
+    double sample(const NodeData& node, int i, int j) const
+    {
+        return node.heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
+    }
+
+    /// Largest projected change from `parent`'s surface to `child`'s over the child's samples in view.
+    double change(const NodeData& child, const NodeData& parent) const
+    {
+        const LocalMap local = LocalMap::of(child.id, parent.id, n);
+        double worst = 0.0;
+        for (int j = 0; j < n; ++j) {
+            const double y = worldY(child.id, j);
+            for (int i = 0; i < n; ++i) {
+                const double zc = sample(child, i, j);
+                const double zp =
+                    nodeSurfaceAt(parent, n, local.offsetX + i * local.scale, local.offsetY + j * local.scale);
+                worst = std::max(worst, projector.pixels(worldX(child.id, i), y, offset + zc, zp - zc));
+            }
+        }
+        return worst;
+    }
+
+    VerticalSegmentProjector projector;
+    Frustum frustum;
+    const QuadtreeExtent& extent;
+    int n, w;
+    double offset;
 };
 
-/// A refined node being checked for "bought nothing".
-struct RefinedNode {
-    NodePtr node;
-    double worst = 0.0;
-    bool measured = false;
-};
-
-}  // namespace
+Status ErrorMeter::referenceLeaves(const View& view, const NodePtr& from, int maxDepthBelow,
+                                   std::vector<NodePtr>& leaves)
+{
+    std::vector<std::pair<NodePtr, int>> stack;  // (node, levels below `from`)
+    stack.emplace_back(from, 0);
+    while (!stack.empty()) {
+        auto [at, depth] = stack.back();
+        stack.pop_back();
+        if (!at->hasChildren || depth >= maxDepthBelow) {
+            leaves.push_back(at);
+            continue;
+        }
+        auto group = children(*at);
+        TERRAIN_TRY(group);
+        for (const NodePtr& child : **group) {
+            if (!view.frustum.intersects(mExtent.box(child->id, child->zMin, child->zMax))) {
+                continue;
+            }
+            // Static levels are the data: always followed. Dynamic ones until they stop changing.
+            const bool leaf =
+                !child->hasChildren || (!child->isStatic && view.change(*child, *at) < mOptions.convergencePixels);
+            if (leaf) {
+                leaves.push_back(child);
+            } else {
+                stack.emplace_back(child, depth + 1);
+            }
+        }
+    }
+    return {};
+}
 
 Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const ResidentNodeLookup& drawn,
                                          const Camera& camera, double tauPixels)
 {
     TERRAIN_EXPECTS(tauPixels > 0.0, "tau must be > 0 pixels");
     camera.expectValid();
-    const VerticalSegmentProjector projector(camera);
-    const Frustum frustum = Frustum::fromCamera(camera);
-    const int n = static_cast<int>(mHeader.chunkSize);
-    const int w = windowSize(n);
-    const double offset = mHeader.heightOffset;
-    const double threshold = mOptions.convergencePixels;
+    const View view(mHeader, mExtent, camera);
+    const VerticalSegmentProjector& projector = view.projector;
+    const int n = view.n;
+    const double offset = view.offset;
 
     FrameError out;
     out.nodes = selection.nodes.size();
     double sum = 0.0;
     std::unordered_map<std::uint64_t, RefinedNode> refined;
     std::vector<NodePtr> leaves;
-    std::vector<std::pair<NodePtr, int>> stack;  // (node, levels below the selected node)
     std::vector<RefinedNode*> ancestors;
     std::vector<LocalMap> inAncestors;
-
-    auto worldX = [&](const NodeId& id, int i) {
-        const double size = mExtent.nodeSize(id.level);
-        return mExtent.originX + (static_cast<double>(id.x) + static_cast<double>(i) / (n - 1)) * size;
-    };
-    auto worldY = [&](const NodeId& id, int j) {
-        const double size = mExtent.nodeSize(id.level);
-        return mExtent.originY + (static_cast<double>(id.y) + static_cast<double>(j) / (n - 1)) * size;
-    };
-    // Largest projected change from `parent`'s surface to `child`'s over the child's samples in view.
-    auto change = [&](const NodeData& child, const NodeData& parent) {
-        const LocalMap local = LocalMap::of(child.id, parent.id, n);
-        double worst = 0.0;
-        for (int j = 0; j < n; ++j) {
-            const double y = worldY(child.id, j);
-            for (int i = 0; i < n; ++i) {
-                const double zc = child.heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
-                const double zp =
-                    nodeSurfaceAt(parent, n, local.offsetX + i * local.scale, local.offsetY + j * local.scale);
-                const double px = projector.pixels(worldX(child.id, i), y, offset + zc, zp - zc);
-                worst = std::max(worst, px);
-            }
-        }
-        return worst;
-    };
 
     for (const SelectedNode& selected : selection.nodes) {
         ++mStamp;
@@ -158,32 +219,8 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
             parent = drawn(selected.id.parent());
             TERRAIN_EXPECTS(parent != nullptr, "a morphing node's parent must be resident");
         }
-        // The reference leaves below the selected node.
         leaves.clear();
-        stack.clear();
-        stack.emplace_back(node, 0);
-        while (!stack.empty()) {
-            auto [at, depth] = stack.back();
-            stack.pop_back();
-            if (!at->hasChildren || depth >= mOptions.maxDepthBelow) {
-                leaves.push_back(at);
-                continue;
-            }
-            auto group = children(*at);
-            TERRAIN_TRY(group);
-            for (const NodePtr& child : **group) {
-                if (!frustum.intersects(mExtent.box(child->id, child->zMin, child->zMax))) {
-                    continue;
-                }
-                // Static levels are the data: always followed. Dynamic ones until they stop changing.
-                const bool leaf = !child->hasChildren || (!child->isStatic && change(*child, *at) < threshold);
-                if (leaf) {
-                    leaves.push_back(child);
-                } else {
-                    stack.emplace_back(child, depth + 1);
-                }
-            }
-        }
+        TERRAIN_TRY(referenceLeaves(view, node, mOptions.maxDepthBelow, leaves));
         out.referenceNodes += leaves.size();
 
         // The refined nodes above it, checked while they may still be within tau.
@@ -210,11 +247,11 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
                 inAncestors.push_back(LocalMap::of(leaf->id, a->node->id, n));
             }
             for (int j = 0; j < n; ++j) {
-                const double y = worldY(leaf->id, j);
+                const double y = view.worldY(leaf->id, j);
                 const double ly = inNode.offsetY + j * inNode.scale;
                 for (int i = 0; i < n; ++i) {
-                    const double x = worldX(leaf->id, i);
-                    const double ref = leaf->heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
+                    const double x = view.worldX(leaf->id, i);
+                    const double ref = view.sample(*leaf, i, j);
                     const double lx = inNode.offsetX + i * inNode.scale;
                     double z = nodeSurfaceAt(*node, n, lx, ly);
                     const double own = std::abs(ref - z);
@@ -270,6 +307,130 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
         std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(at), sorted.end());
         out.p99Pixels = sorted[at];
     }
+    return out;
+}
+
+Expected<OracleSelection> ErrorMeter::oracle(const Camera& camera, double tauPixels, int blocks)
+{
+    TERRAIN_EXPECTS(tauPixels > 0.0, "tau must be > 0 pixels");
+    TERRAIN_EXPECTS(blocks >= 0 && blocks <= 64, "the oracle's blocks per side must be in [0, 64]");
+    camera.expectValid();
+    const View view(mHeader, mExtent, camera);
+    const int n = view.n;
+    if (!mRoot) {
+        auto root = mSource.loadRoot();
+        TERRAIN_TRY(root);
+        mRoot = std::move(root).value();
+    }
+    ++mStamp;
+    OracleSelection out;
+    if (!view.frustum.intersects(mExtent.box(mRoot->id, mRoot->zMin, mRoot->zMax))) {
+        return out;
+    }
+    // One reference for the whole frame. Its convergence test compares a child with its parent only, so the
+    // leaves below any node are the ones a reference made from that node would have (measure() starts at a
+    // selected node and always looks at its children: it may follow a dynamic level a little further).
+    std::vector<NodePtr> leaves;
+    TERRAIN_TRY(referenceLeaves(view, mRoot, NodeId::kMaxLevel, leaves));
+    // Deeper leaves lie nearer the camera, where a coarse node's error is largest: looked at first, they find a
+    // node over tau after few points.
+    std::stable_sort(leaves.begin(), leaves.end(),
+                     [](const NodePtr& a, const NodePtr& b) { return a->id.level > b->id.level; });
+
+    struct Visit {
+        NodePtr node;
+        std::vector<NodePtr> leaves;  ///< the reference leaves in view below it (or it)
+    };
+    std::vector<Visit> stack;
+    stack.push_back({mRoot, std::move(leaves)});
+    // Pixels per metre of a bound at lodDistance 1 (eq. 3.3: refined when lodDistance < deltaC * C).
+    const double boundPixels = tauPixels * lodDistanceFactor(camera, tauPixels);
+    const double k = verticalErrorFactor(camera);
+    std::vector<double> blockMetres(static_cast<std::size_t>(blocks * blocks));
+    while (!stack.empty()) {
+        Visit visit = std::move(stack.back());
+        stack.pop_back();
+        const NodeData& node = *visit.node;
+        double worst = -1.0;        // pixels, over the points in view; stays < 0 without one
+        double worstPixels = -1.0;  // the same at the points' own distances, for blocks > 0
+        std::fill(blockMetres.begin(), blockMetres.end(), -1.0);
+        const double blockSide = blocks > 0 ? (n - 1.0) / blocks : 1.0;
+        for (const NodePtr& leaf : visit.leaves) {
+            // A reference leaf never lies above a visited node: a node is refined only when over tau, and a
+            // reference leaf is within any tau of itself.
+            const LocalMap inNode = LocalMap::of(leaf->id, node.id, n);
+            for (int j = 0; j < n && worst <= tauPixels; ++j) {
+                const double y = view.worldY(leaf->id, j);
+                const double ly = inNode.offsetY + j * inNode.scale;
+                for (int i = 0; i < n; ++i) {
+                    const double ref = view.sample(*leaf, i, j);
+                    const double lx = inNode.offsetX + i * inNode.scale;
+                    const double z = nodeSurfaceAt(node, n, lx, ly);
+                    const double px = view.projector.pixels(view.worldX(leaf->id, i), y, view.offset + z, ref - z);
+                    if (blocks == 0 || px < 0.0) {
+                        worst = std::max(worst, px);
+                        continue;
+                    }
+                    worst = std::max(worst, 0.0);
+                    worstPixels = std::max(worstPixels, px);
+                    // A point on a block edge belongs to the blocks on both sides.
+                    const int bi0 = std::max(0, static_cast<int>(std::ceil(lx / blockSide)) - 1);
+                    const int bi1 = std::min(blocks - 1, static_cast<int>(std::floor(lx / blockSide)));
+                    const int bj0 = std::max(0, static_cast<int>(std::ceil(ly / blockSide)) - 1);
+                    const int bj1 = std::min(blocks - 1, static_cast<int>(std::floor(ly / blockSide)));
+                    for (int bj = bj0; bj <= bj1; ++bj) {
+                        for (int bi = bi0; bi <= bi1; ++bi) {
+                            double& b = blockMetres[static_cast<std::size_t>(bj * blocks + bi)];
+                            b = std::max(b, std::abs(ref - z));
+                        }
+                    }
+                }
+            }
+            if (worst > tauPixels) {
+                break;
+            }
+        }
+        if (blocks > 0 && worst >= 0.0) {
+            const double size = mExtent.nodeSize(node.id.level) / blocks;
+            const Aabb box = mExtent.box(node.id, node.zMin, node.zMax);
+            for (int bj = 0; bj < blocks; ++bj) {
+                for (int bi = 0; bi < blocks; ++bi) {
+                    const double metres = blockMetres[static_cast<std::size_t>(bj * blocks + bi)];
+                    if (metres < 0.0) {
+                        continue;
+                    }
+                    const Aabb block{{box.lo.x + bi * size, box.lo.y + bj * size, box.lo.z},
+                                     {box.lo.x + (bi + 1) * size, box.lo.y + (bj + 1) * size, box.hi.z}};
+                    worst = std::max(worst, metres * boundPixels / lodDistance(camera, k, block));
+                }
+            }
+        }
+        if (worst < 0.0) {
+            continue;  // nothing of it in view
+        }
+        if (worst <= tauPixels || !node.hasChildren) {
+            out.maxPixels = std::max(out.maxPixels, worst);
+            out.overTau += worst > tauPixels ? 1 : 0;
+            out.nodes.push_back(std::move(visit.node));
+            continue;
+        }
+        auto group = children(node);
+        TERRAIN_TRY(group);
+        for (const NodePtr& child : **group) {
+            Visit below{child, {}};
+            for (const NodePtr& leaf : visit.leaves) {
+                if (descends(leaf->id, child->id)) {
+                    below.leaves.push_back(leaf);
+                }
+            }
+            if (!below.leaves.empty()) {
+                stack.push_back(std::move(below));
+            }
+        }
+        out.refinedWithinTau += blocks > 0 && worstPixels <= tauPixels ? 1 : 0;
+        out.refined.push_back(std::move(visit.node));
+    }
+    trimCache();
     return out;
 }
 

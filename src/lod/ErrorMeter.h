@@ -67,8 +67,20 @@ struct FrameError {
     std::vector<BoundCheck> bounds;
 };
 
-/// The drawn nodes' data: the streamer's resident nodes (TerrainStreamer::node). Null when not resident.
-using ResidentNodeLookup = std::function<NodePtr(const NodeId&)>;
+/// The fewest chunked nodes that draw a frame within tau, picked with the measured errors instead of bounds:
+/// from the root down, a node in view whose own surface (morph 1) is within tau of the reference at every one
+/// of its points in view is drawn, any other is replaced by its children in view. No selection of whole
+/// nodes that are each within tau has fewer nodes in view (each of its nodes holds one of these or lies
+/// inside one), so this is the floor that any bound-driven chunked selection of the frame stands on.
+struct OracleSelection {
+    std::vector<NodePtr> nodes;    ///< drawn
+    std::vector<NodePtr> refined;  ///< their ancestors in view, every one over tau
+    double maxPixels = 0.0;        ///< the worst drawn node's own error
+    std::size_t overTau = 0;       ///< drawn nodes over tau because the source has nothing finer there
+    /// Refined nodes whose own error in pixels at their points' distances was within tau: refinements that
+    /// bought nothing (none when the criterion is that error itself, blocks = 0).
+    std::size_t refinedWithinTau = 0;
+};
 
 class ErrorMeter {
 public:
@@ -82,6 +94,15 @@ public:
     Expected<FrameError> measure(const LodSelection& selection, const ResidentNodeLookup& drawn, const Camera& camera,
                                  double tauPixels);
 
+    /// The oracle's selection for `camera` at `tauPixels` > 0 (see OracleSelection), from the same reference
+    /// as measure(). With `blocks` = 0 a node's error is its largest error in pixels at its points' own
+    /// distances. With `blocks` = B >= 1 the node is cut into B x B blocks and its error is the largest over
+    /// its blocks of the block's measured vertical error in metres projected as the selection projects a
+    /// bound (at lodDistance() of the block's square with the node's height range): what bounds as tight as
+    /// the measurement would buy, per node (B = 1) or per block. Errors: a node that cannot be loaded (file
+    /// and node named).
+    Expected<OracleSelection> oracle(const Camera& camera, double tauPixels, int blocks = 0);
+
     /// Reference groups made so far (statistics).
     std::uint64_t groupsMade() const { return mGroupsMade; }
 
@@ -90,8 +111,11 @@ private:
         ChildNodes nodes;
         std::uint64_t used = 0;
     };
+    struct View;  // the frame's projector and frustum with the map's grid (ErrorMeter.cpp)
     Expected<const ChildNodes*> children(const NodeData& parent);
     void trimCache();
+    /// Appends the reference leaves in view below `from` (itself when it has no children in view) to `leaves`.
+    Status referenceLeaves(const View& view, const NodePtr& from, int maxDepthBelow, std::vector<NodePtr>& leaves);
 
     MapHeader mHeader;
     QuadtreeExtent mExtent;
@@ -100,6 +124,7 @@ private:
     std::unordered_map<std::uint64_t, CachedGroup> mCache;
     std::uint64_t mStamp = 0;
     std::uint64_t mGroupsMade = 0;
+    NodePtr mRoot;  ///< for oracle(), loaded once
 };
 
 /// Screen length in pixels of vertical segments seen by a camera: the projection of (x, y, z) and

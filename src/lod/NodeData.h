@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -31,6 +32,9 @@ struct NodeData {
 
 using NodePtr = std::shared_ptr<const NodeData>;
 using ChildNodes = std::array<NodePtr, 4>;
+
+/// A node's resident data (the streamer's cache: TerrainStreamer::node), null when it is not resident.
+using ResidentNodeLookup = std::function<NodePtr(const NodeId&)>;
 
 /// Where nodes come from: the map (static) and synthesis (dynamic).
 class NodeSource {

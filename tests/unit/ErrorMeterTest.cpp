@@ -634,6 +634,78 @@ TEST_F(ErrorMeterStaticTest, RefinementsThatBoughtNothing)
     expectSameMaximum(measured->maxPixels, root.maxPixels, "the root alone");
 }
 
+/// The oracle (ErrorMeter::oracle) against brute force: every node it draws is within tau over every input
+/// sample in view (the decoded map against the input, not the meter), every node it refined was over tau,
+/// and the selection the bounds make has at least as many nodes.
+TEST_F(ErrorMeterStaticTest, OracleDrawsTheFewestNodesWithinTau)
+{
+    const double size = header().nodeSizeAt(0);
+    struct Case {
+        Camera camera;
+        double tau;
+    };
+    const std::vector<Case> cases = {
+        {groundCamera(0.5 * size, 0.45 * size, 1500.0, 0.0, -90.0), 2.0},
+        {groundCamera(0.3 * size, 0.25 * size, 300.0, 20.0, -40.0), 4.0},
+        {groundCamera(0.2 * size, 0.15 * size, 25.0, 40.0, -15.0), 2.0},
+        {groundCamera(0.2 * size, 0.15 * size, 25.0, 40.0, -15.0), 0.5},
+    };
+    int fewer = 0;
+    for (const auto& [camera, tau] : cases) {
+        ErrorMeter meter(header(), *mSource, {tau / 8.0, 1024, 16});
+        auto oracle = meter.oracle(camera, tau);
+        ASSERT_TRUE(oracle.ok()) << oracle.error().message;
+        ASSERT_FALSE(oracle->nodes.empty());
+        EXPECT_EQ(oracle->overTau, 0u) << "the input's own grid is within any tau";
+
+        LodSelection selection;
+        std::unordered_map<std::uint64_t, NodePtr> nodes;
+        for (const NodePtr& node : oracle->nodes) {
+            selection.nodes.push_back({node->id, 1.0f});
+            nodes.emplace(node->id.key(), node);
+        }
+        for (const NodePtr& node : oracle->refined) {
+            nodes.emplace(node->id.key(), node);
+        }
+        // The drawn nodes tile the view: disjoint, and no refined node among them.
+        for (const NodePtr& node : oracle->nodes) {
+            for (NodeId up = node->id; !up.isRoot();) {
+                up = up.parent();
+                ASSERT_TRUE(nodes.count(up.key()))
+                    << "an oracle node's ancestor " << up.toString() << " is not refined";
+                for (const NodePtr& other : oracle->nodes) {
+                    ASSERT_FALSE(other->id == up) << other->id.toString() << " lies above another drawn node";
+                }
+            }
+        }
+        // Brute force: each drawn node over every input sample in its square, each refined node over those of
+        // the drawn nodes below it; the meter agrees on what was refined.
+        const BruteError brute = bruteForceDecoded(selection, camera, tau);
+        EXPECT_LE(brute.maxPixels, tau);
+        EXPECT_NEAR(oracle->maxPixels, brute.maxPixels, 1e-6 * brute.maxPixels + 1e-6);
+        auto measured = meter.measure(
+            selection,
+            [&nodes](const NodeId& id) {
+                auto it = nodes.find(id.key());
+                return it == nodes.end() ? NodePtr{} : it->second;
+            },
+            camera, tau);
+        ASSERT_TRUE(measured.ok()) << measured.error().message;
+        EXPECT_EQ(measured->refined, oracle->refined.size());
+        EXPECT_EQ(measured->refinedWithinTau, 0u) << "the oracle refines only nodes over tau";
+        EXPECT_LE(measured->maxPixels, tau);
+
+        // The bound-driven selection, whose frame is within tau too, draws at least as many nodes.
+        settle(*mStreamer, camera, tau);
+        EXPECT_GE(mStreamer->selection().nodes.size(), oracle->nodes.size());
+        fewer += mStreamer->selection().nodes.size() > oracle->nodes.size() ? 1 : 0;
+        std::printf("tau %.1f: oracle %zu nodes (%zu refined, max %.4f px), bounds %zu nodes\n", tau,
+                    oracle->nodes.size(), oracle->refined.size(), oracle->maxPixels,
+                    mStreamer->selection().nodes.size());
+    }
+    EXPECT_GE(fewer, 2) << "the bounds are loose somewhere: the oracle must draw fewer nodes in some case";
+}
+
 // ---- With detail synthesis ----
 
 TEST(ErrorMeterDetailTest, ReferenceReachesTheDeepestDynamicLevel)
