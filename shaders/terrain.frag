@@ -1,18 +1,20 @@
 #version 330 core
 // Chunk fragment program: the node's texture blended with its parent's by the morph factor (eq. 3.6,
-// textural morphing), lit by the sun from the morphed normal, hazed with distance.
+// textural morphing), lit by the sun from the morphed normal, hazed with distance. The node's data comes
+// from the vertex program (flat: the same for the whole node).
 
 in vec3 vRelative;
 in vec3 vNormal;
 in vec2 vNodeUv;
 in vec2 vLocal;
 in vec4 vMaterials;
+flat in float vMorph;
+flat in vec2 vParentOffset;  // the node's quadrant in the parent's square: (0 or 0.5, 0 or 0.5)
+flat in ivec2 vSlots;        // own, parent's layer of uColour
 
-uniform sampler2D uColour;        // the node's texture, corner texels centred on the corners (3.2.7)
-uniform sampler2D uParentColour;  // the parent's texture
-uniform vec2 uParentOffset;       // the node's quadrant in the parent's square: (0 or 0.5, 0 or 0.5)
-uniform float uTexels;            // texels per side
-uniform float uMorph;
+uniform sampler2DArray uColour;   // per slot: the node's texture, corner texels centred on the corners (3.2.7)
+uniform float uTexels;            // texels per side of a node's texture
+uniform float uLayerTexels;       // texels per side of a layer (>= uTexels: DXT1 pads to a multiple of 4)
 uniform vec3 uSunDirection;       // unit, towards the sun
 uniform vec3 uSunColour;
 uniform vec3 uAmbient;
@@ -29,10 +31,12 @@ const int kMaxLayers = 8;
 const float kDetailContrast = 0.6;
 // LAYER_COUNT (1..kMaxLayers) is defined by the renderer: a loop of constant length, unrolled. With
 // DETAIL_TINT_ONLY (nodes beyond every layer's fade) the layers are left out and only the tint applies.
+#ifndef DETAIL_TINT_ONLY
+flat in vec4 vLayerOrigin[(LAYER_COUNT + 1) / 2];  // the node's corner in repeats, fractional part, 2 a vec4
+#endif
 uniform sampler2DArray uDetail;
 uniform vec4 uLayerMaterialMask[kMaxLayers];  // which material a layer belongs to, as a one-hot vec4
 uniform float uLayerScale[kMaxLayers];   // 1 / metres per repeat
-uniform vec2 uLayerOrigin[kMaxLayers];   // the node's corner in repeats, fractional part (per node)
 uniform vec4 uMaterialTintColumns[3];    // r, g, b of the 4 materials' tints, brightness-preserving and applied at
                                          // kTintStrength (TerrainRenderer.cpp): the map's colours stay the base
 
@@ -44,15 +48,18 @@ vec3 detailFactor()
     // distance, so the switch leaves no seam.
     vec4 layers = vec4(1.0);
 #ifndef DETAIL_TINT_ONLY
+    {
     float distance = length(vRelative);
     for (int k = 0; k < LAYER_COUNT; ++k) {
         // Gray 0.5 is neutral; kDetailContrast scales the rest, so the tile modulates the node's colour
         // rather than replacing it. Faded out between 10 and 40 repeats away: farther, the repetition of
         // the tile would show as a regular pattern, and the node's own texture carries what matters there.
         float scale = uLayerScale[k];
-        float g = 2.0 * texture(uDetail, vec3(uLayerOrigin[k] + vLocal * scale, float(k))).r - 1.0;
+        vec2 origin = (k & 1) == 0 ? vLayerOrigin[k / 2].xy : vLayerOrigin[k / 2].zw;
+        float g = 2.0 * texture(uDetail, vec3(origin + vLocal * scale, float(k))).r - 1.0;
         float amount = kDetailContrast * (1.0 - smoothstep(10.0, 40.0, distance * scale));
         layers *= vec4(1.0) + uLayerMaterialMask[k] * (amount * g);
+    }
     }
 #endif
     float total = dot(vMaterials, vec4(1.0));
@@ -65,7 +72,7 @@ vec3 detailFactor()
 
 out vec4 fragColour;
 
-vec2 texelCentre(vec2 p) { return (p * (uTexels - 1.0) + 0.5) / uTexels; }
+vec2 texelCentre(vec2 p) { return (p * (uTexels - 1.0) + 0.5) / uLayerTexels; }
 
 void main()
 {
@@ -81,9 +88,9 @@ void main()
         fragColour = vec4(0.05, 0.05, 0.05, 1.0);
         return;
     }
-    vec3 own = texture(uColour, texelCentre(vNodeUv)).rgb;
-    vec3 parent = texture(uParentColour, texelCentre(uParentOffset + 0.5 * vNodeUv)).rgb;
-    vec3 albedo = mix(parent, own, uMorph);
+    vec3 own = texture(uColour, vec3(texelCentre(vNodeUv), float(vSlots.x))).rgb;
+    vec3 parent = texture(uColour, vec3(texelCentre(vParentOffset + 0.5 * vNodeUv), float(vSlots.y))).rgb;
+    vec3 albedo = mix(parent, own, vMorph);
 #ifdef DETAIL
     albedo *= detailFactor();
 #endif

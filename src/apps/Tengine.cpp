@@ -171,13 +171,14 @@ private:
 
 /// Video mode's frames.csv columns. Per frame: cache_hits, cache_misses, requests_made, requests_completed
 /// and requests_failed (groups that could not be loaded); now: cache_nodes, requests_pending (queued plus
-/// loading), resident_bytes (the process's resident set) and deepest_level (of the nodes drawn; below the
-/// map's levels - 1 they are dynamic); since the start: requests_pending_peak (the most queued plus loading
-/// at once, NodeServerStats::peakPending). New columns go at the end: readers cut columns by position.
+/// loading), resident_bytes (the process's resident set), deepest_level (of the nodes drawn; below the
+/// map's levels - 1 they are dynamic) and draw_calls (for the terrain: 1); since the start: requests_pending_peak (the
+/// most queued plus loading at once, NodeServerStats::peakPending). New columns go at the end: readers cut columns by
+/// position.
 constexpr const char* kCsvHeader =
     "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
     "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,resident_bytes,"
-    "deepest_level";
+    "deepest_level,draw_calls";
 
 /// Everything the viewer draws with, opened from the options in dependency order. Not movable: the source
 /// refers to the map and the synthesizer, the streamer to the source.
@@ -260,11 +261,19 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
     log(scene->window->description());
     const std::filesystem::path shaders =
         o.shaderPath.empty() ? std::filesystem::path(TERRAIN_SHADER_DIR) : o.shaderPath;
-    auto renderer = TerrainRenderer::create(shaders, header, o.vertexCacheSize, materials);
+    auto renderer =
+        TerrainRenderer::create(shaders, header, o.vertexCacheSize,
+                                {static_cast<std::size_t>(o.quadCacheSize), o.nodeTextureCompression}, materials);
     if (!renderer.ok()) {
         return fail(renderer.error().message);
     }
     scene->renderer = std::move(renderer).value();
+    {
+        const SlotBytes& b = scene->renderer->slotBytes();
+        log("node pools: " + std::to_string(scene->renderer->slots()) + " slots of " + std::to_string(b.total()) +
+            " bytes (heights " + std::to_string(b.heights) + ", colour " + std::to_string(b.colour) +
+            ", material weights " + std::to_string(b.weights) + ", constants " + std::to_string(b.constants) + ")");
+    }
     auto overlay = TextOverlay::create(shaders);
     if (!overlay.ok()) {
         return fail(overlay.error().message);
@@ -284,6 +293,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
     }
     scene->streamer = std::move(streamer).value();
     scene->streamer->onLoadError([&log](const std::string& message) { log(message); });
+    scene->streamer->onEvict([renderer = scene->renderer.get()](const NodeData& node) { renderer->release(node.id); });
     return scene;
 }
 
@@ -372,7 +382,7 @@ public:
             << ',' << render.dynamicNodes << ',' << cache.size() << ',' << cache.hits() - mHits << ','
             << cache.misses() - mMisses << ',' << server.requested - mRequested << ',' << server.completed - mCompleted
             << ',' << server.queued + server.inFlight << ',' << server.failed - mFailed << ',' << server.peakPending
-            << ',' << currentResidentBytes() << ',' << deepestLevel;
+            << ',' << currentResidentBytes() << ',' << deepestLevel << ',' << render.drawCalls;
         remember(scene);
         return row.str();
     }
@@ -522,7 +532,9 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
                 frameStats = scene->streamer->update(camera, o.lodError, speed);
             }
         }
-        const RenderStats renderStats = scene->renderer->draw(*scene->streamer, camera, style);
+        const TerrainStreamer& streamer = *scene->streamer;
+        const RenderStats renderStats = scene->renderer->draw(
+            streamer.selection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, style);
         if (o.drawUserInterface) {
             scene->overlay->draw(overlayLines(video, frame, time, rate.framesPerSecond(), renderStats, *scene, camera,
                                               o.lodError, style.wireframe),

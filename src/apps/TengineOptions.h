@@ -67,6 +67,7 @@ struct TengineOptions {
     bool drawSky = true;                      ///< draw_sky
     bool wireframe = false;                   ///< wireframe
     bool geomorph = true;                     ///< geomorph: off draws every node at its own detail (pops)
+    bool nodeTextureCompression = false;      ///< node_texture_compression: DXT1 colour textures on the GPU
     double sunAzimuth = 135.0;                ///< sun_azimuth: degrees in [0, 360], clockwise from north
     double sunElevation = 35.0;               ///< sun_elevation: degrees in [-90, 90] above the horizon
     double hazeDistance = 60000.0;            ///< haze_distance: metres, >= 0; 0 = no haze

@@ -73,8 +73,14 @@ bool NodeCache::evictOne()
             continue;
         }
         mLru.erase(found->second.lru);
+        const ChildNodes nodes = std::move(found->second.nodes);
         mGroups.erase(found);
         ++mEvictions;
+        if (mEvicted) {
+            for (const NodePtr& node : nodes) {
+                mEvicted(*node);
+            }
+        }
         return true;
     }
     return false;

@@ -11,6 +11,7 @@
 #include "lod/NodeData.h"
 
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <unordered_map>
 
@@ -48,6 +49,9 @@ public:
     std::uint64_t misses() const { return mMisses; }
     std::uint64_t evictions() const { return mEvictions; }
 
+    /// Called with every node the cache evicts, as it goes (the renderer frees its GPU slot).
+    void onEvict(std::function<void(const NodeData&)> evicted) { mEvicted = std::move(evicted); }
+
 private:
     struct Group {
         ChildNodes nodes;
@@ -65,6 +69,7 @@ private:
     std::uint64_t mHits = 0;
     std::uint64_t mMisses = 0;
     std::uint64_t mEvictions = 0;
+    std::function<void(const NodeData&)> mEvicted;
 };
 
 }  // namespace terrain

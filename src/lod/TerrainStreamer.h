@@ -53,6 +53,9 @@ public:
     NodePtr node(const NodeId& id) const;
     const NodeCache& cache() const { return mCache; }
     NodeServerStats serverStats() const { return mServer.stats(); }
+    /// Called with every node the cache evicts, as it goes (in update() and drain(), on their thread): the renderer
+    /// frees the node's GPU slot (TerrainRenderer::release).
+    void onEvict(std::function<void(const NodeData&)> evicted) { mCache.onEvict(std::move(evicted)); }
     /// Called once per group that failed to load, with the error (file and node named).
     void onLoadError(std::function<void(const std::string&)> report) { mReport = std::move(report); }
 

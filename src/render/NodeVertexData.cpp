@@ -35,27 +35,33 @@ std::vector<NodeVertex> buildNodeVertices(const TemplateMesh& mesh, std::span<co
         out[0] = toSnorm16(x / length);
         out[1] = toSnorm16(y / length);
     };
-    auto parentGradient = [&](int i, int j, double& gx, double& gy) {
-        gx = (code(i + 2, j) - code(i - 2, j)) * 0.25;
-        gy = (code(i, j + 2) - code(i, j - 2)) * 0.25;
+    // The parent's unit normal (x, y) at one of its samples: its own central difference, two node samples
+    // either side.
+    auto parentNormal = [&](int i, int j, double& nx, double& ny) {
+        const double x = -(code(i + 2, j) - code(i - 2, j)) * 0.25 * scale;
+        const double y = -(code(i, j + 2) - code(i, j - 2)) * 0.25 * scale;
+        const double length = std::sqrt(x * x + y * y + 1.0);
+        nx = x / length;
+        ny = y / length;
     };
     std::vector<NodeVertex> vertices(mesh.vertices.size());
     for (std::size_t k = 0; k < mesh.vertices.size(); ++k) {
         const int i = mesh.vertices[k].i, j = mesh.vertices[k].j;
         NodeVertex& v = vertices[k];
         const double own = code(i, j);
-        // The two parent samples the vertex lies between (along x, y or the SW-NE diagonal).
+        // The two parent samples the vertex lies between (along x, y or the SW-NE diagonal): the parent's
+        // surface and (x, y) of its normal are their means, as the parent's triangles interpolate them.
         const int dx = i & 1, dy = j & 1;
-        double parent = own, pgx = 0, pgy = 0;
+        double parent = own, pnx = 0, pny = 0;
         if (dx || dy) {
             parent = 0.5 * (code(i - dx, j - dy) + code(i + dx, j + dy));
             double ax, ay, bx, by;
-            parentGradient(i - dx, j - dy, ax, ay);
-            parentGradient(i + dx, j + dy, bx, by);
-            pgx = 0.5 * (ax + bx);
-            pgy = 0.5 * (ay + by);
+            parentNormal(i - dx, j - dy, ax, ay);
+            parentNormal(i + dx, j + dy, bx, by);
+            pnx = 0.5 * (ax + bx);
+            pny = 0.5 * (ay + by);
         } else {
-            parentGradient(i, j, pgx, pgy);
+            parentNormal(i, j, pnx, pny);
         }
         v.own = static_cast<float>(own);
         v.parent = static_cast<float>(parent);
@@ -64,7 +70,8 @@ std::vector<NodeVertex> buildNodeVertices(const TemplateMesh& mesh, std::span<co
             std::copy(weights, weights + 4, v.materialWeights);
         }
         normal((code(i + 1, j) - code(i - 1, j)) * 0.5, (code(i, j + 1) - code(i, j - 1)) * 0.5, v.ownNormal);
-        normal(pgx, pgy, v.parentNormal);
+        v.parentNormal[0] = toSnorm16(pnx);
+        v.parentNormal[1] = toSnorm16(pny);
     }
     return vertices;
 }

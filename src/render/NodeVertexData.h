@@ -31,8 +31,9 @@ static_assert(sizeof(NodeVertex) == 20, "the GL side uploads NodeVertex as 2 flo
 /// offset, 2-sample border, rows south to north) and its material weights (N x N x 4 bytes, or empty).
 /// The parent's surface follows the template triangulation (SW-NE diagonals) through the node's even
 /// samples, which are the parent's samples (DetailSynthesizer.h, "Nesting"); its normal at a parent
-/// sample uses central differences over two node samples, and at other vertices the mean of the two
-/// parent samples the vertex lies between. `spacing`: metres between the node's samples.
+/// sample uses central differences over two node samples, and at other vertices (x, y) is the mean of the
+/// two parent samples' that the vertex lies between, as the parent's triangles interpolate it. `spacing`: metres
+/// between the node's samples.
 std::vector<NodeVertex> buildNodeVertices(const TemplateMesh& mesh, std::span<const float> window, double spacing,
                                           std::span<const std::uint8_t> materialWeights);
 

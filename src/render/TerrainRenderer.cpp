@@ -1,9 +1,10 @@
 // Drawing the selected chunks: template mesh (3.2.9, eq. 3.7), geomorphing (3.2.8, eq. 3.4-3.6), skirts
-// (3.2.6), zigzag index buffer (3.2.10), front to back (3.2.11).
+// (3.2.6), zigzag index buffer (3.2.10), front to back (3.2.11), node data in pools (4.2.3, issue 13).
 #include "render/TerrainRenderer.h"
 
 #include "heightfield/Image.h"
-#include "render/NodeVertexData.h"
+#include "quadtree/ChunkGeometry.h"
+#include "render/NodeTextures.h"
 #include "render/TemplateMesh.h"
 #include "render/ZigzagIndexBuffer.h"
 
@@ -12,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace terrain {
 
@@ -53,9 +55,18 @@ Expected<std::vector<DetailLayer>> loadDetailLayers(const MaterialSet& materials
 
 Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::filesystem::path& shaderDirectory,
                                                                    const MapHeader& header, int vertexCacheSize,
+                                                                   const PoolOptions& pools,
                                                                    const MaterialSet* materials)
 {
+    const std::size_t slots = pools.slots;
+    TERRAIN_EXPECTS(slots >= 1, "the pools need at least one slot");
     std::unique_ptr<TerrainRenderer> r(new TerrainRenderer(header));
+    GLint maxLayers = 0;
+    glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &maxLayers);
+    if (slots > static_cast<std::size_t>(maxLayers)) {
+        return makeError("quad_cache_size ", slots, " is more nodes than this GPU's texture arrays hold (",
+                         "GL_MAX_ARRAY_TEXTURE_LAYERS ", maxLayers, "): the node pools keep one layer per node");
+    }
     std::vector<DetailLayer> layers;
     if (materials) {
         TERRAIN_EXPECTS(materials->materials().size() <= 4, "at most 4 materials");
@@ -63,6 +74,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         TERRAIN_TRY(loaded);
         layers = std::move(loaded).value();
     }
+    r->mNodeTexels = 3 + (static_cast<int>(layers.size()) + 1) / 2;
     const bool padded = header.validWidth < header.gridSize() || header.validHeight < header.gridSize();
     std::vector<std::string> defines;
     if (padded) {
@@ -76,12 +88,21 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     TERRAIN_TRY(terrain);
     r->mPrograms.push_back(std::move(terrain.value()));
     if (!layers.empty()) {
-        // Nodes beyond every layer's fade get the variant without the detail texture loop: on llvmpipe
-        // the loop cost a 1280 x 720 frame of the demo about 180 ms even where it ran no iteration.
+        // Nodes beyond every layer's fade are drawn by the variant without the detail texture loop: llvmpipe
+        // runs a loop or branch for every fragment even where no fragment needs it (measured on the demo at
+        // 1280 x 720: about 40 ms a frame with one program and a per-node branch).
         defines.emplace_back("DETAIL_TINT_ONLY");
         auto far = ShaderProgram::load(shaderDirectory, "terrain", defines);
         TERRAIN_TRY(far);
         r->mPrograms.push_back(std::move(far.value()));
+    }
+    for (ShaderProgram& program : r->mPrograms) {
+        program.use();
+        glUniform1i(program.uniform("uColour"), 0);
+        glUniform1i(program.uniform("uHeights"), 1);
+        glUniform1i(program.uniform("uDetail"), 2);
+        glUniform1i(program.uniform("uWeights"), 3);
+        glUniform1i(program.uniform("uParentNormals"), 4);
     }
     if (!layers.empty()) {
         const int w = layers.front().image.width, h = layers.front().image.height;
@@ -102,47 +123,34 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         for (const DetailLayer& layer : layers) {
             r->mLayerSize.push_back(layer.size);
         }
-        for (ShaderProgram& terrainProgram : r->mPrograms) {
-            terrainProgram.use();
-            glUniform1i(terrainProgram.uniform("uDetail"), 2);
+        r->mCoarsestLayer = *std::max_element(r->mLayerSize.begin(), r->mLayerSize.end());
+        glm::vec4 tintColumns[3] = {glm::vec4(1.0f), glm::vec4(1.0f), glm::vec4(1.0f)};
+        for (std::size_t m = 0; m < materials->materials().size(); ++m) {
+            const auto& t = materials->materials()[m].tint;
+            glm::vec3 tint(t[0], t[1], t[2]);
+            const float luminance = glm::dot(tint, glm::vec3(0.2126f, 0.7152f, 0.0722f));
+            tint = luminance > 0.0f ? tint / luminance : glm::vec3(1.0f);
+            // A third of the tint: the map's colours (from -t or prep's height colouring) stay the base and
+            // the material only shifts them, so a grass tint does not paint a dry valley green.
+            constexpr float kTintStrength = 0.35f;
+            tint = glm::mix(glm::vec3(1.0f), tint, kTintStrength);
+            for (int c = 0; c < 3; ++c) {
+                tintColumns[c][static_cast<int>(m)] = tint[c];
+            }
+        }
+        for (ShaderProgram& program : r->mPrograms) {
+            program.use();
             for (std::size_t k = 0; k < layers.size(); ++k) {
                 std::string index = "[";
                 index += std::to_string(k);
                 index += ']';
                 glm::vec4 mask(0.0f);
                 mask[layers[k].material] = 1.0f;
-                glUniform4fv(terrainProgram.uniform(("uLayerMaterialMask" + index).c_str()), 1, glm::value_ptr(mask));
-                glUniform1f(terrainProgram.uniform(("uLayerScale" + index).c_str()),
-                            static_cast<float>(1.0 / layers[k].size));
+                glUniform4fv(program.uniform(("uLayerMaterialMask" + index).c_str()), 1, glm::value_ptr(mask));
+                glUniform1f(program.uniform(("uLayerScale" + index).c_str()), static_cast<float>(1.0 / layers[k].size));
             }
-            glm::vec4 tintColumns[3] = {glm::vec4(1.0f), glm::vec4(1.0f), glm::vec4(1.0f)};
-            for (std::size_t m = 0; m < materials->materials().size(); ++m) {
-                const auto& t = materials->materials()[m].tint;
-                glm::vec3 tint(t[0], t[1], t[2]);
-                const float luminance = glm::dot(tint, glm::vec3(0.2126f, 0.7152f, 0.0722f));
-                tint = luminance > 0.0f ? tint / luminance : glm::vec3(1.0f);
-                // A third of the tint: the map's colours (from -t or prep's height colouring) stay the base and
-                // the material only shifts them, so a grass tint does not paint a dry valley green.
-                constexpr float kTintStrength = 0.35f;
-                tint = glm::mix(glm::vec3(1.0f), tint, kTintStrength);
-                for (int c = 0; c < 3; ++c) {
-                    tintColumns[c][static_cast<int>(m)] = tint[c];
-                }
-            }
-            glUniform4fv(terrainProgram.uniform("uMaterialTintColumns"), 3, glm::value_ptr(tintColumns[0]));
+            glUniform4fv(program.uniform("uMaterialTintColumns"), 3, glm::value_ptr(tintColumns[0]));
         }
-    }
-    // Per-node uniform locations of each variant, and the layer that fades out last.
-    for (ShaderProgram& program : r->mPrograms) {
-        NodeUniforms l{program.uniform("uOrigin"),     program.uniform("uSpacing"),      program.uniform("uMorph"),
-                       program.uniform("uSkirtDepth"), program.uniform("uParentOffset"), {}};
-        for (std::size_t k = 0; k < r->mLayerSize.size(); ++k) {
-            l.layerOrigin.push_back(program.uniform(("uLayerOrigin[" + std::to_string(k) + "]").c_str()));
-        }
-        r->mLocations.push_back(std::move(l));
-    }
-    if (!r->mLayerSize.empty()) {
-        r->mCoarsestLayer = *std::max_element(r->mLayerSize.begin(), r->mLayerSize.end());
     }
     auto sky = ShaderProgram::load(shaderDirectory, "sky");
     TERRAIN_TRY(sky);
@@ -170,9 +178,17 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     glEnableVertexAttribArray(1);
     glVertexAttribIPointer(1, 1, GL_UNSIGNED_BYTE, sizeof(TemplateVertex),
                            reinterpret_cast<const void*>(offsetof(TemplateVertex, skirt)));
-    glEnableVertexAttribArray(2);  // the node's data: pointed at each node's buffer when it is drawn
-    glEnableVertexAttribArray(3);
-    glEnableVertexAttribArray(4);
+    // Per-instance node constants: attributes 2.. from the frame's constants buffer, a node's texels apart.
+    r->mConstantsBuffer = gl::Buffer::create();
+    glBindBuffer(GL_ARRAY_BUFFER, r->mConstantsBuffer.name());
+    const auto stride = static_cast<GLsizei>(r->mNodeTexels * 4 * sizeof(float));
+    for (int k = 0; k < r->mNodeTexels; ++k) {
+        const auto location = static_cast<GLuint>(2 + k);
+        glEnableVertexAttribArray(location);
+        glVertexAttribPointer(location, 4, GL_FLOAT, GL_FALSE, stride,
+                              reinterpret_cast<const void*>(static_cast<std::uintptr_t>(k) * 4 * sizeof(float)));
+        glVertexAttribDivisor(location, 1);
+    }
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, r->mTemplateIndices.name());
     if (narrow) {
         const std::vector<std::uint16_t> shortIndices = narrowIndices(indices);
@@ -184,50 +200,133 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     }
     glBindVertexArray(0);
     r->mEmptyVao = gl::VertexArray::create();
+
+    // The pools, allocated once: a layer per slot.
+    const auto layersOf = static_cast<GLsizei>(slots);
+    const int w = n + 2;  // the surface with a 1-sample border: own normals at the edges need it
+    const int m = (n + 1) / 2;
+    const int t = static_cast<int>(header.textureSize);
+    r->mHeights = gl::Texture::create();
+    glBindTexture(GL_TEXTURE_2D_ARRAY, r->mHeights.name());
+    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R32F, w, w, layersOf, 0, GL_RED, GL_FLOAT, nullptr);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+    r->mSlotBytes.heights = static_cast<std::size_t>(w) * w * sizeof(float);
+    r->mParentNormals = gl::Texture::create();
+    glBindTexture(GL_TEXTURE_2D_ARRAY, r->mParentNormals.name());
+    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RG8_SNORM, m, m, layersOf, 0, GL_RG, GL_BYTE, nullptr);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+    r->mSlotBytes.normals = static_cast<std::size_t>(m) * m * 2;
+    r->mDxt1 = pools.compressColour && epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
+    r->mColourLayerSize = r->mDxt1 ? dxt1LayerSize(t) : t;
+    r->mColour = gl::Texture::create();
+    glBindTexture(GL_TEXTURE_2D_ARRAY, r->mColour.name());
+    const GLenum colourFormat = r->mDxt1 ? GL_COMPRESSED_RGB_S3TC_DXT1_EXT : GL_RGB8;
+    const auto colourTexels = static_cast<std::size_t>(r->mColourLayerSize) * r->mColourLayerSize;
+    r->mSlotBytes.colour = r->mDxt1 ? colourTexels / 2 : colourTexels * 3;
+    if (r->mDxt1) {
+        glCompressedTexImage3D(GL_TEXTURE_2D_ARRAY, 0, colourFormat, r->mColourLayerSize, r->mColourLayerSize, layersOf,
+                               0, static_cast<GLsizei>(r->mSlotBytes.colour * slots), nullptr);
+    } else {
+        glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, colourFormat, t, t, layersOf, 0, GL_RGB, GL_UNSIGNED_BYTE, nullptr);
+    }
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    if (!layers.empty()) {
+        r->mWeights = gl::Texture::create();
+        glBindTexture(GL_TEXTURE_2D_ARRAY, r->mWeights.name());
+        glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA4, n, n, layersOf, 0, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4, nullptr);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        r->mSlotBytes.weights = static_cast<std::size_t>(n) * n * sizeof(std::uint16_t);
+    }
+    r->mSlotBytes.constants = static_cast<std::size_t>(r->mNodeTexels) * 4 * sizeof(float);
+    r->mSlotData.resize(slots);
+    r->mFreeSlots.reserve(slots);
+    for (std::size_t k = slots; k-- > 0;) {
+        r->mFreeSlots.push_back(static_cast<int>(k));  // slot 0 on top
+    }
+    if (GLenum error = glGetError(); error != GL_NO_ERROR) {
+        return makeError("allocating the node pools for ", slots, " nodes (", r->mSlotBytes.total(),
+                         " bytes each) failed: GL error ", error,
+                         " (out of GPU memory? a smaller quad_cache_size "
+                         "needs less)");
+    }
     return r;
 }
 
-TerrainRenderer::GpuNode& TerrainRenderer::upload(const NodePtr& node, RenderStats& stats)
+void TerrainRenderer::release(const NodeId& id)
 {
-    auto [it, inserted] = mGpuNodes.try_emplace(node->id.key());
-    GpuNode& gpu = it->second;
-    if (!inserted && gpu.data == node) {
-        gpu.lastFrame = mFrame;
-        return gpu;
+    auto it = mSlotOf.find(id.key());
+    if (it == mSlotOf.end()) {
+        return;
     }
-    // New, or the cache holds a different copy of this node now (evicted and loaded again).
-    gpu.data = node;
-    gpu.lastFrame = mFrame;
+    mSlotData[static_cast<std::size_t>(it->second)].reset();
+    mFreeSlots.push_back(it->second);
+    mSlotOf.erase(it);
+}
+
+int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats)
+{
+    auto [it, inserted] = mSlotOf.try_emplace(node->id.key(), -1);
+    if (!inserted && mSlotData[static_cast<std::size_t>(it->second)] == node) {
+        return it->second;
+    }
+    if (inserted) {
+        TERRAIN_EXPECTS(!mFreeSlots.empty(),
+                        "more nodes drawn than the pools have slots: size them by the cache's capacity and release "
+                        "what the cache evicts (TerrainStreamer::onEvict)");
+        it->second = mFreeSlots.back();
+        mFreeSlots.pop_back();
+    }
+    // A new node, or the cache holds a different copy of this one now: copy it into its slot.
+    const int slot = it->second;
+    mSlotData[static_cast<std::size_t>(slot)] = node;
+    const int n = static_cast<int>(mHeader.chunkSize);
+    const int w = windowSize(n);
+    const int m = (n + 1) / 2;
     const int t = static_cast<int>(mHeader.textureSize);
     std::vector<float> surface(node->heights.base.size());
     node->heights.surface(surface);
-    const std::vector<NodeVertex> vertices = buildNodeVertices(mMesh, surface, node->spacing, node->materialWeights);
-    gpu.vertices = gl::Buffer::create();
-    glBindBuffer(GL_ARRAY_BUFFER, gpu.vertices.name());
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(NodeVertex)), vertices.data(),
-                 GL_STATIC_DRAW);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    gpu.colour = gl::Texture::create();
-    glBindTexture(GL_TEXTURE_2D, gpu.colour.name());
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, t, t, 0, GL_RGB, GL_UNSIGNED_BYTE, node->texture.data());
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    ++stats.uploads;
-    return gpu;
-}
-
-void TerrainRenderer::releaseEvicted(const TerrainStreamer& streamer)
-{
-    for (auto it = mGpuNodes.begin(); it != mGpuNodes.end();) {
-        const GpuNode& gpu = it->second;
-        if (gpu.lastFrame != mFrame && streamer.node(gpu.data->id) != gpu.data) {
-            it = mGpuNodes.erase(it);  // no longer in the cache: free its textures
-        } else {
-            ++it;
-        }
+    // The window's inner (N + 2)^2: one sample of its 2-sample border.
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, w);
+    glPixelStorei(GL_UNPACK_SKIP_PIXELS, kBorder - 1);
+    glPixelStorei(GL_UNPACK_SKIP_ROWS, kBorder - 1);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, n + 2, n + 2, 1, GL_RED, GL_FLOAT, surface.data());
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+    glPixelStorei(GL_UNPACK_SKIP_PIXELS, 0);
+    glPixelStorei(GL_UNPACK_SKIP_ROWS, 0);
+    const std::vector<std::int8_t> normals = parentNormalsRg8(surface, n, node->spacing);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, mParentNormals.name());
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, m, m, 1, GL_RG, GL_BYTE, normals.data());
+    glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
+    if (mDxt1) {
+        const std::vector<std::uint8_t> blocks = compressDxt1(node->texture, t);
+        glCompressedTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, mColourLayerSize, mColourLayerSize, 1,
+                                  GL_COMPRESSED_RGB_S3TC_DXT1_EXT, static_cast<GLsizei>(blocks.size()), blocks.data());
+    } else {
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, t, t, 1, GL_RGB, GL_UNSIGNED_BYTE, node->texture.data());
     }
+    if (mWeights) {
+        std::vector<std::uint16_t> weights(static_cast<std::size_t>(n) * n, 0);
+        if (!node->materialWeights.empty()) {
+            weights = packWeightsRgba4(node->materialWeights);
+        }
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mWeights.name());
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, n, n, 1, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4,
+                        weights.data());
+    }
+    ++stats.uploads;
+    return slot;
 }
 
 void TerrainRenderer::drawSky(const Camera& camera, const SceneStyle& style)
@@ -248,9 +347,9 @@ void TerrainRenderer::drawSky(const Camera& camera, const SceneStyle& style)
     glDepthMask(GL_TRUE);
 }
 
-RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera& camera, const SceneStyle& style)
+RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentNodeLookup& resident,
+                                  const Camera& camera, const SceneStyle& style)
 {
-    ++mFrame;
     RenderStats stats;
     glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
     glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
@@ -260,6 +359,72 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
         drawSky(camera, style);
     }
 
+    // The frame's nodes: slots (uploading what is new) and constants. In the selection's (front to back)
+    // order, the nodes with detail layers first, then those beyond every layer's fade (shaders/terrain.frag
+    // fades each layer out by 40 repeats away; the coarsest fades last), which the second draw takes.
+    const int texels = mNodeTexels;
+    const bool split = mPrograms.size() > 1;
+    const double fade = kDetailFadeRepeats * mCoarsestLayer;
+    mConstants.assign(selection.nodes.size() * static_cast<std::size_t>(texels) * 4, 0.0f);
+    std::size_t count = 0;
+    for (const SelectedNode& selected : selection.nodes) {
+        NodePtr node = resident(selected.id);
+        TERRAIN_EXPECTS(node != nullptr, "every selected node must be resident");
+        (node->isStatic ? stats.staticNodes : stats.dynamicNodes) += 1;
+    }
+    std::size_t nearCount = 0;
+    for (int pass = 0; pass < (split ? 2 : 1); ++pass) {
+        for (const SelectedNode& selected : selection.nodes) {
+            const bool near = !split || selected.distance < fade;
+            if (near != (pass == 0)) {
+                continue;
+            }
+            NodePtr node = resident(selected.id);
+            const int slot = slotFor(node, stats);
+            // The parent's texture for textural morphing (eq. 3.6); the root morphs to itself.
+            NodePtr parent = selected.id.isRoot() ? node : resident(selected.id.parent());
+            TERRAIN_EXPECTS(parent != nullptr, "a selected node's parent must be resident");
+            const int parentSlot = parent == node ? slot : slotFor(parent, stats);
+            float* c = mConstants.data() + count * static_cast<std::size_t>(texels) * 4;
+            c[0] = static_cast<float>(selected.cameraRelativeOrigin.x);
+            c[1] = static_cast<float>(selected.cameraRelativeOrigin.y);
+            c[2] = static_cast<float>(selected.size / (mHeader.chunkSize - 1));
+            c[3] = selected.id.isRoot() || !style.geomorph ? 1.0f : selected.morph;
+            // Skirts hang the parent's delta_c deep: a leaf's own delta_c is zero, yet it can meet a coarser
+            // neighbour whose edge lies up to that far away (3.2.6).
+            c[4] = std::max(parent->deltaC, node->deltaC) + static_cast<float>(mHeader.heightStep);
+            c[5] = static_cast<float>(slot);
+            c[6] = static_cast<float>(parentSlot);
+            c[8] = (selected.id.x & 1) ? 0.5f : 0.0f;
+            c[9] = (selected.id.y & 1) ? 0.5f : 0.0f;
+            if (split && near) {
+                // The node's corner in repeats of each layer, reduced to [0, 1) in double: texture
+                // coordinates stay small and exact however far from the origin the node is.
+                const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(camera.position);
+                for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
+                    const glm::dvec2 repeats = corner / mLayerSize[k];
+                    const glm::dvec2 fraction = repeats - glm::floor(repeats);
+                    c[12 + 2 * k] = static_cast<float>(fraction.x);
+                    c[13 + 2 * k] = static_cast<float>(fraction.y);
+                }
+            }
+            ++count;
+        }
+        if (pass == 0) {
+            nearCount = count;
+        }
+    }
+    stats.nodes = count;
+    stats.triangles = count * mTrianglesPerNode;
+    stats.gpuNodes = mSlotOf.size();
+    if (count == 0) {
+        return stats;
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, mConstantsBuffer.name());
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(mConstants.size() * sizeof(float)), mConstants.data(),
+                 GL_STREAM_DRAW);
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glEnable(GL_CULL_FACE);
@@ -268,18 +433,13 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
     glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
 
     const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
-    if (!mLayerSize.empty()) {
-        glActiveTexture(GL_TEXTURE2);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mDetail.name());
-    }
     for (ShaderProgram& program : mPrograms) {
         program.use();
         glUniformMatrix4fv(program.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
-        glUniform1i(program.uniform("uColour"), 0);
-        glUniform1i(program.uniform("uParentColour"), 1);
         glUniform1f(program.uniform("uHeightBase"), static_cast<float>(mHeader.heightOffset - camera.position.z));
         glUniform1f(program.uniform("uInverseCells"), 1.0f / static_cast<float>(mHeader.chunkSize - 1));
         glUniform1f(program.uniform("uTexels"), static_cast<float>(mHeader.textureSize));
+        glUniform1f(program.uniform("uLayerTexels"), static_cast<float>(mColourLayerSize));
         const glm::vec3 sun = glm::normalize(style.sunDirection);
         glUniform3fv(program.uniform("uSunDirection"), 1, glm::value_ptr(sun));
         glUniform3fv(program.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
@@ -298,67 +458,49 @@ RenderStats TerrainRenderer::draw(const TerrainStreamer& streamer, const Camera&
                     static_cast<float>(valid.y - slack), static_cast<float>(valid.z + slack),
                     static_cast<float>(valid.w + slack));
     }
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
+    if (mDetail) {
+        glActiveTexture(GL_TEXTURE2);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mDetail.name());
+    }
+    if (mWeights) {
+        glActiveTexture(GL_TEXTURE3);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mWeights.name());
+    }
+    glActiveTexture(GL_TEXTURE0);
+
+    if (mParentNormals) {
+        glActiveTexture(GL_TEXTURE4);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mParentNormals.name());
+    }
+    glActiveTexture(GL_TEXTURE0);
+
     glBindVertexArray(mTemplateVao.name());
-    std::size_t current = mPrograms.size();
-    for (const SelectedNode& selected : streamer.selection().nodes) {
-        NodePtr node = streamer.node(selected.id);
-        if (!node) {
-            continue;  // cannot happen: selected nodes are resident
+    const std::size_t ranges[2][2] = {{0, nearCount}, {nearCount, count}};
+    for (std::size_t p = 0; p < mPrograms.size(); ++p) {
+        const auto [first, last] = ranges[p];
+        if (first == last) {
+            continue;
         }
-        GpuNode& gpu = upload(node, stats);
-        // The parent's texture for textural morphing (eq. 3.6); the root morphs to itself.
-        NodePtr parent = selected.id.isRoot() ? node : streamer.node(selected.id.parent());
-        GpuNode& parentGpu = parent ? upload(parent, stats) : gpu;
-        glActiveTexture(GL_TEXTURE0);
-        glBindTexture(GL_TEXTURE_2D, gpu.colour.name());
-        glActiveTexture(GL_TEXTURE1);
-        glBindTexture(GL_TEXTURE_2D, parentGpu.colour.name());
-        glBindBuffer(GL_ARRAY_BUFFER, gpu.vertices.name());
-        glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(NodeVertex),
-                              reinterpret_cast<const void*>(offsetof(NodeVertex, own)));
-        glVertexAttribPointer(3, 4, GL_SHORT, GL_TRUE, sizeof(NodeVertex),
-                              reinterpret_cast<const void*>(offsetof(NodeVertex, ownNormal)));
-        glVertexAttribPointer(4, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(NodeVertex),
-                              reinterpret_cast<const void*>(offsetof(NodeVertex, materialWeights)));
-        // The fragment shader fades each layer out by 40 repeats away (shaders/terrain.frag): a node wholly
-        // beyond that for every layer (the coarsest fades last) is drawn by the variant without the layers.
-        const std::size_t variant =
-            mPrograms.size() > 1 && selected.distance >= kDetailFadeRepeats * mCoarsestLayer ? kFar : kNear;
-        if (variant != current) {
-            mPrograms[variant].use();
-            current = variant;
+        mPrograms[p].use();
+        // The instances' constants start at `first`: the per-instance attributes are pointed there.
+        const auto stride = static_cast<GLsizei>(texels * 4 * sizeof(float));
+        glBindBuffer(GL_ARRAY_BUFFER, mConstantsBuffer.name());
+        for (int k = 0; k < texels; ++k) {
+            const std::size_t offset =
+                (first * static_cast<std::size_t>(texels) + static_cast<std::size_t>(k)) * 4 * sizeof(float);
+            glVertexAttribPointer(static_cast<GLuint>(2 + k), 4, GL_FLOAT, GL_FALSE, stride,
+                                  reinterpret_cast<const void*>(offset));
         }
-        const NodeUniforms& at = mLocations[variant];
-        if (variant == kNear && !mLayerSize.empty()) {
-            // The node's corner in repeats of each layer, reduced to [0, 1) in double: texture coordinates
-            // stay small and exact however far from the origin the node is.
-            const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(camera.position);
-            for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
-                const glm::dvec2 repeats = corner / mLayerSize[k];
-                const glm::dvec2 fraction = repeats - glm::floor(repeats);
-                glUniform2f(at.layerOrigin[k], static_cast<float>(fraction.x), static_cast<float>(fraction.y));
-            }
-        }
-
-        glUniform2f(at.origin, static_cast<float>(selected.cameraRelativeOrigin.x),
-                    static_cast<float>(selected.cameraRelativeOrigin.y));
-        glUniform1f(at.spacing, static_cast<float>(selected.size / (mHeader.chunkSize - 1)));
-        glUniform1f(at.morph, selected.id.isRoot() || !style.geomorph ? 1.0f : selected.morph);
-        // Skirts hang the parent's delta_c deep: a leaf's own delta_c is zero, yet it can meet a coarser
-        // neighbour whose edge lies up to that far away (3.2.6).
-        const float skirt = parent ? std::max(parent->deltaC, node->deltaC) : node->deltaC;
-        glUniform1f(at.skirt, skirt + static_cast<float>(mHeader.heightStep));
-        glUniform2f(at.parentOffset, (selected.id.x & 1) ? 0.5f : 0.0f, (selected.id.y & 1) ? 0.5f : 0.0f);
-        glDrawElements(GL_TRIANGLES, mIndexCount, mIndexType, nullptr);
-
-        ++stats.nodes;
-        (node->isStatic ? stats.staticNodes : stats.dynamicNodes) += 1;
-        stats.triangles += mTrianglesPerNode;
+        glBindBuffer(GL_ARRAY_BUFFER, 0);
+        glDrawElementsInstanced(GL_TRIANGLES, mIndexCount, mIndexType, nullptr, static_cast<GLsizei>(last - first));
+        ++stats.drawCalls;
     }
     glBindVertexArray(0);
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-    releaseEvicted(streamer);
-    stats.gpuNodes = mGpuNodes.size();
     return stats;
 }
 

@@ -1,11 +1,13 @@
-// The chunk renderer (paper 3.2.6-3.2.11, 4.2.3): one template mesh for every node, each node drawn
-// with its own heights and texture, geomorphed and skirted in the vertex program, front to back in the
-// selector's order. GPU copies of node data live as long as the node stays in the cache.
+// The chunk renderer (paper 3.2.6-3.2.11, 4.2.3): one template mesh for every node, geomorphed and skirted
+// in the vertex program, front to back in the selector's order. Node data lives in pools allocated once for
+// the cache's capacity (4.2.3; issue 13): a slot per resident node in texture arrays, taken when the node is
+// first drawn and given back when the cache evicts it, and every frame's nodes go in one instanced draw.
 #pragma once
 
 #include "core/Camera.h"
 #include "core/Expected.h"
-#include "lod/TerrainStreamer.h"
+#include "lod/LodSelector.h"
+#include "lod/NodeData.h"
 #include "quadtree/MapFormat.h"
 #include "render/GlObjects.h"
 #include "render/ShaderProgram.h"
@@ -39,39 +41,62 @@ struct RenderStats {
     std::size_t staticNodes = 0;
     std::size_t dynamicNodes = 0;
     std::uint64_t triangles = 0;
-    std::size_t uploads = 0;   ///< nodes copied to the GPU this frame
-    std::size_t gpuNodes = 0;  ///< nodes with GPU copies after the frame
+    std::size_t uploads = 0;    ///< nodes copied into their slots this frame
+    std::size_t gpuNodes = 0;   ///< slots holding a node after the frame
+    std::size_t drawCalls = 0;  ///< draw calls for the terrain (the sky not counted): 1 with anything in view
+};
+
+/// GPU bytes of one slot of the node pools (TerrainRenderer::create): what each resident node costs.
+struct SlotBytes {
+    std::size_t heights = 0;    ///< the surface with a 1-sample border, 32-bit floats
+    std::size_t normals = 0;    ///< the parent's normals at its samples, 2 bytes each
+    std::size_t colour = 0;     ///< the colour texture (RGB8, or DXT1 with node_texture_compression)
+    std::size_t weights = 0;    ///< material weights (RGBA4), 0 without materials
+    std::size_t constants = 0;  ///< per drawn node, in the frame's constants buffer
+    std::size_t total() const { return heights + normals + colour + weights + constants; }
+};
+
+/// The node pools' size and formats.
+struct PoolOptions {
+    std::size_t slots = 512;      ///< nodes: the cache's capacity (quad_cache_size)
+    bool compressColour = false;  ///< DXT1 colour layers (node_texture_compression), where the GL has S3TC
 };
 
 class TerrainRenderer {
 public:
-    /// Loads the shaders from `shaderDirectory` and builds the template mesh for `header`'s chunk size with
-    /// the zigzag order for `vertexCacheSize`. With `materials`, their detail textures are drawn over the
-    /// nodes' colours, blended by the nodes' material weights (NodeData::materialWeights): material m's k-th
-    /// detail_texture repeats every detail_texture_size / 4^k metres (a finer layer of the same ground).
-    /// All detail textures must have the same size (they share one texture array); at most kMaxDetailLayers.
-    /// Errors name the file. Needs a current GL context.
+    /// Loads the shaders from `shaderDirectory`, builds the template mesh for `header`'s chunk size with the
+    /// zigzag order for `vertexCacheSize`, and allocates the node pools: `pools.slots` nodes' heights,
+    /// normals, colour textures and material weights in texture arrays. With
+    /// `materials`, their detail textures are drawn over the nodes' colours, blended by the nodes' material
+    /// weights (NodeData::materialWeights): material m's k-th detail_texture repeats every
+    /// detail_texture_size / 4^k metres (a finer layer of the same ground). All detail textures must have the
+    /// same size (they share one texture array); at most kMaxDetailLayers. Errors name the file, or the GL
+    /// limit that the slots exceed. Needs a current GL context.
     static Expected<std::unique_ptr<TerrainRenderer>> create(const std::filesystem::path& shaderDirectory,
                                                              const MapHeader& header, int vertexCacheSize,
+                                                             const PoolOptions& pools,
                                                              const MaterialSet* materials = nullptr);
 
     /// Detail texture layers the shader blends (shaders/terrain.frag, kMaxLayers).
     static constexpr int kMaxDetailLayers = 8;
 
-    /// Clears, draws the sky and every node of `streamer`'s current selection. `camera` must be the one the
-    /// selection was made with.
-    RenderStats draw(const TerrainStreamer& streamer, const Camera& camera, const SceneStyle& style);
+    /// Clears, draws the sky and every node of `selection` (made for `camera`) in one instanced draw (two
+    /// with detail layers: nodes beyond every layer's fade go in a second one, drawn by a program without
+    /// the layers), the nodes' data from `resident` (the node cache: every selected node and its parent must be
+    /// resident). A node gets a slot the first time it is drawn and keeps it until release().
+    RenderStats draw(const LodSelection& selection, const ResidentNodeLookup& resident, const Camera& camera,
+                     const SceneStyle& style);
+
+    /// The node cache evicted `id` (TerrainStreamer::onEvict): its slot is free for another node. Nothing
+    /// is freed on the GPU. Unknown ids are ignored (a node evicted before it was ever drawn).
+    void release(const NodeId& id);
+
+    const SlotBytes& slotBytes() const { return mSlotBytes; }
+    std::size_t slots() const { return mSlotData.size(); }
 
 private:
-    struct GpuNode {
-        NodePtr data;         ///< keeps the CPU copy alive while the GPU copy is in use; identity for eviction
-        gl::Buffer vertices;  ///< NodeVertex per template vertex (render/NodeVertexData.h)
-        gl::Texture colour;
-        std::uint64_t lastFrame = 0;
-    };
     TerrainRenderer(const MapHeader& header) : mHeader(header) {}
-    GpuNode& upload(const NodePtr& node, RenderStats& stats);
-    void releaseEvicted(const TerrainStreamer& streamer);
+    int slotFor(const NodePtr& node, RenderStats& stats);
     void drawSky(const Camera& camera, const SceneStyle& style);
 
     MapHeader mHeader;
@@ -81,12 +106,6 @@ private:
     std::vector<ShaderProgram> mPrograms;
     static constexpr std::size_t kNear = 0;
     static constexpr std::size_t kFar = 1;
-    /// Uniform locations set per node, one entry per program variant.
-    struct NodeUniforms {
-        GLint origin, spacing, morph, skirt, parentOffset;
-        std::vector<GLint> layerOrigin;  ///< uLayerOrigin[k]
-    };
-    std::vector<NodeUniforms> mLocations;
     double mCoarsestLayer = 0.0;  ///< metres per repeat of the detail layer that fades out last
     ShaderProgram mSky;
     gl::VertexArray mTemplateVao;
@@ -100,8 +119,21 @@ private:
     std::vector<double> mLayerSize;  ///< metres per repeat of each detail layer
     /// Repeats of a detail layer beyond which the fragment shader has faded it out (terrain.frag).
     static constexpr double kDetailFadeRepeats = 40.0;
-    std::unordered_map<std::uint64_t, GpuNode> mGpuNodes;
-    std::uint64_t mFrame = 0;
-};
 
+    // The pools: one layer per slot in each texture array.
+    gl::Texture mHeights;        ///< GL_R32F, (N + 2)^2 per layer
+    gl::Texture mParentNormals;  ///< GL_RG8_SNORM, ((N + 1) / 2)^2 per layer
+    gl::Texture mColour;         ///< DXT1 (or GL_RGB8), mColourLayerSize^2 per layer
+    gl::Texture mWeights;        ///< GL_RGBA4, N^2 per layer; none without materials
+    bool mDxt1 = false;
+    int mColourLayerSize = 0;
+    SlotBytes mSlotBytes;
+    std::vector<NodePtr> mSlotData;                  ///< per slot: the node it holds (identity for reloads), or null
+    std::vector<int> mFreeSlots;                     ///< a stack
+    std::unordered_map<std::uint64_t, int> mSlotOf;  ///< by node key
+    // The frame's per-node constants (terrain.vert's per-instance attributes: mNodeTexels vec4s a node).
+    int mNodeTexels = 3;
+    std::vector<float> mConstants;
+    gl::Buffer mConstantsBuffer;
+};
 }  // namespace terrain

@@ -1,8 +1,9 @@
 // Triangle throughput of the chunk renderer against a brute-force single mesh with the same triangle
 // count, on the same OpenGL context and camera path: per camera, the brute-force mesh is the
 // engine's own triangles of that frame merged into one static mesh (positions and normals, one draw
-// call, a plain lit shader), so the ratio is what the engine's per-node machinery (template mesh,
-// per-node buffers and textures, morphing, one call per node) costs. Needs a display: run under Xvfb,
+// call, a plain lit shader), so the ratio is what the engine's per-node machinery (template mesh, node
+// pools, morphing and normals in the vertex program, textures, one instanced draw) costs. Needs a display: run under
+// Xvfb,
 //
 //   xvfb-run -a -s "-screen 0 1280x720x24" build/tests/RenderBench
 //
@@ -82,12 +83,17 @@ Scene& scene()
 void BM_ChunkRenderer(benchmark::State& state)
 {
     Scene& s = scene();
-    auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, s.map->header(), 16).value();
     TerrainNodeSource source(*s.map, {});
     StreamerOptions options;
     options.cacheSize = s.map->directory().size();
     options.workers = 2;
+    auto renderer =
+        TerrainRenderer::create(TERRAIN_SHADER_DIR, s.map->header(), 16, {options.cacheSize, state.range(0) != 0})
+            .value();
     auto streamer = TerrainStreamer::create(source, extentOf(s.map->header()), options).value();
+    streamer->onEvict([&renderer](const NodeData& node) { renderer->release(node.id); });
+    const ResidentNodeLookup resident = [&streamer](const NodeId& id) { return streamer->node(id); };
+    std::size_t drawCalls = 0;
     SceneStyle style;
     style.drawSky = false;  // triangles only: the brute-force side draws no sky either
     double seconds = 0, triangles = 0;
@@ -99,7 +105,8 @@ void BM_ChunkRenderer(benchmark::State& state)
             }
             for (int r = 0; r < kRepeats; ++r) {
                 auto start = std::chrono::steady_clock::now();
-                RenderStats stats = renderer->draw(*streamer, camera, style);
+                RenderStats stats = renderer->draw(streamer->selection(), resident, camera, style);
+                drawCalls = std::max(drawCalls, stats.drawCalls);
                 glFinish();
                 seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
                 triangles += static_cast<double>(stats.triangles);
@@ -111,8 +118,11 @@ void BM_ChunkRenderer(benchmark::State& state)
     state.counters["triangles_per_frame"] = s.engineTrianglesPerFrame;
     state.counters["Mtriangles_per_s"] = s.engineMtrisPerSecond;
     state.counters["ms_per_frame"] = 1e3 * seconds / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
+    state.counters["draw_calls"] = static_cast<double>(drawCalls);
+    state.counters["gpu_bytes_per_node"] = static_cast<double>(renderer->slotBytes().total());
 }
-BENCHMARK(BM_ChunkRenderer)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+// Arg: node_texture_compression (DXT1 colour layers) on, then off; the brute-force ratio is against the last.
+BENCHMARK(BM_ChunkRenderer)->Arg(1)->Arg(0)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
 constexpr const char* kBruteVertex = R"(#version 330 core
 layout(location = 0) in vec3 aPosition;

@@ -205,6 +205,79 @@ TEST_F(TengineGLTest, SameRunGivesIdenticalFrames)
     EXPECT_EQ(rows, 17);
 }
 
+/// The node pools (issue 13): every frame's terrain is one instanced draw per program (detail layers need
+/// two: the nodes beyond the layers' fade get a program without them), the log gives each slot's bytes,
+/// and DXT1 colour layers (node_texture_compression) look like the uncompressed ones.
+TEST_F(TengineGLTest, NodePoolsDrawOneCallPerProgramAndCompressedTexturesLookTheSame)
+{
+    test::ScratchDir plain, compressed, detail;
+    const std::vector<std::string> settings = {"frames_per_second=2"};
+    auto run = video(plain.path(), settings);
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    EXPECT_NE(run.output.find("node pools: "), std::string::npos) << run.output;
+    std::vector<std::string> on = settings;
+    on.push_back("node_texture_compression=on");
+    auto runCompressed = video(compressed.path(), on);
+    ASSERT_EQ(runCompressed.exitCode, 0) << runCompressed.output;
+
+    // draw_calls per frame from the CSV (its header names the column).
+    auto drawCalls = [](const std::filesystem::path& dir) {
+        std::ifstream csv(dir / "frames.csv");
+        std::string line;
+        std::getline(csv, line);
+        std::vector<std::string> header;
+        for (std::size_t at = 0, next; at <= line.size(); at = next + 1) {
+            next = std::min(line.find(',', at), line.size());
+            header.push_back(line.substr(at, next - at));
+        }
+        const auto column = std::find(header.begin(), header.end(), "draw_calls") - header.begin();
+        EXPECT_LT(static_cast<std::size_t>(column), header.size()) << line;
+        std::vector<int> calls;
+        while (std::getline(csv, line)) {
+            std::size_t at = 0;
+            for (std::ptrdiff_t k = 0; k < column; ++k) {
+                at = line.find(',', at) + 1;
+            }
+            calls.push_back(std::stoi(line.substr(at)));
+        }
+        return calls;
+    };
+    // The built-in materials have detail layers: one call, or two where near and far nodes are in view.
+    const std::vector<int> calls = drawCalls(plain.path());
+    ASSERT_EQ(calls.size(), 17u);
+    for (int c : calls) {
+        EXPECT_GE(c, 1);
+        EXPECT_LE(c, 2);
+    }
+
+    double worstMean = 0.0;
+    int worst = 0;
+    for (int f = 0; f <= 16; ++f) {
+        const Image a = frame(plain.path(), f), b = frame(compressed.path(), f);
+        ASSERT_EQ(a.pixels.size(), b.pixels.size());
+        double sum = 0.0;
+        for (std::size_t k = 0; k < a.pixels.size(); ++k) {
+            const int d = std::abs(int{a.pixels[k]} - int{b.pixels[k]});
+            sum += d;
+            worst = std::max(worst, d);
+        }
+        worstMean = std::max(worstMean, sum / static_cast<double>(a.pixels.size()));
+    }
+    std::printf("DXT1 against RGB8 colour layers: mean difference at most %.3f, largest %d of 255\n", worstMean, worst);
+    EXPECT_GT(worst, 0) << "compression must change something, or the option does nothing";
+    EXPECT_LT(worstMean, 2.0);
+    EXPECT_LT(worst, 64);
+
+    // Low over the detail map, near and far nodes are both in view: two calls, one per program.
+    auto runDetail = video(detail.path(), lowDetailFlight({"frames_per_second=2", "video_frames=8"}), detailMap());
+    ASSERT_EQ(runDetail.exitCode, 0) << runDetail.output;
+    const std::vector<int> detailCalls = drawCalls(detail.path());
+    ASSERT_FALSE(detailCalls.empty());
+    for (int c : detailCalls) {
+        EXPECT_EQ(c, 2);
+    }
+}
+
 TEST_F(TengineGLTest, MissingMapIsAClearError)
 {
     auto run = test::runProgram(TERRAIN_TENGINE_EXE, {"/nonexistent/terrain.map"});

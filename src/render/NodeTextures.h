@@ -1,0 +1,31 @@
+// A node's colour texture and material weights as the renderer's texture arrays store them (issue 13: node
+// data in GPU pools): the colour as DXT1 (S3TC) blocks, 4 bits a texel, and the weights as 4 bits per
+// material. Pure CPU code: no GL here.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace terrain {
+
+/// Texels per side of a DXT1 layer for a T x T texture: T rounded up to a multiple of 4 (DXT1 codes 4 x 4
+/// blocks). The texels beyond T repeat the last row and column.
+int dxt1LayerSize(int textureSize);
+
+/// The DXT1 blocks (8 bytes each, rows of blocks south to north, as GL_COMPRESSED_RGB_S3TC_DXT1_EXT wants
+/// them) of a T x T RGB texture (3 bytes a texel, rows south to north), padded to dxt1LayerSize(T). Encoded
+/// with stb_dxt's high-quality mode.
+std::vector<std::uint8_t> compressDxt1(std::span<const std::uint8_t> rgb, int textureSize);
+
+/// The parent's unit normals at its samples, the node's even samples: ((N + 1) / 2)^2 pairs (x, y) as signed
+/// 8-bit normalised integers (GL_RG8_SNORM; z = sqrt(1 - x^2 - y^2)), rows south to north. The parent's
+/// normal at a sample is its own central difference, over the node's samples two away on each side, from
+/// the node's (N + 4)^2 surface `window` (2-sample border); `spacing` is the node's (metres).
+std::vector<std::int8_t> parentNormalsRg8(std::span<const float> window, int chunkSize, double spacing);
+
+/// N x N x 4 material weights (0..255) as GL_RGBA4 texels (GL_UNSIGNED_SHORT_4_4_4_4: red in the top 4 bits),
+/// each weight rounded to the nearest of 0, 1/15, ..., 1.
+std::vector<std::uint16_t> packWeightsRgba4(std::span<const std::uint8_t> weights);
+
+}  // namespace terrain
