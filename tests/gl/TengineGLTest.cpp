@@ -278,6 +278,15 @@ TEST_F(TengineGLTest, NodePoolsDrawOneCallPerProgramAndCompressedTexturesLookThe
     }
 }
 
+TEST_F(TengineGLTest, ACacheLargerThanTheGpuPoolsCanHoldIsAClearError)
+{
+    test::ScratchDir frames;
+    auto run = video(frames.path(), {"video_frames=1", "quad_cache_size=1000000"});
+    EXPECT_NE(run.exitCode, 0);
+    EXPECT_NE(run.output.find("quad_cache_size 1000000"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("GL_MAX_ARRAY_TEXTURE_LAYERS"), std::string::npos) << run.output;
+}
+
 TEST_F(TengineGLTest, MissingMapIsAClearError)
 {
     auto run = test::runProgram(TERRAIN_TENGINE_EXE, {"/nonexistent/terrain.map"});
