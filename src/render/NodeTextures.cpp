@@ -5,8 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include <string.h>
-#include <cstring>  // stb_dxt uses memcpy without including it
+#include <string.h>  // stb_dxt uses memcpy without including it
 
 // stb_dxt (public domain; Debian libstb-dev) compiled here, with its functions static to this file. Its own
 // code is not held to our warning flags.

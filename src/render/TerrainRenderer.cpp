@@ -51,6 +51,20 @@ Expected<std::vector<DetailLayer>> loadDetailLayers(const MaterialSet& materials
     return layers;
 }
 
+/// A texture array of `layers` layers of size x size texels, one mip level, uninitialised, left bound to
+/// GL_TEXTURE_2D_ARRAY: one of the node pools.
+gl::Texture createLayers(GLenum internalFormat, int size, GLsizei layers, GLenum format, GLenum type, GLint filter)
+{
+    gl::Texture texture = gl::Texture::create();
+    glBindTexture(GL_TEXTURE_2D_ARRAY, texture.name());
+    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, static_cast<GLint>(internalFormat), size, size, layers, 0, format, type,
+                 nullptr);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
+    return texture;
+}
+
 }  // namespace
 
 Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::filesystem::path& shaderDirectory,
@@ -206,45 +220,30 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     const int w = n + 2;  // the surface with a 1-sample border: own normals at the edges need it
     const int m = (n + 1) / 2;
     const int t = static_cast<int>(header.textureSize);
-    r->mHeights = gl::Texture::create();
-    glBindTexture(GL_TEXTURE_2D_ARRAY, r->mHeights.name());
-    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R32F, w, w, layersOf, 0, GL_RED, GL_FLOAT, nullptr);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+    r->mHeights = createLayers(GL_R32F, w, layersOf, GL_RED, GL_FLOAT, GL_NEAREST);
     r->mSlotBytes.heights = static_cast<std::size_t>(w) * w * sizeof(float);
-    r->mParentNormals = gl::Texture::create();
-    glBindTexture(GL_TEXTURE_2D_ARRAY, r->mParentNormals.name());
-    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RG8_SNORM, m, m, layersOf, 0, GL_RG, GL_BYTE, nullptr);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+    r->mParentNormals = createLayers(GL_RG8_SNORM, m, layersOf, GL_RG, GL_BYTE, GL_NEAREST);
     r->mSlotBytes.normals = static_cast<std::size_t>(m) * m * 2;
     r->mDxt1 = pools.compressColour && epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
     r->mColourLayerSize = r->mDxt1 ? dxt1LayerSize(t) : t;
-    r->mColour = gl::Texture::create();
-    glBindTexture(GL_TEXTURE_2D_ARRAY, r->mColour.name());
-    const GLenum colourFormat = r->mDxt1 ? GL_COMPRESSED_RGB_S3TC_DXT1_EXT : GL_RGB8;
     const auto colourTexels = static_cast<std::size_t>(r->mColourLayerSize) * r->mColourLayerSize;
     r->mSlotBytes.colour = r->mDxt1 ? colourTexels / 2 : colourTexels * 3;
     if (r->mDxt1) {
-        glCompressedTexImage3D(GL_TEXTURE_2D_ARRAY, 0, colourFormat, r->mColourLayerSize, r->mColourLayerSize, layersOf,
-                               0, static_cast<GLsizei>(r->mSlotBytes.colour * slots), nullptr);
+        r->mColour = gl::Texture::create();
+        glBindTexture(GL_TEXTURE_2D_ARRAY, r->mColour.name());
+        glCompressedTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_COMPRESSED_RGB_S3TC_DXT1_EXT, r->mColourLayerSize,
+                               r->mColourLayerSize, layersOf, 0, static_cast<GLsizei>(r->mSlotBytes.colour * slots),
+                               nullptr);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     } else {
-        glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, colourFormat, t, t, layersOf, 0, GL_RGB, GL_UNSIGNED_BYTE, nullptr);
+        r->mColour = createLayers(GL_RGB8, t, layersOf, GL_RGB, GL_UNSIGNED_BYTE, GL_LINEAR);
     }
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     if (!layers.empty()) {
-        r->mWeights = gl::Texture::create();
-        glBindTexture(GL_TEXTURE_2D_ARRAY, r->mWeights.name());
-        glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA4, n, n, layersOf, 0, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4, nullptr);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        r->mWeights = createLayers(GL_RGBA4, n, layersOf, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4, GL_NEAREST);
         r->mSlotBytes.weights = static_cast<std::size_t>(n) * n * sizeof(std::uint16_t);
     }
     r->mSlotBytes.constants = static_cast<std::size_t>(r->mNodeTexels) * 4 * sizeof(float);
@@ -256,8 +255,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     if (GLenum error = glGetError(); error != GL_NO_ERROR) {
         return makeError("allocating the node pools for ", slots, " nodes (", r->mSlotBytes.total(),
                          " bytes each) failed: GL error ", error,
-                         " (out of GPU memory? a smaller quad_cache_size "
-                         "needs less)");
+                         " (out of GPU memory? a smaller quad_cache_size needs less)");
     }
     return r;
 }
@@ -367,11 +365,6 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     const double fade = kDetailFadeRepeats * mCoarsestLayer;
     mConstants.assign(selection.nodes.size() * static_cast<std::size_t>(texels) * 4, 0.0f);
     std::size_t count = 0;
-    for (const SelectedNode& selected : selection.nodes) {
-        NodePtr node = resident(selected.id);
-        TERRAIN_EXPECTS(node != nullptr, "every selected node must be resident");
-        (node->isStatic ? stats.staticNodes : stats.dynamicNodes) += 1;
-    }
     std::size_t nearCount = 0;
     for (int pass = 0; pass < (split ? 2 : 1); ++pass) {
         for (const SelectedNode& selected : selection.nodes) {
@@ -380,6 +373,8 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                 continue;
             }
             NodePtr node = resident(selected.id);
+            TERRAIN_EXPECTS(node != nullptr, "every selected node must be resident");
+            (node->isStatic ? stats.staticNodes : stats.dynamicNodes) += 1;
             const int slot = slotFor(node, stats);
             // The parent's texture for textural morphing (eq. 3.6); the root morphs to itself.
             NodePtr parent = selected.id.isRoot() ? node : resident(selected.id.parent());
