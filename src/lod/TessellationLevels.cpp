@@ -1,82 +1,175 @@
 #include "lod/TessellationLevels.h"
 
 #include "core/Check.h"
+#include "core/Frustum.h"
 #include "lod/LodSelector.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace terrain {
 
-BlockLevels chooseBlockLevels(const BlockErrors& errors, const Aabb& node, const Camera& camera, double pixels)
+std::uint16_t BlockLevels::code(int block) const
 {
-    const int b = errors.blocksPerSide;
-    TERRAIN_EXPECTS(b >= 1 && errors.levels >= 1, "block errors must come from computeBlockErrors");
-    // Eq. 3.3 per block: level d is within the budget when lodDistance >= lambda(d) * C.
+    const auto k = static_cast<std::size_t>(block);
+    return static_cast<std::uint16_t>(level[k] | snap[4 * k] << 2 | snap[4 * k + 1] << 4 | snap[4 * k + 2] << 6 |
+                                      snap[4 * k + 3] << 8 | culled[k] << 10);
+}
+
+std::uint64_t BlockLevels::surfaceTriangles() const
+{
+    std::uint64_t triangles = 0;
+    for (std::size_t k = 0; k < level.size(); ++k) {
+        if (!culled[k]) {
+            const std::uint64_t f = static_cast<std::uint64_t>(blockQuads) >> level[k];
+            triangles += 2 * f * f;
+        }
+    }
+    return triangles;
+}
+
+BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels)
+{
+    const BlockErrors& lambda = errors.blocks;
+    const int b = lambda.blocksPerSide;
+    TERRAIN_EXPECTS(b >= 1 && lambda.levels >= 1, "block errors must come from computeTessellationErrors");
+    // Eq. 3.3 per block: an error of delta metres is within the budget where lodDistance >= delta * C.
     const double c = lodDistanceFactor(camera, pixels);
     const double k = verticalErrorFactor(camera);
+    const Frustum frustum = Frustum::fromCamera(camera);
     const double size = (node.hi.x - node.lo.x) / b;
-    std::vector<double> distance(static_cast<std::size_t>(b) * b);
-    for (int by = 0; by < b; ++by) {
-        for (int bx = 0; bx < b; ++bx) {
-            const Aabb block{{node.lo.x + bx * size, node.lo.y + by * size, node.lo.z},
-                             {node.lo.x + (bx + 1) * size, node.lo.y + (by + 1) * size, node.hi.z}};
-            distance[static_cast<std::size_t>(by * b + bx)] = lodDistance(camera, k, block);
-        }
-    }
-    // The coarsest level at which every block of the edge (one or two) is within the budget at the nearer
-    // of their distances.
-    auto edgeLevel = [&](int ax, int ay, int cx, int cy) {
-        const bool first = ax >= 0 && ax < b && ay >= 0 && ay < b;
-        const bool second = cx >= 0 && cx < b && cy >= 0 && cy < b;
-        TERRAIN_ASSERT(first || second);
-        double d = 1e300;
-        if (first) {
-            d = std::min(d, distance[static_cast<std::size_t>(ay * b + ax)]);
-        }
-        if (second) {
-            d = std::min(d, distance[static_cast<std::size_t>(cy * b + cx)]);
-        }
-        int level = 0;
-        for (int next = 1; next <= errors.levels; ++next) {
-            double lambda = 0.0;
-            if (first) {
-                lambda = std::max(lambda, static_cast<double>(errors.at(ax, ay, next)));
-            }
-            if (second) {
-                lambda = std::max(lambda, static_cast<double>(errors.at(cx, cy, next)));
-            }
-            if (d < lambda * c) {
-                break;  // lambda is non-decreasing in d: no coarser level fits either
-            }
-            level = next;
-        }
-        return static_cast<std::uint8_t>(level);
-    };
+    const auto blocks = static_cast<std::size_t>(b) * b;
+    std::vector<double> distance(blocks);
     BlockLevels out;
     out.blocksPerSide = b;
-    out.northEdges.resize(static_cast<std::size_t>(b) * (b + 1));
-    out.eastEdges.resize(static_cast<std::size_t>(b + 1) * b);
-    for (int by = 0; by < b; ++by) {
-        for (int bx = 0; bx <= b; ++bx) {
-            out.northEdges[static_cast<std::size_t>(by * (b + 1) + bx)] = edgeLevel(bx - 1, by, bx, by);
-        }
-    }
-    for (int by = 0; by <= b; ++by) {
-        for (int bx = 0; bx < b; ++bx) {
-            out.eastEdges[static_cast<std::size_t>(by * b + bx)] = edgeLevel(bx, by - 1, bx, by);
-        }
-    }
-    out.interior.resize(static_cast<std::size_t>(b) * b);
+    out.blockQuads = lambda.blockQuads;
+    out.level.assign(blocks, 0);
+    out.snap.assign(4 * blocks, 0);
+    out.culled.assign(blocks, 0);
     for (int by = 0; by < b; ++by) {
         for (int bx = 0; bx < b; ++bx) {
-            out.interior[static_cast<std::size_t>(by * b + bx)] =
-                std::min({out.northEdges[static_cast<std::size_t>(by * (b + 1) + bx)],
-                          out.northEdges[static_cast<std::size_t>(by * (b + 1) + bx + 1)],
-                          out.eastEdges[static_cast<std::size_t>(by * b + bx)],
-                          out.eastEdges[static_cast<std::size_t>((by + 1) * b + bx)]});
+            const Aabb box{{node.lo.x + bx * size, node.lo.y + by * size, node.lo.z},
+                           {node.lo.x + (bx + 1) * size, node.lo.y + (by + 1) * size, node.hi.z}};
+            const auto i = static_cast<std::size_t>(by * b + bx);
+            distance[i] = lodDistance(camera, k, box);
+            out.culled[i] = frustum.intersects(box) ? 0 : 1;
+            int level = 0;
+            while (level < lambda.levels && lambda.at(bx, by, level + 1) * c <= distance[i]) {
+                ++level;  // lambda is non-decreasing in d: the first that does not fit ends the search
+            }
+            out.level[i] = static_cast<std::uint8_t>(level);
+        }
+    }
+    // The drawn neighbour across `side`, or -1 (the node's border, or a culled block: nothing is drawn there).
+    auto neighbour = [&](int bx, int by, int side) {
+        static constexpr int kDx[4] = {0, 1, 0, -1}, kDy[4] = {-1, 0, 1, 0};
+        const int nx = bx + kDx[side], ny = by + kDy[side];
+        if (nx < 0 || ny < 0 || nx >= b || ny >= b || out.culled[static_cast<std::size_t>(ny * b + nx)]) {
+            return -1;
+        }
+        return ny * b + nx;
+    };
+    // A finer block snapped onto a coarser neighbour's lattice must stay within its budget; where it would
+    // not, the neighbour gets finer. Levels only decrease, so this ends.
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (int by = 0; by < b; ++by) {
+            for (int bx = 0; bx < b; ++bx) {
+                const auto i = static_cast<std::size_t>(by * b + bx);
+                if (out.culled[i]) {
+                    continue;
+                }
+                for (int side = 0; side < 4; ++side) {
+                    const int other = neighbour(bx, by, side);
+                    if (other < 0 || out.level[static_cast<std::size_t>(other)] <= out.level[i]) {
+                        continue;
+                    }
+                    const int e = out.level[static_cast<std::size_t>(other)];
+                    if (errors.snapError(bx, by, side, out.level[i], e) * c > distance[i]) {
+                        out.level[static_cast<std::size_t>(other)] = static_cast<std::uint8_t>(e - 1);
+                        changed = true;
+                    }
+                }
+            }
+        }
+    }
+    for (int by = 0; by < b; ++by) {
+        for (int bx = 0; bx < b; ++bx) {
+            const auto i = static_cast<std::size_t>(by * b + bx);
+            for (int side = 0; side < 4; ++side) {
+                const int other = neighbour(bx, by, side);
+                out.snap[4 * i + static_cast<std::size_t>(side)] =
+                    other < 0 ? out.level[i] : std::max(out.level[i], out.level[static_cast<std::size_t>(other)]);
+            }
         }
     }
     return out;
+}
+
+std::pair<double, double> tessellatedHeights(std::span<const float> surface, int chunkSize, const BlockLevels& levels,
+                                             double lx, double ly)
+{
+    const int n = chunkSize;
+    const int q = levels.blockQuads, b = levels.blocksPerSide;
+    TERRAIN_EXPECTS(q * b == n - 1, "levels must be for a node of this chunk size");
+    lx = std::clamp(lx, 0.0, n - 1.0);
+    ly = std::clamp(ly, 0.0, n - 1.0);
+    const int bx = std::min(static_cast<int>(lx / q), b - 1), by = std::min(static_cast<int>(ly / q), b - 1);
+    const auto block = static_cast<std::size_t>(by * b + bx);
+    const int t = levels.level[block];
+    const int s = 1 << t, f = q >> t;
+    const int snap[4] = {levels.snap[4 * block], levels.snap[4 * block + 1], levels.snap[4 * block + 2],
+                         levels.snap[4 * block + 3]};
+    const double u = lx - bx * q, v = ly - by * q;
+    const int a = std::min(static_cast<int>(u / s), f - 1), c = std::min(static_cast<int>(v / s), f - 1);
+    auto h = [&](glm::ivec2 p) -> double { return surface[static_cast<std::size_t>(p.y) * n + p.x]; };
+    // The value at (lx, ly) of triangle (p, q, r) when it holds the point.
+    auto inside = [&](glm::ivec2 p, glm::ivec2 q2, glm::ivec2 r, double& value) {
+        const double area2 =
+            static_cast<double>(q2.x - p.x) * (r.y - p.y) - static_cast<double>(q2.y - p.y) * (r.x - p.x);
+        if (area2 == 0.0) {
+            return false;
+        }
+        const double wq = ((lx - p.x) * (r.y - p.y) - (ly - p.y) * (r.x - p.x)) / area2;
+        const double wr = ((q2.x - p.x) * (ly - p.y) - (q2.y - p.y) * (lx - p.x)) / area2;
+        constexpr double kSlack = -1e-9;
+        if (wq < kSlack || wr < kSlack || 1.0 - wq - wr < kSlack) {
+            return false;
+        }
+        value = h(p) + wq * (h(q2) - h(p)) + wr * (h(r) - h(p));
+        return true;
+    };
+    auto cellHeights = [&](int ca, int cc, double& first, double& second, bool& foundFirst, bool& foundSecond) {
+        const glm::ivec2 v00 = tessellatedVertex(q, bx, by, t, ca, cc, snap);
+        const glm::ivec2 v10 = tessellatedVertex(q, bx, by, t, ca + 1, cc, snap);
+        const glm::ivec2 v11 = tessellatedVertex(q, bx, by, t, ca + 1, cc + 1, snap);
+        const glm::ivec2 v01 = tessellatedVertex(q, bx, by, t, ca, cc + 1, snap);
+        if (!foundFirst) {
+            foundFirst = inside(v00, v10, v11, first) || inside(v00, v11, v01, first);
+        }
+        if (!foundSecond) {
+            foundSecond = inside(v00, v10, v01, second) || inside(v10, v11, v01, second);
+        }
+    };
+    double first = 0.0, second = 0.0;
+    bool foundFirst = false, foundSecond = false;
+    const bool ring = a == 0 || c == 0 || a == f - 1 || c == f - 1;
+    const bool snapped = snap[0] > t || snap[1] > t || snap[2] > t || snap[3] > t;
+    if (!ring || !snapped) {
+        cellHeights(a, c, first, second, foundFirst, foundSecond);
+    } else {
+        // Snapped vertices move along the block's sides: the ring of cells along them still tiles the ring,
+        // but a point may lie in another of its cells.
+        for (int cc = 0; cc < f && !(foundFirst && foundSecond); ++cc) {
+            for (int ca = 0; ca < f && !(foundFirst && foundSecond); ++ca) {
+                if (ca == 0 || cc == 0 || ca == f - 1 || cc == f - 1) {
+                    cellHeights(ca, cc, first, second, foundFirst, foundSecond);
+                }
+            }
+        }
+    }
+    TERRAIN_ASSERT(foundFirst && foundSecond);
+    return {first, second};
 }
 
 }  // namespace terrain

@@ -1,11 +1,18 @@
-// The simplification level of every tessellation block edge of a node (issue 13, part 2; Yusov & Shevtsov,
+// The tessellation render mode's levels for the blocks of a drawn node (issue 13, part 2; Yusov & Shevtsov,
 // seed 000, section 5, with their edge-centre projection replaced by the selector's bound projection).
-// An edge shared by two blocks gets the coarsest level d (its segments span 2^d samples) at which both
-// blocks' errors lambda(d) stay within the pixel budget, each projected at the nearer of the two blocks'
-// distances (lodDistance() of the block's square with the node's height range), so both sides compute the
-// same level and the tessellated node has no cracks. An edge on the node's border has one block. A block's
-// interior takes the finest of its four edges, which is at least as fine as its own error needs. Pure: the
-// tessellation control shader computes the same from the same data.
+//
+// Each block is tessellated uniformly at its level t (cells of 2^t samples). Where two blocks meet, the
+// side takes the coarser of their levels, e = max(t_a, t_b), and the finer block's vertices on that side are
+// snapped onto lattice e (snapToLattice), so both blocks put exactly the same vertices on it: no crack, and
+// no transition triangles, whose triangulation the GL leaves to the implementation. A snapped vertex falls
+// onto its neighbour and the cell between them becomes a degenerate triangle, which the rasterizer drops.
+//
+// A block's level is the coarsest d whose error lambda(d), projected as eq. 3.3 projects bounds (at
+// lodDistance() of the block's square with the node's height range), stays within the budget; a side whose
+// snapped band would exceed the block's budget makes the coarser neighbour finer, until none does. So every
+// block's drawn surface is within `pixels` of the node's full surface. Blocks outside the view frustum are
+// marked culled (the control shader drops them). Pure: the renderer uploads these levels as they are, and
+// the error meter evaluates the same surface (tessellatedHeights).
 #pragma once
 
 #include "core/Aabb.h"
@@ -13,22 +20,34 @@
 #include "lod/BlockErrors.h"
 
 #include <cstdint>
+#include <span>
+#include <utility>
 #include <vector>
 
 namespace terrain {
 
 struct BlockLevels {
     int blocksPerSide = 0;
-    /// Edges between blocks (bx - 1, by) and (bx, by), running north: [by * (B + 1) + bx], bx in [0, B].
-    std::vector<std::uint8_t> northEdges;
-    /// Edges between blocks (bx, by - 1) and (bx, by), running east: [by * B + bx], by in [0, B].
-    std::vector<std::uint8_t> eastEdges;
-    /// Per block [by * B + bx]: the finest (smallest) level of its four edges.
-    std::vector<std::uint8_t> interior;
+    int blockQuads = 0;
+    std::vector<std::uint8_t> level;   ///< per block [by * B + bx]: t
+    std::vector<std::uint8_t> snap;    ///< per block and side [(by * B + bx) * 4 + side]: the side's lattice, >= t
+    std::vector<std::uint8_t> culled;  ///< per block: 1 outside the view frustum (not drawn)
+
+    /// The block as the shaders read it: t | south << 2 | east << 4 | north << 6 | west << 8 | culled << 10.
+    std::uint16_t code(int block) const;
+    /// Triangles the tessellator makes for the node's surface patches (2 (B / 2^t)^2 a drawn block,
+    /// degenerate ones included).
+    std::uint64_t surfaceTriangles() const;
 };
 
 /// The levels of the blocks of a node whose box is `node` (its square and height range), for `camera` at
-/// `pixels` of error (the part of tau the blocks may spend). `errors` are the node's (computeBlockErrors).
-BlockLevels chooseBlockLevels(const BlockErrors& errors, const Aabb& node, const Camera& camera, double pixels);
+/// `pixels` of error (the part of tau the blocks may spend). `errors` are the node's.
+BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels);
+
+/// The heights the tessellation mode draws at node sample coordinates (lx, ly) in [0, N - 1]^2, for the
+/// node's blended sample heights `surface` (N x N) and `levels`: under the one and the other diagonal of the
+/// tessellator's cells (the implementation picks). Both equal where the cell is a triangle.
+std::pair<double, double> tessellatedHeights(std::span<const float> surface, int chunkSize, const BlockLevels& levels,
+                                             double lx, double ly);
 
 }  // namespace terrain

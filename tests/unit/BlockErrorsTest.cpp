@@ -117,6 +117,48 @@ TEST(BlockErrorsTest, PlanesAreExactAtEveryLevelAndABumpOnlyInItsBlocks)
     }
 }
 
+TEST(BlockErrorsTest, TriangleErrorIsTheExactMaximumOverTheTriangle)
+{
+    const int n = 17;
+    std::vector<float> s(static_cast<std::size_t>(n) * n);
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            s[static_cast<std::size_t>(j) * n + i] = static_cast<float>(10.0 * test::unitNoise(7, i, j) + 0.3 * i);
+        }
+    }
+    auto fine = [&](double x, double y) {
+        const int i = std::min(static_cast<int>(x), n - 2), j = std::min(static_cast<int>(y), n - 2);
+        const double fx = x - i, fy = y - j;
+        auto h = [&](int a, int b) -> double { return s[static_cast<std::size_t>(j + b) * n + i + a]; };
+        return fx >= fy ? (1 - fx) * h(0, 0) + (fx - fy) * h(1, 0) + fy * h(1, 1)
+                        : (1 - fy) * h(0, 0) + (fy - fx) * h(0, 1) + fx * h(1, 1);
+    };
+    const glm::ivec2 triangles[][3] = {{{0, 0}, {8, 0}, {3, 1}},
+                                       {{2, 2}, {2, 9}, {7, 5}},
+                                       {{16, 0}, {0, 16}, {9, 11}},
+                                       {{4, 4}, {5, 4}, {4, 5}},
+                                       {{1, 3}, {13, 4}, {6, 6}}};
+    for (const auto& t : triangles) {
+        const double exact = triangleError(s, n, t[0], t[1], t[2]);
+        // Dense barycentric sampling: never above the exact maximum, and close to it.
+        double sampled = 0.0;
+        const int steps = 256;
+        auto h = [&](glm::ivec2 v) -> double { return s[static_cast<std::size_t>(v.y) * n + v.x]; };
+        for (int a = 0; a <= steps; ++a) {
+            for (int b = 0; a + b <= steps; ++b) {
+                const double wa = a / double(steps), wb = b / double(steps), wc = 1.0 - wa - wb;
+                const double x = wa * t[0].x + wb * t[1].x + wc * t[2].x, y = wa * t[0].y + wb * t[1].y + wc * t[2].y;
+                const double plane = wa * h(t[0]) + wb * h(t[1]) + wc * h(t[2]);
+                sampled = std::max(sampled, std::abs(fine(x, y) - plane));
+            }
+        }
+        EXPECT_LE(sampled, exact + 1e-9);
+        EXPECT_GE(sampled, 0.97 * exact);
+        EXPECT_GT(exact, 0.0);
+    }
+    EXPECT_EQ(triangleError(s, n, {0, 0}, {4, 4}, {8, 8}), 0.0) << "no area";
+}
+
 TEST(BlockErrorsDeathTest, RejectsBlocksThatDoNotTileTheNode)
 {
     const std::vector<float> surface(33 * 33, 0.0f);

@@ -1,9 +1,9 @@
-// Block edge levels (lod/TessellationLevels.h) against a brute force written from the definition: for each
-// edge, the largest d whose lambda(d) of every block on the edge, times C (eq. 3.3), is at most the nearer
-// block distance, searched from the coarsest level down (the code searches up); the interior is the finest
-// edge; and what that guarantees: every block within the budget at its own distance.
+// Tessellation block levels (lod/TessellationLevels.h): what they guarantee, checked by brute force on the
+// surface they draw. Every drawn block, sampled densely under both diagonals, is within the pixel budget at
+// its own distance; blocks meeting at a side put the same vertices on it; a plane takes the coarsest level.
 #include "MapTestSupport.h"
 
+#include "core/Frustum.h"
 #include "lod/LodSelector.h"
 #include "lod/TessellationLevels.h"
 
@@ -49,105 +49,113 @@ Aabb blockBox(const Aabb& node, int b, int bx, int by)
             {node.lo.x + (bx + 1) * size, node.lo.y + (by + 1) * size, node.hi.z}};
 }
 
-TEST(TessellationLevelsTest, EdgesTakeTheCoarsestLevelBothBlocksAllowAndInteriorsTheFinestEdge)
+/// The largest distance, sampled every 1/8 sample under both diagonals, between the drawn surface of block
+/// (bx, by) and the node's template surface.
+double drawnBlockError(const std::vector<float>& surface, int n, const BlockLevels& levels, int bx, int by)
+{
+    const int q = levels.blockQuads;
+    double worst = 0.0;
+    for (int y = 0; y <= 8 * q; ++y) {
+        for (int x = 0; x <= 8 * q; ++x) {
+            const double lx = bx * q + x / 8.0, ly = by * q + y / 8.0;
+            const int i = std::min(static_cast<int>(lx), n - 2), j = std::min(static_cast<int>(ly), n - 2);
+            const double fx = lx - i, fy = ly - j;
+            auto h = [&](int a, int b) -> double { return surface[static_cast<std::size_t>(j + b) * n + i + a]; };
+            const double fine = fx >= fy ? (1 - fx) * h(0, 0) + (fx - fy) * h(1, 0) + fy * h(1, 1)
+                                         : (1 - fy) * h(0, 0) + (fy - fx) * h(0, 1) + fx * h(1, 1);
+            const auto [first, second] = tessellatedHeights(surface, n, levels, lx, ly);
+            worst = std::max({worst, std::abs(fine - first), std::abs(fine - second)});
+        }
+    }
+    return worst;
+}
+
+TEST(TessellationLevelsTest, EveryDrawnBlockIsWithinItsBudgetAndSharedSidesMatch)
 {
     const int n = 65;
     const std::vector<float> surface = hills(n, 3, 6.0);
-    const BlockErrors errors = computeBlockErrors(surface, n, 8);
+    const TessellationErrors errors = computeTessellationErrors(surface, n, 8);
     const auto [lo, hi] = std::minmax_element(surface.begin(), surface.end());
     const Aabb node{{0.0, 0.0, *lo}, {640.0, 640.0, *hi}};
     const double pixels = 1.0;
-    int mixed = 0;
+    int mixed = 0, snappedSides = 0;
     for (const Camera& camera :
          {cameraAt({320.0, -50.0, 360.0}, 0.0, -10.0), cameraAt({100.0, 100.0, 900.0}, 30.0, -60.0),
           cameraAt({-400.0, 320.0, 500.0}, 90.0, -5.0), cameraAt({320.0, -2500.0, 1500.0}, 0.0, -25.0)}) {
         const BlockLevels levels = chooseBlockLevels(errors, node, camera, pixels);
-        const int b = errors.blocksPerSide;
-        ASSERT_EQ(levels.blocksPerSide, b);
+        const int b = levels.blocksPerSide;
+        ASSERT_EQ(b, 8);
         const double c = lodDistanceFactor(camera, pixels);
         const double k = verticalErrorFactor(camera);
-        auto distanceOf = [&](int bx, int by) { return lodDistance(camera, k, blockBox(node, b, bx, by)); };
-        // Brute force per edge: from the coarsest level down, the first that every block on it allows.
-        auto brute = [&](std::vector<std::pair<int, int>> blocks) {
-            double d = 1e300;
-            for (auto [bx, by] : blocks) {
-                d = std::min(d, distanceOf(bx, by));
-            }
-            for (int level = errors.levels; level >= 1; --level) {
-                bool fits = true;
-                for (auto [bx, by] : blocks) {
-                    fits = fits && errors.at(bx, by, level) * c <= d;
-                }
-                if (fits) {
-                    return level;
-                }
-            }
-            return 0;
-        };
+        const Frustum frustum = Frustum::fromCamera(camera);
         std::vector<int> seen(4, 0);
         for (int by = 0; by < b; ++by) {
-            for (int bx = 0; bx <= b; ++bx) {
-                std::vector<std::pair<int, int>> blocks;
-                if (bx > 0)
-                    blocks.emplace_back(bx - 1, by);
-                if (bx < b)
-                    blocks.emplace_back(bx, by);
-                EXPECT_EQ(levels.northEdges[static_cast<std::size_t>(by * (b + 1) + bx)], brute(blocks))
-                    << bx << "," << by;
-            }
-        }
-        for (int by = 0; by <= b; ++by) {
             for (int bx = 0; bx < b; ++bx) {
-                std::vector<std::pair<int, int>> blocks;
-                if (by > 0)
-                    blocks.emplace_back(bx, by - 1);
-                if (by < b)
-                    blocks.emplace_back(bx, by);
-                EXPECT_EQ(levels.eastEdges[static_cast<std::size_t>(by * b + bx)], brute(blocks)) << bx << "," << by;
-            }
-        }
-        for (int by = 0; by < b; ++by) {
-            for (int bx = 0; bx < b; ++bx) {
-                const int interior = levels.interior[static_cast<std::size_t>(by * b + bx)];
-                EXPECT_EQ(interior, std::min({int{levels.northEdges[static_cast<std::size_t>(by * (b + 1) + bx)]},
-                                              int{levels.northEdges[static_cast<std::size_t>(by * (b + 1) + bx + 1)]},
-                                              int{levels.eastEdges[static_cast<std::size_t>(by * b + bx)]},
-                                              int{levels.eastEdges[static_cast<std::size_t>((by + 1) * b + bx)]}}));
-                // The guarantee: the block drawn at its interior level is within the budget where it is.
-                if (interior > 0) {
-                    EXPECT_LE(errors.at(bx, by, interior) * c, distanceOf(bx, by));
+                const auto i = static_cast<std::size_t>(by * b + bx);
+                const Aabb box = blockBox(node, b, bx, by);
+                ASSERT_EQ(levels.culled[i] != 0, !frustum.intersects(box));
+                if (levels.culled[i]) {
+                    continue;
                 }
-                ++seen[static_cast<std::size_t>(interior)];
+                // The guarantee, from the drawn surface itself.
+                const double error = drawnBlockError(surface, n, levels, bx, by);
+                // Level 0 is the node's own samples: nothing finer exists, and the tessellator may split
+                // its quads along the other diagonal.
+                if (levels.level[i] == 0) {
+                    EXPECT_LE(error, std::max(errors.flip[i] + 1e-6, lodDistance(camera, k, box) / c * (1.0 + 1e-9)))
+                        << "block " << bx << "," << by;
+                } else {
+                    EXPECT_LE(error * c, lodDistance(camera, k, box) * (1.0 + 1e-9))
+                        << "block " << bx << "," << by << " level " << int{levels.level[i]};
+                }
+                ++seen[levels.level[i]];
+                for (int side = 0; side < 4; ++side) {
+                    snappedSides += levels.snap[4 * i + static_cast<std::size_t>(side)] > levels.level[i] ? 1 : 0;
+                }
+            }
+        }
+        // Shared sides: both blocks put the same vertices on them (vertices of every cell on the side).
+        auto sideVertices = [&](int bx, int by, int side) {
+            const auto i = static_cast<std::size_t>(by * b + bx);
+            const int t = levels.level[i], f = 8 >> t;
+            const int snap[4] = {levels.snap[4 * i], levels.snap[4 * i + 1], levels.snap[4 * i + 2],
+                                 levels.snap[4 * i + 3]};
+            std::vector<std::pair<int, int>> out;
+            for (int m = 0; m <= f; ++m) {
+                const int a = side == kEast ? f : side == kWest ? 0 : m;
+                const int cc = side == kNorth ? f : side == kSouth ? 0 : m;
+                const glm::ivec2 v = tessellatedVertex(8, bx, by, t, a, cc, snap);
+                out.emplace_back(v.x, v.y);
+            }
+            std::sort(out.begin(), out.end());
+            out.erase(std::unique(out.begin(), out.end()), out.end());
+            return out;
+        };
+        for (int by = 0; by < b; ++by) {
+            for (int bx = 0; bx + 1 < b; ++bx) {
+                if (!levels.culled[static_cast<std::size_t>(by * b + bx)] &&
+                    !levels.culled[static_cast<std::size_t>(by * b + bx + 1)]) {
+                    EXPECT_EQ(sideVertices(bx, by, kEast), sideVertices(bx + 1, by, kWest)) << bx << "," << by;
+                }
+                if (!levels.culled[static_cast<std::size_t>(bx * b + by)] &&
+                    !levels.culled[static_cast<std::size_t>((bx + 1) * b + by)]) {
+                    EXPECT_EQ(sideVertices(by, bx, kNorth), sideVertices(by, bx + 1, kSouth)) << by << "," << bx;
+                }
             }
         }
         mixed += std::count_if(seen.begin(), seen.end(), [](int s) { return s > 0; }) >= 2 ? 1 : 0;
-        std::printf("levels 0..3: %d %d %d %d blocks\n", seen[0], seen[1], seen[2], seen[3]);
+        std::printf("levels 0..3: %d %d %d %d blocks, %llu triangles\n", seen[0], seen[1], seen[2], seen[3],
+                    static_cast<unsigned long long>(levels.surfaceTriangles()));
     }
     EXPECT_GE(mixed, 3) << "the cases must mix levels inside a node";
+    EXPECT_GT(snappedSides, 10) << "the cases must snap sides";
 }
 
-TEST(TessellationLevelsTest, MovingAwayNeverMakesALevelFinerAndPlanesAreCoarsest)
+TEST(TessellationLevelsTest, APlaneTakesTheCoarsestLevelHoweverCloseAndNearTakesMore)
 {
     const int n = 33;
-    const std::vector<float> surface = hills(n, 5, 4.0);
-    const BlockErrors errors = computeBlockErrors(surface, n, 8);
-    const auto [lo, hi] = std::minmax_element(surface.begin(), surface.end());
-    const Aabb node{{0.0, 0.0, *lo}, {320.0, 320.0, *hi}};
-    BlockLevels previous;
-    for (double back = 0.0; back <= 3000.0; back += 150.0) {
-        const Camera camera = cameraAt({160.0, -20.0 - back, 340.0 + 0.2 * back}, 0.0, -12.0);
-        const BlockLevels levels = chooseBlockLevels(errors, node, camera, 2.0);
-        if (!previous.interior.empty()) {
-            for (std::size_t k = 0; k < levels.northEdges.size(); ++k) {
-                EXPECT_GE(levels.northEdges[k], previous.northEdges[k]) << back;
-            }
-            for (std::size_t k = 0; k < levels.interior.size(); ++k) {
-                EXPECT_GE(levels.interior[k], previous.interior[k]) << back;
-            }
-        }
-        previous = levels;
-    }
-    // A plane has no error at any level: every edge takes the coarsest, however close the camera is.
+    const auto [lo, hi] = std::pair{0.0, 30.0};
+    const Aabb node{{0.0, 0.0, lo}, {320.0, 320.0, hi}};
     std::vector<float> plane(static_cast<std::size_t>(n) * n);
     for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) {
@@ -155,10 +163,15 @@ TEST(TessellationLevelsTest, MovingAwayNeverMakesALevelFinerAndPlanesAreCoarsest
         }
     }
     const BlockLevels flat =
-        chooseBlockLevels(computeBlockErrors(plane, n, 8), node, cameraAt({10.0, 10.0, 5.0}, 45.0, -20.0), 0.5);
-    for (std::uint8_t level : flat.interior) {
+        chooseBlockLevels(computeTessellationErrors(plane, n, 8), node, cameraAt({10.0, 10.0, 5.0}, 45.0, -20.0), 0.5);
+    for (std::uint8_t level : flat.level) {
         EXPECT_EQ(level, 3);
     }
+    // Rough ground: close up takes more triangles than far away.
+    const TessellationErrors rough = computeTessellationErrors(hills(n, 5, 4.0), n, 8);
+    const Camera down = cameraAt({160.0, 160.0, 500.0}, 0.0, -89.0), far = cameraAt({160.0, 160.0, 5000.0}, 0.0, -89.0);
+    EXPECT_GT(chooseBlockLevels(rough, node, down, 2.0).surfaceTriangles(),
+              chooseBlockLevels(rough, node, far, 2.0).surfaceTriangles());
 }
 
 }  // namespace
