@@ -191,6 +191,9 @@ struct Scene {
     std::unique_ptr<TextOverlay> overlay;
     std::unique_ptr<TerrainNodeSource> source;
     std::unique_ptr<TerrainStreamer> streamer;
+    bool tessellation = false;  ///< render_mode = tessellation, and the GL has it
+    double nodePixels = 2.0;    ///< the selection's tau: all of lod_error, or what the blocks leave of it
+    double blockPixels = 0.0;   ///< tessellation: the blocks' part of lod_error
 
     const MapHeader& header() const { return map->header(); }
 };
@@ -261,9 +264,16 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
     log(scene->window->description());
     const std::filesystem::path shaders =
         o.shaderPath.empty() ? std::filesystem::path(TERRAIN_SHADER_DIR) : o.shaderPath;
-    auto renderer =
-        TerrainRenderer::create(shaders, header, o.vertexCacheSize,
-                                {static_cast<std::size_t>(o.quadCacheSize), o.nodeTextureCompression}, materials);
+    scene->tessellation = o.tessellation;
+    if (o.tessellation && !TerrainRenderer::tessellationSupported()) {
+        log("render_mode = tessellation needs OpenGL 4.0 tessellation shaders, which this GL lacks: drawing chunks");
+        scene->tessellation = false;
+    }
+    scene->nodePixels = scene->tessellation ? o.lodError * (1.0 - o.tessellationShare) : o.lodError;
+    scene->blockPixels = scene->tessellation ? o.lodError * o.tessellationShare : 0.0;
+    auto renderer = TerrainRenderer::create(
+        shaders, header, o.vertexCacheSize,
+        {static_cast<std::size_t>(o.quadCacheSize), o.nodeTextureCompression, scene->tessellation}, materials);
     if (!renderer.ok()) {
         return fail(renderer.error().message);
     }
@@ -280,8 +290,9 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
     }
     scene->overlay = std::move(overlay).value();
 
-    scene->source =
-        std::make_unique<TerrainNodeSource>(*scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing});
+    scene->source = std::make_unique<TerrainNodeSource>(
+        *scene->map,
+        DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing, scene->tessellation ? kTessellationBlockQuads : 0});
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
@@ -521,7 +532,7 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         const double speed = frame == 0 || step <= 0.0 ? 0.0 : glm::length(camera.position - previousPosition) / step;
         previousPosition = camera.position;
         const auto frameStart = std::chrono::steady_clock::now();
-        FrameStats frameStats = scene->streamer->update(camera, o.lodError, speed);
+        FrameStats frameStats = scene->streamer->update(camera, scene->nodePixels, speed);
         if (video) {
             // A recording shows every frame complete: load what it wants, select again, until it wants
             // nothing more (or the cache is full). Independent of thread timing: identical runs give
@@ -529,12 +540,13 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
             for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred + frameStats.tooFast;
                  ++round) {
                 scene->streamer->drain();
-                frameStats = scene->streamer->update(camera, o.lodError, speed);
+                frameStats = scene->streamer->update(camera, scene->nodePixels, speed);
             }
         }
         const TerrainStreamer& streamer = *scene->streamer;
         const RenderStats renderStats = scene->renderer->draw(
-            streamer.selection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, style);
+            streamer.selection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, style,
+            scene->blockPixels);
         if (o.drawUserInterface) {
             scene->overlay->draw(overlayLines(video, frame, time, rate.framesPerSecond(), renderStats, *scene, camera,
                                               o.lodError, style.wireframe),

@@ -434,6 +434,24 @@ std::vector<OptionSpec> makeOptionTable()
                            "65 x 65 node. Off by default: Mesa's llvmpipe decodes DXT1 in software, which cost about "
                            "15% of frame time in RenderBench.",
                            &O::nodeTextureCompression));
+    t.push_back({"render_mode", kGroupDisplay,
+                 "How nodes become triangles: chunks draws every selected node's template mesh in full (3.2.9); "
+                 "tessellation cuts each node into blocks of 8 x 8 quads that the GPU tessellates, each as coarse "
+                 "as its share of tau allows (issue 13; needs OpenGL 4.0, else chunks with a line saying so).",
+                 "chunks or tessellation",
+                 [](std::string_view value, const SetContext&, TengineOptions& o) {
+                     const std::string v = lowerCase(value);
+                     if (v != "chunks" && v != "tessellation") {
+                         return false;
+                     }
+                     o.tessellation = v == "tessellation";
+                     return true;
+                 },
+                 [](const TengineOptions& o) { return std::string(o.tessellation ? "tessellation" : "chunks"); }});
+    t.push_back(realOption("tessellation_error_share", kGroupDisplay,
+                           "With render_mode = tessellation: the part of lod_error the blocks inside a node may spend; "
+                           "the nodes are selected for the rest, so the drawn surface stays within lod_error.",
+                           &O::tessellationShare, openInterval(0, 1), ""));
     t.push_back(realOption("sun_azimuth", kGroupDisplay, "Direction the sunlight comes from: 0 north, 90 east.",
                            &O::sunAzimuth, closedInterval(0, 360), "degrees"));
     t.push_back(realOption("sun_elevation", kGroupDisplay, "Height of the sun above the horizon.", &O::sunElevation,

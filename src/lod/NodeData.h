@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/Expected.h"
+#include "lod/BlockErrors.h"
 #include "quadtree/NodeId.h"
 #include "synthesis/DualHeightMap.h"
 
@@ -28,6 +29,9 @@ struct NodeData {
     DualHeightMap heights;                      ///< base + displacement, (N + 4)^2, metres above the map's offset
     std::vector<std::uint8_t> materialWeights;  ///< N x N x 4 material weights (DetailSynthesizer), or empty
     std::vector<std::uint8_t> texture;          ///< T x T RGB, rows south to north
+    /// The tessellation render mode's block errors of the drawn surface (base plus displacement), made with
+    /// the node when that mode is on (DetailPolicy::tessellationBlockQuads); null otherwise.
+    std::shared_ptr<const TessellationErrors> tessellation;
 };
 
 using NodePtr = std::shared_ptr<const NodeData>;

@@ -71,7 +71,27 @@ Expected<NodePtr> TerrainNodeSource::loadStatic(const NodeId& id, const NodeData
         data->materialWeights = mPolicy.synthesizer->materialWeights(map, where);
     }
     data->texture = std::move(node->texture);
+    addTessellationErrors(*data);
     return NodePtr(std::move(data));
+}
+
+void TerrainNodeSource::addTessellationErrors(NodeData& data) const
+{
+    if (mPolicy.tessellationBlockQuads <= 0) {
+        return;
+    }
+    const int n = static_cast<int>(mMap.header().chunkSize), w = data.heights.size;
+    std::vector<float> window(data.heights.base.size());
+    data.heights.surface(window);
+    std::vector<float> surface(static_cast<std::size_t>(n) * n);
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            surface[static_cast<std::size_t>(j) * n + i] =
+                window[static_cast<std::size_t>(j + kBorder) * w + i + kBorder];
+        }
+    }
+    data.tessellation = std::make_shared<const TessellationErrors>(
+        computeTessellationErrors(surface, n, mPolicy.tessellationBlockQuads));
 }
 
 NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) const
@@ -106,6 +126,7 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     }
     data->zMin = std::clamp(h.heightOffset + lo - mDisplacementBound, parent.zMin, parent.zMax);
     data->zMax = std::clamp(h.heightOffset + hi + mDisplacementBound, data->zMin, parent.zMax);
+    addTessellationErrors(*data);
     return data;
 }
 

@@ -21,6 +21,9 @@ struct DetailPolicy {
     const DetailSynthesizer* synthesizer = nullptr;
     /// lod_minimum_spacing: no node, static or dynamic, with a sample spacing below this (metres, >= 0).
     double minimumSpacing = 0.0;
+    /// > 0: every node gets its tessellation errors (NodeData::tessellation) for blocks of this many quads a
+    /// side (render_mode = tessellation), made on the loading thread with the node.
+    int tessellationBlockQuads = 0;
 };
 
 class TerrainNodeSource final : public NodeSource {
@@ -44,6 +47,7 @@ private:
     Expected<NodePtr> loadStatic(const NodeId& id, const NodeData* parent) const;
     NodePtr synthesize(const NodeData& parent, int quadrant) const;
     bool childrenAllowed(const NodeId& id, bool hasStaticChildren) const;
+    void addTessellationErrors(NodeData& data) const;
 
     const MapFile& mMap;
     DetailPolicy mPolicy;

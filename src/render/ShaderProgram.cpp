@@ -62,23 +62,39 @@ Expected<GLuint> compile(GLenum type, const std::string& name, const std::string
 
 }  // namespace
 
-Expected<ShaderProgram> ShaderProgram::fromSource(const std::string& name, const std::string& vertex,
-                                                  const std::string& fragment, const std::vector<std::string>& defines)
+Expected<ShaderProgram> ShaderProgram::link(const std::string& name, const std::vector<Stage>& stages,
+                                            const std::vector<std::string>& defines,
+                                            const std::vector<std::string>& feedback)
 {
-    auto vs = compile(GL_VERTEX_SHADER, name + ".vert", withDefines(vertex, defines));
-    TERRAIN_TRY(vs);
-    auto fs = compile(GL_FRAGMENT_SHADER, name + ".frag", withDefines(fragment, defines));
-    if (!fs.ok()) {
-        glDeleteShader(*vs);
-        return fs.error();
+    std::vector<GLuint> shaders;
+    auto release = [&] {
+        for (GLuint shader : shaders) {
+            glDeleteShader(shader);
+        }
+    };
+    for (const Stage& stage : stages) {
+        auto shader = compile(stage.type, stage.file, withDefines(stage.source, defines));
+        if (!shader.ok()) {
+            release();
+            return shader.error();
+        }
+        shaders.push_back(*shader);
     }
     ShaderProgram program;
     program.mProgram = gl::Program::create();
-    glAttachShader(program.name(), *vs);
-    glAttachShader(program.name(), *fs);
+    for (GLuint shader : shaders) {
+        glAttachShader(program.name(), shader);
+    }
+    if (!feedback.empty()) {
+        std::vector<const char*> names;
+        for (const auto& f : feedback) {
+            names.push_back(f.c_str());
+        }
+        glTransformFeedbackVaryings(program.name(), static_cast<GLsizei>(names.size()), names.data(),
+                                    GL_INTERLEAVED_ATTRIBS);
+    }
     glLinkProgram(program.name());
-    glDeleteShader(*vs);
-    glDeleteShader(*fs);
+    release();
     GLint ok = GL_FALSE;
     glGetProgramiv(program.name(), GL_LINK_STATUS, &ok);
     if (ok != GL_TRUE) {
@@ -91,6 +107,13 @@ Expected<ShaderProgram> ShaderProgram::fromSource(const std::string& name, const
     return program;
 }
 
+Expected<ShaderProgram> ShaderProgram::fromSource(const std::string& name, const std::string& vertex,
+                                                  const std::string& fragment, const std::vector<std::string>& defines)
+{
+    return link(name, {{GL_VERTEX_SHADER, name + ".vert", vertex}, {GL_FRAGMENT_SHADER, name + ".frag", fragment}},
+                defines, {});
+}
+
 Expected<ShaderProgram> ShaderProgram::load(const std::filesystem::path& directory, const std::string& name,
                                             const std::vector<std::string>& defines)
 {
@@ -99,6 +122,22 @@ Expected<ShaderProgram> ShaderProgram::load(const std::filesystem::path& directo
     auto fragment = readText(directory / (name + ".frag"));
     TERRAIN_TRY(fragment);
     return fromSource((directory / name).string(), *vertex, *fragment, defines);
+}
+
+Expected<ShaderProgram> ShaderProgram::loadTessellation(const std::filesystem::path& directory,
+                                                        const std::string& vertex, const std::string& name,
+                                                        const std::vector<std::string>& defines,
+                                                        const std::vector<std::string>& feedback)
+{
+    std::vector<Stage> stages;
+    for (auto [type, file] :
+         {std::pair{GL_VERTEX_SHADER, vertex + ".vert"}, std::pair{GL_TESS_CONTROL_SHADER, name + ".tesc"},
+          std::pair{GL_TESS_EVALUATION_SHADER, name + ".tese"}, std::pair{GL_FRAGMENT_SHADER, name + ".frag"}}) {
+        auto text = readText(directory / file);
+        TERRAIN_TRY(text);
+        stages.push_back({static_cast<GLenum>(type), (directory / file).string(), std::move(text).value()});
+    }
+    return link((directory / name).string(), stages, defines, feedback);
 }
 
 GLint ShaderProgram::uniform(const char* name) const

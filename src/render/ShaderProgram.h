@@ -23,12 +23,28 @@ public:
                                               const std::string& fragment,
                                               const std::vector<std::string>& defines = {});
 
+    /// The tessellation program: `<directory>/<vertex>.vert`, `<name>.tesc`, `<name>.tese` and `<name>.frag`.
+    /// With `feedback`, those outputs of the last geometry stage are captured by transform feedback
+    /// (interleaved), for tests that read back what was generated.
+    static Expected<ShaderProgram> loadTessellation(const std::filesystem::path& directory, const std::string& vertex,
+                                                    const std::string& name,
+                                                    const std::vector<std::string>& defines = {},
+                                                    const std::vector<std::string>& feedback = {});
+
     void use() const { glUseProgram(mProgram.name()); }
     /// Location of a uniform, cached; -1 when the program has none of that name (optimised away).
     GLint uniform(const char* name) const;
     GLuint name() const { return mProgram.name(); }
 
 private:
+    struct Stage {
+        GLenum type;
+        std::string file;
+        std::string source;
+    };
+    static Expected<ShaderProgram> link(const std::string& name, const std::vector<Stage>& stages,
+                                        const std::vector<std::string>& defines,
+                                        const std::vector<std::string>& feedback);
     gl::Program mProgram;
     mutable std::unordered_map<std::string, GLint> mUniforms;
 };

@@ -3,6 +3,7 @@
 #include "render/TerrainRenderer.h"
 
 #include "heightfield/Image.h"
+#include "lod/TessellationLevels.h"
 #include "quadtree/ChunkGeometry.h"
 #include "render/NodeTextures.h"
 #include "render/TemplateMesh.h"
@@ -98,7 +99,21 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         defines.emplace_back("DETAIL");
         defines.emplace_back("LAYER_COUNT " + std::to_string(layers.size()));
     }
-    auto terrain = ShaderProgram::load(shaderDirectory, "terrain", defines);
+    r->mTessellation = pools.tessellation;
+    r->mExtent = extentOf(header);
+    if (r->mTessellation) {
+        if (!tessellationSupported()) {
+            return makeError("render_mode = tessellation needs OpenGL 4.0 tessellation shaders; this GL has none");
+        }
+        TERRAIN_EXPECTS((header.chunkSize - 1) % kTessellationBlockQuads == 0,
+                        "tessellation blocks must tile the node");
+        r->mBlocks = static_cast<int>(header.chunkSize - 1) / kTessellationBlockQuads;
+    }
+    auto loadProgram = [&](const std::vector<std::string>& with) {
+        return r->mTessellation ? ShaderProgram::loadTessellation(shaderDirectory, "terrain_tess", "terrain", with)
+                                : ShaderProgram::load(shaderDirectory, "terrain", with);
+    };
+    auto terrain = loadProgram(defines);
     TERRAIN_TRY(terrain);
     r->mPrograms.push_back(std::move(terrain.value()));
     if (!layers.empty()) {
@@ -106,7 +121,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         // runs a loop or branch for every fragment even where no fragment needs it (measured on the demo at
         // 1280 x 720: about 40 ms a frame with one program and a per-node branch).
         defines.emplace_back("DETAIL_TINT_ONLY");
-        auto far = ShaderProgram::load(shaderDirectory, "terrain", defines);
+        auto far = loadProgram(defines);
         TERRAIN_TRY(far);
         r->mPrograms.push_back(std::move(far.value()));
     }
@@ -117,6 +132,9 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         glUniform1i(program.uniform("uDetail"), 2);
         glUniform1i(program.uniform("uWeights"), 3);
         glUniform1i(program.uniform("uParentNormals"), 4);
+        glUniform1i(program.uniform("uLevels"), 5);
+        glUniform1i(program.uniform("uBlocks"), r->mBlocks);
+        glUniform1i(program.uniform("uBlockQuads"), kTessellationBlockQuads);
     }
     if (!layers.empty()) {
         const int w = layers.front().image.width, h = layers.front().image.height;
@@ -214,6 +232,41 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     }
     glBindVertexArray(0);
     r->mEmptyVao = gl::VertexArray::create();
+    if (r->mTessellation) {
+        // One patch vertex per block and per border block side, numbered (terrain_tess.vert); the node
+        // constants per instance, as for the chunks.
+        const int b = r->mBlocks;
+        std::vector<float> ids(static_cast<std::size_t>(b * b + 4 * b));
+        for (std::size_t k = 0; k < ids.size(); ++k) {
+            ids[k] = static_cast<float>(k);
+        }
+        r->mPatchVao = gl::VertexArray::create();
+        r->mPatchIds = gl::Buffer::create();
+        glBindVertexArray(r->mPatchVao.name());
+        glBindBuffer(GL_ARRAY_BUFFER, r->mPatchIds.name());
+        glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(ids.size() * sizeof(float)), ids.data(), GL_STATIC_DRAW);
+        glEnableVertexAttribArray(0);
+        glVertexAttribPointer(0, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
+        glBindBuffer(GL_ARRAY_BUFFER, r->mConstantsBuffer.name());
+        for (int k = 0; k < r->mNodeTexels; ++k) {
+            const auto location = static_cast<GLuint>(2 + k);
+            glEnableVertexAttribArray(location);
+            glVertexAttribPointer(location, 4, GL_FLOAT, GL_FALSE, stride,
+                                  reinterpret_cast<const void*>(static_cast<std::uintptr_t>(k) * 4 * sizeof(float)));
+            glVertexAttribDivisor(location, 1);
+        }
+        glBindBuffer(GL_ARRAY_BUFFER, 0);
+        glBindVertexArray(0);
+        r->mLevelsBuffer = gl::Buffer::create();
+        glBindBuffer(GL_TEXTURE_BUFFER, r->mLevelsBuffer.name());
+        glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(b * b * sizeof(std::uint16_t)), nullptr,
+                     GL_STREAM_DRAW);
+        r->mLevelsTexture = gl::Texture::create();
+        glBindTexture(GL_TEXTURE_BUFFER, r->mLevelsTexture.name());
+        glTexBuffer(GL_TEXTURE_BUFFER, GL_R16UI, r->mLevelsBuffer.name());
+        glBindTexture(GL_TEXTURE_BUFFER, 0);
+        glBindBuffer(GL_TEXTURE_BUFFER, 0);
+    }
 
     // The pools, allocated once: a layer per slot.
     const auto layersOf = static_cast<GLsizei>(slots);
@@ -345,9 +398,17 @@ void TerrainRenderer::drawSky(const Camera& camera, const SceneStyle& style)
     glDepthMask(GL_TRUE);
 }
 
-RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentNodeLookup& resident,
-                                  const Camera& camera, const SceneStyle& style)
+bool TerrainRenderer::tessellationSupported()
 {
+    GLint major = 0;
+    glGetIntegerv(GL_MAJOR_VERSION, &major);
+    return major >= 4;
+}
+
+RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentNodeLookup& resident,
+                                  const Camera& camera, const SceneStyle& style, double blockPixels)
+{
+    TERRAIN_EXPECTS(!mTessellation || blockPixels > 0.0, "tessellation mode needs a block error budget > 0 pixels");
     RenderStats stats;
     glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
     glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
@@ -366,6 +427,8 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     mConstants.assign(selection.nodes.size() * static_cast<std::size_t>(texels) * 4, 0.0f);
     std::size_t count = 0;
     std::size_t nearCount = 0;
+    std::uint64_t tessellatedTriangles = 0;
+    mCodes.clear();
     for (int pass = 0; pass < (split ? 2 : 1); ++pass) {
         for (const SelectedNode& selected : selection.nodes) {
             const bool near = !split || selected.distance < fade;
@@ -403,6 +466,26 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                     c[13 + 2 * k] = static_cast<float>(fraction.y);
                 }
             }
+            if (mTessellation) {
+                TERRAIN_EXPECTS(node->tessellation != nullptr,
+                                "tessellation mode needs nodes made with their tessellation errors "
+                                "(DetailPolicy::tessellationBlockQuads)");
+                const BlockLevels levels = chooseBlockLevels(
+                    *node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera, blockPixels);
+                const int b = levels.blocksPerSide;
+                for (int k = 0; k < b * b; ++k) {
+                    mCodes.push_back(levels.code(k));
+                    const bool drawn = levels.culled[static_cast<std::size_t>(k)] == 0;
+                    (drawn ? stats.blocks : stats.culledBlocks) += 1;
+                    const int bx = k % b, by = k / b;
+                    const int borders = (bx == 0) + (bx == b - 1) + (by == 0) + (by == b - 1);
+                    if (drawn && borders > 0) {
+                        tessellatedTriangles += borders * skirtTriangles(kTessellationBlockQuads >>
+                                                                         levels.level[static_cast<std::size_t>(k)]);
+                    }
+                }
+                tessellatedTriangles += levels.surfaceTriangles();
+            }
             ++count;
         }
         if (pass == 0) {
@@ -410,7 +493,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         }
     }
     stats.nodes = count;
-    stats.triangles = count * mTrianglesPerNode;
+    stats.triangles = mTessellation ? tessellatedTriangles : count * mTrianglesPerNode;
     stats.gpuNodes = mSlotOf.size();
     if (count == 0) {
         return stats;
@@ -419,6 +502,16 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(mConstants.size() * sizeof(float)), mConstants.data(),
                  GL_STREAM_DRAW);
     glBindBuffer(GL_ARRAY_BUFFER, 0);
+    if (mTessellation) {
+        glBindBuffer(GL_TEXTURE_BUFFER, mLevelsBuffer.name());
+        glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(mCodes.size() * sizeof(std::uint16_t)), mCodes.data(),
+                     GL_STREAM_DRAW);
+        glBindBuffer(GL_TEXTURE_BUFFER, 0);
+        glActiveTexture(GL_TEXTURE5);
+        glBindTexture(GL_TEXTURE_BUFFER, mLevelsTexture.name());
+        glActiveTexture(GL_TEXTURE0);
+        glPatchParameteri(GL_PATCH_VERTICES, 1);
+    }
 
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
@@ -473,7 +566,8 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     }
     glActiveTexture(GL_TEXTURE0);
 
-    glBindVertexArray(mTemplateVao.name());
+    glBindVertexArray(mTessellation ? mPatchVao.name() : mTemplateVao.name());
+    const auto patches = static_cast<GLsizei>(mBlocks * mBlocks + 4 * mBlocks);
     const std::size_t ranges[2][2] = {{0, nearCount}, {nearCount, count}};
     for (std::size_t p = 0; p < mPrograms.size(); ++p) {
         const auto [first, last] = ranges[p];
@@ -491,7 +585,12 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                                   reinterpret_cast<const void*>(offset));
         }
         glBindBuffer(GL_ARRAY_BUFFER, 0);
-        glDrawElementsInstanced(GL_TRIANGLES, mIndexCount, mIndexType, nullptr, static_cast<GLsizei>(last - first));
+        if (mTessellation) {
+            glUniform1i(mPrograms[p].uniform("uFirstInstance"), static_cast<GLint>(first));
+            glDrawArraysInstanced(GL_PATCHES, 0, patches, static_cast<GLsizei>(last - first));
+        } else {
+            glDrawElementsInstanced(GL_TRIANGLES, mIndexCount, mIndexType, nullptr, static_cast<GLsizei>(last - first));
+        }
         ++stats.drawCalls;
     }
     glBindVertexArray(0);

@@ -41,9 +41,11 @@ struct RenderStats {
     std::size_t staticNodes = 0;
     std::size_t dynamicNodes = 0;
     std::uint64_t triangles = 0;
-    std::size_t uploads = 0;    ///< nodes copied into their slots this frame
-    std::size_t gpuNodes = 0;   ///< slots holding a node after the frame
-    std::size_t drawCalls = 0;  ///< draw calls for the terrain (the sky not counted): 1 with anything in view
+    std::size_t uploads = 0;       ///< nodes copied into their slots this frame
+    std::size_t gpuNodes = 0;      ///< slots holding a node after the frame
+    std::size_t drawCalls = 0;     ///< draw calls for the terrain (the sky not counted): 1 with anything in view
+    std::size_t blocks = 0;        ///< tessellation mode: blocks drawn (not culled)
+    std::size_t culledBlocks = 0;  ///< tessellation mode: blocks of drawn nodes outside the frustum
 };
 
 /// GPU bytes of one slot of the node pools (TerrainRenderer::create): what each resident node costs.
@@ -60,7 +62,14 @@ struct SlotBytes {
 struct PoolOptions {
     std::size_t slots = 512;      ///< nodes: the cache's capacity (quad_cache_size)
     bool compressColour = false;  ///< DXT1 colour layers (node_texture_compression), where the GL has S3TC
+    /// render_mode = tessellation: blocks of kTessellationBlockQuads quads tessellated at the levels
+    /// chooseBlockLevels picks (lod/TessellationLevels.h); needs GL 4.0 (tessellationSupported()) and nodes
+    /// with tessellation errors.
+    bool tessellation = false;
 };
+
+/// Quads per side of a tessellation block (render_mode = tessellation).
+inline constexpr int kTessellationBlockQuads = 8;
 
 class TerrainRenderer {
 public:
@@ -84,8 +93,14 @@ public:
     /// with detail layers: nodes beyond every layer's fade go in a second one, drawn by a program without
     /// the layers), the nodes' data from `resident` (the node cache: every selected node and its parent must be
     /// resident). A node gets a slot the first time it is drawn and keeps it until release().
+    /// In tessellation mode the blocks spend `blockPixels` of error (the selection was made for the rest of tau).
     RenderStats draw(const LodSelection& selection, const ResidentNodeLookup& resident, const Camera& camera,
-                     const SceneStyle& style);
+                     const SceneStyle& style, double blockPixels = 0.0);
+
+    /// Whether this context runs tessellation shaders (OpenGL 4.0).
+    static bool tessellationSupported();
+    /// Triangles the tessellator makes for a border skirt patch of f columns.
+    static std::uint64_t skirtTriangles(int f) { return f == 1 ? 2 : 4 * static_cast<std::uint64_t>(f) - 2; }
 
     /// The node cache evicted `id` (TerrainStreamer::onEvict): its slot is free for another node. Nothing
     /// is freed on the GPU. Unknown ids are ignored (a node evicted before it was ever drawn).
@@ -135,5 +150,14 @@ private:
     int mNodeTexels = 3;
     std::vector<float> mConstants;
     gl::Buffer mConstantsBuffer;
+    // Tessellation mode: patches (blocks, then border skirts) and the frame's block codes.
+    bool mTessellation = false;
+    QuadtreeExtent mExtent;
+    int mBlocks = 0;  ///< per side
+    gl::VertexArray mPatchVao;
+    gl::Buffer mPatchIds;
+    gl::Buffer mLevelsBuffer;
+    gl::Texture mLevelsTexture;  ///< GL_TEXTURE_BUFFER over mLevelsBuffer, R16UI
+    std::vector<std::uint16_t> mCodes;
 };
 }  // namespace terrain

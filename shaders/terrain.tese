@@ -1,0 +1,107 @@
+#version 400 core
+// Tessellation evaluation (issue 13): the vertices of a block at level t, or of a border skirt, from the
+// node's data in the pools, with the same geomorph, normals and outputs as the chunk vertex program
+// (terrain.vert; terrain.frag shades both). A vertex on a block side whose lattice is coarser than t is
+// snapped onto that lattice (lod/BlockErrors.h, snapToLattice and tessellatedVertex compute the same), so the
+// neighbouring block makes the same vertex there, bit for bit: same sample, same arithmetic (precise).
+
+layout(quads, equal_spacing, ccw) in;
+
+patch in vec4 eNode0;  // as terrain.vert's aNode0 .. aNode2
+patch in vec4 eNode1;
+patch in vec4 eNode2;
+patch in ivec4 eBlock;  // bx, by, kind (0 surface, 1 + side: skirt of the south, east, north, west border), t
+patch in ivec4 eSnap;   // lattices of the south, east, north, west sides
+#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+patch in vec4 eLayerOrigin[4];
+flat out vec4 vLayerOrigin[(LAYER_COUNT + 1) / 2];
+#endif
+
+uniform mat4 uViewProjection;
+uniform float uInverseCells;
+uniform float uHeightBase;
+uniform int uBlockQuads;
+uniform sampler2DArray uHeights;
+uniform sampler2DArray uParentNormals;
+#ifdef DETAIL
+uniform sampler2DArray uWeights;
+#endif
+
+precise out vec3 vRelative;
+out vec3 vNormal;
+out vec2 vNodeUv;
+out vec2 vLocal;
+out vec4 vMaterials;
+flat out float vMorph;
+flat out vec2 vParentOffset;
+flat out ivec2 vSlots;
+precise gl_Position;
+
+int gSlot;
+float height(ivec2 p) { return texelFetch(uHeights, ivec3(p + 1, gSlot), 0).r; }
+vec2 parentNormalAt(ivec2 p) { return texelFetch(uParentNormals, ivec3(p / 2, gSlot), 0).xy; }
+int snapToLattice(int c, int level) { int g = 1 << level; return (c + g / 2) / g * g; }
+
+void main()
+{
+    gSlot = int(eNode1.y);
+    float spacing = eNode0.z;
+    float morph = eNode0.w;
+    int q = uBlockQuads;
+    int t = eBlock.w;
+    int s = 1 << t;
+    int f = q >> t;
+    ivec2 origin = eBlock.xy * q;
+    ivec2 p;
+    float drop = 0.0;
+    if (eBlock.z == 0) {
+        ivec2 cell = ivec2(round(gl_TessCoord.xy * float(f)));
+        p = origin + cell * s;
+        bool alongX = cell.x > 0 && cell.x < f, alongY = cell.y > 0 && cell.y < f;
+        if (alongX && cell.y == 0) {
+            p.x = snapToLattice(p.x, eSnap.x);
+        } else if (alongX && cell.y == f) {
+            p.x = snapToLattice(p.x, eSnap.z);
+        } else if (alongY && cell.x == 0) {
+            p.y = snapToLattice(p.y, eSnap.w);
+        } else if (alongY && cell.x == f) {
+            p.y = snapToLattice(p.y, eSnap.y);
+        }
+    } else {
+        // Skirt: u runs along the border with the node on its left seen from outside, v up; the bottom
+        // hangs the skirt depth below the surface (3.2.6).
+        int a = int(round(gl_TessCoord.x * float(f))) * s;
+        int side = eBlock.z - 1;
+        p = side == 0 ? origin + ivec2(a, 0)
+                      : side == 1 ? origin + ivec2(q, a) : side == 2 ? origin + ivec2(q - a, q) : origin + ivec2(0, q - a);
+        drop = 1.0 - gl_TessCoord.y;
+    }
+
+    ivec2 d = p & 1;
+    float own = height(p);
+    float parent = 0.5 * (height(p - d) + height(p + d));
+    vec3 ownN = vec3(-0.5 * vec2(height(p + ivec2(1, 0)) - height(p - ivec2(1, 0)),
+                                 height(p + ivec2(0, 1)) - height(p - ivec2(0, 1))) / spacing, 1.0);
+    vec2 ownNormal = ownN.xy / length(ownN);
+    vec2 parentNormal = 0.5 * (parentNormalAt(p - d) + parentNormalAt(p + d));
+    vec2 n = mix(parentNormal, ownNormal, morph);
+    vNormal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
+    float z = uHeightBase + mix(parent, own, morph) - drop * eNode1.x;
+    vRelative = vec3(eNode0.xy + vec2(p) * spacing, z);
+    vNodeUv = vec2(p) * uInverseCells;
+    vLocal = vec2(p) * spacing;
+#ifdef DETAIL
+    vMaterials = texelFetch(uWeights, ivec3(p, gSlot), 0);
+#ifndef DETAIL_TINT_ONLY
+    for (int k = 0; k < (LAYER_COUNT + 1) / 2; ++k) {
+        vLayerOrigin[k] = eLayerOrigin[k];
+    }
+#endif
+#else
+    vMaterials = vec4(0.0);
+#endif
+    vMorph = morph;
+    vParentOffset = eNode2.xy;
+    vSlots = ivec2(gSlot, int(eNode1.z));
+    gl_Position = uViewProjection * vec4(vRelative, 1.0);
+}

@@ -1,0 +1,44 @@
+#version 400 core
+// Tessellation mode (render_mode = tessellation, issue 13): one patch per tessellation block of a drawn node
+// and one per block side on the node's border (its skirt), one instance per node. This stage only hands the
+// patch number and the node's constants (the same per-instance attributes as terrain.vert) to the control
+// shader (terrain.tesc); terrain.tese makes the vertices.
+
+layout(location = 0) in float aPatch;  // 0 .. B^2 - 1: block by * B + bx; B^2 + side * B + k: skirt
+layout(location = 2) in vec4 aNode0;
+layout(location = 3) in vec4 aNode1;
+layout(location = 4) in vec4 aNode2;
+#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+layout(location = 5) in vec4 aLayerOrigin[(LAYER_COUNT + 1) / 2];
+// Up to 4 (kMaxLayers / 2): arrays of arrays (one per patch vertex) need GLSL 4.30.
+out vec4 cLayer0;
+out vec4 cLayer1;
+out vec4 cLayer2;
+out vec4 cLayer3;
+#endif
+
+out float cPatch;
+out float cInstance;
+out vec4 cNode0;
+out vec4 cNode1;
+out vec4 cNode2;
+
+void main()
+{
+    cPatch = aPatch;
+    cInstance = float(gl_InstanceID);
+    cNode0 = aNode0;
+    cNode1 = aNode1;
+    cNode2 = aNode2;
+#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+    vec4 layers[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
+    for (int k = 0; k < (LAYER_COUNT + 1) / 2; ++k) {
+        layers[k] = aLayerOrigin[k];
+    }
+    cLayer0 = layers[0];
+    cLayer1 = layers[1];
+    cLayer2 = layers[2];
+    cLayer3 = layers[3];
+#endif
+    gl_Position = vec4(0.0);
+}
