@@ -7,6 +7,7 @@
 #include "lod/HeightQuery.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
+#include "lod/TessellationLevels.h"
 #include "quadtree/ChunkGeometry.h"
 
 #include <algorithm>
@@ -223,7 +224,11 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
         path = std::move(loaded).value();
     }
 
-    TerrainNodeSource source(map, {synthesizer->get(), o.lodMinimumSpacing});
+    // render_mode = tessellation: the selection spends part of tau and the blocks the rest (as tengine does).
+    const double blockPixels = o.tessellation ? o.lodError * o.tessellationShare : 0.0;
+    const double nodePixels = o.lodError - blockPixels;
+    TerrainNodeSource source(map,
+                             {synthesizer->get(), o.lodMinimumSpacing, o.tessellation ? kTessellationBlockQuads : 0});
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
@@ -240,7 +245,9 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
         }
     });
     const double tau = o.lodError;
-    ErrorMeter meter(header, source, {tau / 8.0, 1024, 16});
+    // The reference nodes are the same nodes without the tessellation errors they do not need.
+    TerrainNodeSource referenceSource(map, {synthesizer->get(), o.lodMinimumSpacing});
+    ErrorMeter meter(header, referenceSource, {tau / 8.0, 1024, 16});
 
     const std::size_t frames =
         path ? static_cast<std::size_t>(std::floor(path->duration() * command.fps + 1e-9)) + 1 : std::size_t{1};
@@ -287,7 +294,7 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
         }
         FrameStats stats;
         for (int round = 0; round < 256; ++round) {
-            stats = (*streamer)->update(camera, tau, 0.0);
+            stats = (*streamer)->update(camera, nodePixels, 0.0);
             if (stats.requested == stats.deferred || !loadError.empty()) {
                 break;
             }
@@ -307,7 +314,7 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
             drawn = &unmorphed;
         }
         auto measured = meter.measure(
-            *drawn, [&s](const NodeId& id) { return s.node(id); }, camera, tau);
+            *drawn, [&s](const NodeId& id) { return s.node(id); }, camera, tau, blockPixels);
         if (!measured.ok()) {
             return fail(measured.error().message);
         }
@@ -335,7 +342,19 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
             }
             l.ratios.push_back(ratio);
         }
-        triangles.push_back(e.nodes * trianglesPerNode);
+        if (o.tessellation) {
+            std::uint64_t drawnTriangles = 0;
+            for (const SelectedNode& selected : drawn->nodes) {
+                const NodePtr node = s.node(selected.id);
+                drawnTriangles +=
+                    chooseBlockLevels(*node->tessellation, extentOf(header).box(selected.id, node->zMin, node->zMax),
+                                      camera, blockPixels)
+                        .triangles();
+            }
+            triangles.push_back(drawnTriangles);
+        } else {
+            triangles.push_back(e.nodes * trianglesPerNode);
+        }
         std::fprintf(out, "%7zu %8.2f %8.3f %8.3f %9.4f %10llu %6zu %8zu %11zu  %s %.3f\n", frame, t, e.maxPixels,
                      e.p99Pixels, e.meanPixels, static_cast<unsigned long long>(triangles.back()), e.nodes, e.refined,
                      e.refinedWithinTau, e.worstNode.toString().c_str(), e.maxMetres);

@@ -1,5 +1,7 @@
 #include "lod/ErrorMeter.h"
 
+#include "lod/TessellationLevels.h"
+
 #include "core/Check.h"
 #include "core/Frustum.h"
 #include "lod/HeightQuery.h"
@@ -192,8 +194,10 @@ Status ErrorMeter::referenceLeaves(const View& view, const NodePtr& from, int ma
 }
 
 Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const ResidentNodeLookup& drawn,
-                                         const Camera& camera, double tauPixels)
+                                         const Camera& camera, double tauPixels, double blockPixels)
 {
+    const bool tessellated = blockPixels > 0.0;
+    std::vector<float> blended;
     TERRAIN_EXPECTS(tauPixels > 0.0, "tau must be > 0 pixels");
     camera.expectValid();
     const View view(mHeader, mExtent, camera);
@@ -237,6 +241,28 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
         }
 
         const float f = selected.morph;
+        BlockLevels levels;
+        if (tessellated) {
+            TERRAIN_EXPECTS(node->tessellation != nullptr, "tessellation mode needs nodes with tessellation errors");
+            levels = chooseBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
+                                       blockPixels);
+            // The samples as the shaders blend them (terrain.tese): odd ones towards the mean of their even
+            // neighbours along the template triangulation.
+            blended.resize(static_cast<std::size_t>(n) * n);
+            const int w = node->heights.size;
+            auto at = [&](int i, int j) -> double {
+                return node->heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
+            };
+            const double g = selected.id.isRoot() ? 1.0 : f;
+            for (int j = 0; j < n; ++j) {
+                for (int i = 0; i < n; ++i) {
+                    const int dx = i & 1, dy = j & 1;
+                    const double parentHeight = 0.5 * (at(i - dx, j - dy) + at(i + dx, j + dy));
+                    blended[static_cast<std::size_t>(j) * n + i] =
+                        static_cast<float>(g * at(i, j) + (1.0 - g) * parentHeight);
+                }
+            }
+        }
         double ownWorst = -1.0;  // metres, own surface; stays < 0 without a point in view
         for (const NodePtr& leaf : leaves) {
             out.deepestReference = std::max(out.deepestReference, leaf->id.level);
@@ -255,7 +281,10 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
                     const double lx = inNode.offsetX + i * inNode.scale;
                     double z = nodeSurfaceAt(*node, n, lx, ly);
                     const double own = std::abs(ref - z);
-                    if (morphs) {
+                    if (tessellated) {
+                        const auto [first, second] = tessellatedHeights(blended, n, levels, lx, ly);
+                        z = std::abs(ref - first) >= std::abs(ref - second) ? first : second;
+                    } else if (morphs) {
                         const double zp = nodeSurfaceAt(*parent, n, inParent.offsetX + i * inParent.scale,
                                                         inParent.offsetY + j * inParent.scale);
                         z = f * z + (1.0 - f) * zp;

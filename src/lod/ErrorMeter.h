@@ -91,8 +91,12 @@ public:
     /// Measures the frame that `selection` (made for `camera`) draws from the nodes `drawn` returns. Every
     /// selected node must be resident, with its parent (for the morph). `tauPixels` > 0 decides the
     /// refinements that bought nothing. Errors: a reference node that cannot be loaded (file and node named).
+    /// With `blockPixels` > 0 the frame is drawn in tessellation mode (render_mode = tessellation): each node's
+    /// blocks at the levels chooseBlockLevels picks for that budget (lod/TessellationLevels.h, what the renderer
+    /// uploads), of the node's samples blended by its morph as the shaders blend them; where the tessellator
+    /// may split a cell either way, the worse diagonal counts. Its nodes must carry tessellation errors.
     Expected<FrameError> measure(const LodSelection& selection, const ResidentNodeLookup& drawn, const Camera& camera,
-                                 double tauPixels);
+                                 double tauPixels, double blockPixels = 0.0);
 
     /// The oracle's selection for `camera` at `tauPixels` > 0 (see OracleSelection), from the same reference
     /// as measure(). With `blocks` = 0 a node's error is its largest error in pixels at its points' own

@@ -28,6 +28,21 @@ std::uint64_t BlockLevels::surfaceTriangles() const
     return triangles;
 }
 
+std::uint64_t BlockLevels::skirtTriangles() const
+{
+    std::uint64_t triangles = 0;
+    const int b = blocksPerSide;
+    for (int k = 0; k < b * b; ++k) {
+        const int bx = k % b, by = k / b;
+        const int borders = (bx == 0) + (bx == b - 1) + (by == 0) + (by == b - 1);
+        if (borders > 0 && !culled[static_cast<std::size_t>(k)]) {
+            triangles += static_cast<std::uint64_t>(borders) *
+                         skirtPatchTriangles(blockQuads >> level[static_cast<std::size_t>(k)]);
+        }
+    }
+    return triangles;
+}
+
 BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels)
 {
     const BlockErrors& lambda = errors.blocks;

@@ -26,6 +26,9 @@
 
 namespace terrain {
 
+/// Quads per side of a tessellation block (render_mode = tessellation): 8 x 8 blocks of a 65 x 65 node.
+inline constexpr int kTessellationBlockQuads = 8;
+
 struct BlockLevels {
     int blocksPerSide = 0;
     int blockQuads = 0;
@@ -38,7 +41,18 @@ struct BlockLevels {
     /// Triangles the tessellator makes for the node's surface patches (2 (B / 2^t)^2 a drawn block,
     /// degenerate ones included).
     std::uint64_t surfaceTriangles() const;
+    /// Triangles of the skirt patches of the drawn blocks on the node's border (skirtPatchTriangles each).
+    std::uint64_t skirtTriangles() const;
+    std::uint64_t triangles() const { return surfaceTriangles() + skirtTriangles(); }
 };
+
+/// Triangles the tessellator makes for a skirt patch of f columns (outer levels 1, f, 1, f; inner f, 1): the
+/// inner level 1 counts as 2 beside an outer level above 1 (GL 4.5, 11.2.2.2), so a ring of 2f + 2 outer and
+/// 2f - 4 inner vertices, stitched; f = 1 is a single pair. TessellationGLTest counts what the GL makes.
+inline std::uint64_t skirtPatchTriangles(int f)
+{
+    return f == 1 ? 2 : 4 * static_cast<std::uint64_t>(f) - 2;
+}
 
 /// The levels of the blocks of a node whose box is `node` (its square and height range), for `camera` at
 /// `pixels` of error (the part of tau the blocks may spend). `errors` are the node's.

@@ -475,16 +475,9 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                 const int b = levels.blocksPerSide;
                 for (int k = 0; k < b * b; ++k) {
                     mCodes.push_back(levels.code(k));
-                    const bool drawn = levels.culled[static_cast<std::size_t>(k)] == 0;
-                    (drawn ? stats.blocks : stats.culledBlocks) += 1;
-                    const int bx = k % b, by = k / b;
-                    const int borders = (bx == 0) + (bx == b - 1) + (by == 0) + (by == b - 1);
-                    if (drawn && borders > 0) {
-                        tessellatedTriangles += borders * skirtTriangles(kTessellationBlockQuads >>
-                                                                         levels.level[static_cast<std::size_t>(k)]);
-                    }
+                    (levels.culled[static_cast<std::size_t>(k)] == 0 ? stats.blocks : stats.culledBlocks) += 1;
                 }
-                tessellatedTriangles += levels.surfaceTriangles();
+                tessellatedTriangles += levels.triangles();
             }
             ++count;
         }

@@ -8,6 +8,7 @@
 #include "core/Expected.h"
 #include "lod/LodSelector.h"
 #include "lod/NodeData.h"
+#include "lod/TessellationLevels.h"
 #include "quadtree/MapFormat.h"
 #include "render/GlObjects.h"
 #include "render/ShaderProgram.h"
@@ -68,9 +69,6 @@ struct PoolOptions {
     bool tessellation = false;
 };
 
-/// Quads per side of a tessellation block (render_mode = tessellation).
-inline constexpr int kTessellationBlockQuads = 8;
-
 class TerrainRenderer {
 public:
     /// Loads the shaders from `shaderDirectory`, builds the template mesh for `header`'s chunk size with the
@@ -99,8 +97,6 @@ public:
 
     /// Whether this context runs tessellation shaders (OpenGL 4.0).
     static bool tessellationSupported();
-    /// Triangles the tessellator makes for a border skirt patch of f columns.
-    static std::uint64_t skirtTriangles(int f) { return f == 1 ? 2 : 4 * static_cast<std::uint64_t>(f) - 2; }
 
     /// The node cache evicted `id` (TerrainStreamer::onEvict): its slot is free for another node. Nothing
     /// is freed on the GPU. Unknown ids are ignored (a node evicted before it was ever drawn).

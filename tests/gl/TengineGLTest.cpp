@@ -108,6 +108,8 @@ protected:
         return image.ok() ? image.value() : Image{};
     }
 
+    static void expectNoHolesAlongTheFlight(const std::vector<std::string>& more);
+
     static test::ScratchDir* sDir;
 };
 
@@ -133,11 +135,15 @@ TEST_F(TengineGLTest, TerrainIsThereAndTheSkyAboveIt)
     EXPECT_GT(sky, image.width * 9 / 10);
 }
 
-TEST_F(TengineGLTest, NoHolesAlongTheFlight)
+/// The hole check over the flight, 4 frames a second, with `more` settings: no pixel whose view ray must hit
+/// the terrain shows the clear colour.
+void TengineGLTest::expectNoHolesAlongTheFlight(const std::vector<std::string>& more)
 {
     test::ScratchDir frames;
-    auto run = video(frames.path(), {"frames_per_second=4", "draw_sky=false", "draw_user_interface=false",
-                                     "clear_color=1,0,1", "haze_distance=0", "camera_z_far=150000"});
+    std::vector<std::string> settings = {"frames_per_second=4", "draw_sky=false",  "draw_user_interface=false",
+                                         "clear_color=1,0,1",   "haze_distance=0", "camera_z_far=150000"};
+    settings.insert(settings.end(), more.begin(), more.end());
+    auto run = video(frames.path(), settings);
     ASSERT_EQ(run.exitCode, 0) << run.output;
     auto mapFile = MapFile::open(map(), ReaderKind::Stream);
     ASSERT_TRUE(mapFile.ok());
@@ -180,6 +186,44 @@ TEST_F(TengineGLTest, NoHolesAlongTheFlight)
     }
     EXPECT_EQ(framesChecked, 33);
     EXPECT_GT(pixelsChecked, framesChecked * 320 * 180 / 4) << "the flight should look at the ground";
+}
+
+TEST_F(TengineGLTest, NoHolesAlongTheFlight)
+{
+    expectNoHolesAlongTheFlight({});
+}
+
+/// render_mode = tessellation (issue 13): no holes, neither between nodes (skirts) nor inside them where
+/// blocks of different levels meet (snapped sides); one draw call per program a frame; identical frames run to run; and
+/// fewer triangles than chunks on the same flight.
+TEST_F(TengineGLTest, TessellationHasNoHolesOneDrawAndFewerTriangles)
+{
+    expectNoHolesAlongTheFlight({"render_mode=tessellation"});
+    test::ScratchDir a, b, chunks;
+    const std::vector<std::string> settings = {"frames_per_second=2", "render_mode=tessellation"};
+    auto run = video(a.path(), settings);
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    ASSERT_EQ(video(b.path(), settings).exitCode, 0);
+    ASSERT_EQ(video(chunks.path(), {"frames_per_second=2"}).exitCode, 0);
+    for (int f = 0; f <= 16; ++f) {
+        Image first = frame(a.path(), f), second = frame(b.path(), f);
+        ASSERT_EQ(first.pixels.size(), second.pixels.size());
+        EXPECT_TRUE(first.pixels == second.pixels) << "frame " << f << " differs";
+    }
+    const auto tessellated = readCsv(a.path() / "frames.csv"), chunked = readCsv(chunks.path() / "frames.csv");
+    ASSERT_EQ(tessellated.size(), chunked.size());
+    double sumTessellated = 0.0, sumChunked = 0.0;
+    for (std::size_t f = 0; f < tessellated.size(); ++f) {
+        // One per program, as chunks: nodes beyond the detail layers' fade go in a second draw.
+        EXPECT_GE(tessellated[f].at("draw_calls"), 1.0) << "frame " << f;
+        EXPECT_LE(tessellated[f].at("draw_calls"), 2.0) << "frame " << f;
+        sumTessellated += tessellated[f].at("triangles");
+        sumChunked += chunked[f].at("triangles");
+    }
+    std::printf("triangles per frame: tessellation %.0f, chunks %.0f (%.2fx fewer)\n",
+                sumTessellated / static_cast<double>(tessellated.size()),
+                sumChunked / static_cast<double>(chunked.size()), sumChunked / sumTessellated);
+    EXPECT_LT(2.0 * sumTessellated, sumChunked);
 }
 
 TEST_F(TengineGLTest, SameRunGivesIdenticalFrames)
