@@ -110,8 +110,9 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         r->mBlocks = static_cast<int>(header.chunkSize - 1) / kTessellationBlockQuads;
     }
     auto loadProgram = [&](const std::vector<std::string>& with) {
-        return r->mTessellation ? ShaderProgram::loadTessellation(shaderDirectory, "terrain_tess", "terrain", with)
-                                : ShaderProgram::load(shaderDirectory, "terrain", with);
+        return r->mTessellation
+                   ? ShaderProgram::loadTessellation(shaderDirectory, "terrain_tess", "terrain", with, {"vRelative"})
+                   : ShaderProgram::load(shaderDirectory, "terrain", with);
     };
     auto terrain = loadProgram(defines);
     TERRAIN_TRY(terrain);
@@ -406,8 +407,10 @@ bool TerrainRenderer::tessellationSupported()
 }
 
 RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentNodeLookup& resident,
-                                  const Camera& camera, const SceneStyle& style, double blockPixels)
+                                  const Camera& camera, const SceneStyle& style, double blockPixels,
+                                  std::vector<glm::vec3>* feedback)
 {
+    TERRAIN_EXPECTS(feedback == nullptr || mTessellation, "transform feedback is for the tessellation mode");
     TERRAIN_EXPECTS(!mTessellation || blockPixels > 0.0, "tessellation mode needs a block error budget > 0 pixels");
     RenderStats stats;
     glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
@@ -560,6 +563,16 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     glActiveTexture(GL_TEXTURE0);
 
     glBindVertexArray(mTessellation ? mPatchVao.name() : mTemplateVao.name());
+    if (feedback) {
+        if (!mFeedback) {
+            mFeedback = gl::Buffer::create();
+        }
+        glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, mFeedback.name());
+        glBufferData(GL_TRANSFORM_FEEDBACK_BUFFER, static_cast<GLsizeiptr>(stats.triangles * 3 * sizeof(glm::vec3)),
+                     nullptr, GL_STREAM_READ);
+        glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, 0);
+    }
+    std::size_t captured = 0;  // triangles
     const auto patches = static_cast<GLsizei>(mBlocks * mBlocks + 4 * mBlocks);
     const std::size_t ranges[2][2] = {{0, nearCount}, {nearCount, count}};
     for (std::size_t p = 0; p < mPrograms.size(); ++p) {
@@ -580,7 +593,32 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         glBindBuffer(GL_ARRAY_BUFFER, 0);
         if (mTessellation) {
             glUniform1i(mPrograms[p].uniform("uFirstInstance"), static_cast<GLint>(first));
+            GLuint query = 0, generated = 0;
+            if (feedback) {
+                // Each program's triangles after the previous one's (feedback cannot span a program change).
+                glBindBufferRange(GL_TRANSFORM_FEEDBACK_BUFFER, 0, mFeedback.name(),
+                                  static_cast<GLintptr>(captured * 3 * sizeof(glm::vec3)),
+                                  static_cast<GLsizeiptr>((stats.triangles - captured) * 3 * sizeof(glm::vec3)));
+                glGenQueries(1, &query);
+                glGenQueries(1, &generated);
+                glBeginQuery(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN, query);
+                glBeginQuery(GL_PRIMITIVES_GENERATED, generated);
+                glBeginTransformFeedback(GL_TRIANGLES);
+            }
             glDrawArraysInstanced(GL_PATCHES, 0, patches, static_cast<GLsizei>(last - first));
+            if (feedback) {
+                glEndTransformFeedback();
+                glEndQuery(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN);
+                glEndQuery(GL_PRIMITIVES_GENERATED);
+                GLuint written = 0, made = 0;
+                glGetQueryObjectuiv(query, GL_QUERY_RESULT, &written);
+                glGetQueryObjectuiv(generated, GL_QUERY_RESULT, &made);
+                glDeleteQueries(1, &query);
+                glDeleteQueries(1, &generated);
+                stats.generatedTriangles += made;
+                glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0);
+                captured += written;
+            }
         } else {
             glDrawElementsInstanced(GL_TRIANGLES, mIndexCount, mIndexType, nullptr, static_cast<GLsizei>(last - first));
         }
@@ -588,6 +626,13 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     }
     glBindVertexArray(0);
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    if (feedback) {
+        feedback->resize(captured * 3);
+        glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, mFeedback.name());
+        glGetBufferSubData(GL_TRANSFORM_FEEDBACK_BUFFER, 0, static_cast<GLsizeiptr>(captured * 3 * sizeof(glm::vec3)),
+                           feedback->data());
+        glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, 0);
+    }
     return stats;
 }
 

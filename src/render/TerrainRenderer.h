@@ -47,6 +47,7 @@ struct RenderStats {
     std::size_t drawCalls = 0;     ///< draw calls for the terrain (the sky not counted): 1 with anything in view
     std::size_t blocks = 0;        ///< tessellation mode: blocks drawn (not culled)
     std::size_t culledBlocks = 0;  ///< tessellation mode: blocks of drawn nodes outside the frustum
+    std::uint64_t generatedTriangles = 0;  ///< with transform feedback: the triangles the GL says it made
 };
 
 /// GPU bytes of one slot of the node pools (TerrainRenderer::create): what each resident node costs.
@@ -92,8 +93,11 @@ public:
     /// the layers), the nodes' data from `resident` (the node cache: every selected node and its parent must be
     /// resident). A node gets a slot the first time it is drawn and keeps it until release().
     /// In tessellation mode the blocks spend `blockPixels` of error (the selection was made for the rest of tau).
+    /// With `feedback` (tessellation mode, for tests), the camera-relative corners of every triangle the
+    /// tessellator made are read back by transform feedback, three a triangle, in drawing order (node by node
+    /// as drawn, patch by patch: blocks, then skirts).
     RenderStats draw(const LodSelection& selection, const ResidentNodeLookup& resident, const Camera& camera,
-                     const SceneStyle& style, double blockPixels = 0.0);
+                     const SceneStyle& style, double blockPixels = 0.0, std::vector<glm::vec3>* feedback = nullptr);
 
     /// Whether this context runs tessellation shaders (OpenGL 4.0).
     static bool tessellationSupported();
@@ -155,5 +159,6 @@ private:
     gl::Buffer mLevelsBuffer;
     gl::Texture mLevelsTexture;  ///< GL_TEXTURE_BUFFER over mLevelsBuffer, R16UI
     std::vector<std::uint16_t> mCodes;
+    gl::Buffer mFeedback;  ///< transform feedback of draw(..., feedback)
 };
 }  // namespace terrain

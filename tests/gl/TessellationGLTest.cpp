@@ -1,0 +1,217 @@
+// The tessellation render mode (issue 13) on the GL itself: transform feedback reads back every triangle the
+// tessellator made for a frame of the bundled terrain, and each is checked against the pure model the error
+// meter measures (lod/TessellationLevels.h): the same vertices at the same heights, cells split along one or
+// the other diagonal only, snapped sides, blocks that meet sharing their vertices bit for bit (no crack inside
+// a node), skirts hanging from the drawn border. The triangle count the renderer reports is what the GL made.
+#include "GlTestSupport.h"
+#include "TestSupport.h"
+
+#include "core/Camera.h"
+#include "lod/TerrainNodeSource.h"
+#include "lod/TerrainStreamer.h"
+#include "lod/TessellationLevels.h"
+#include "quadtree/ChunkGeometry.h"
+#include "quadtree/MapFile.h"
+#include "render/GlWindow.h"
+#include "render/TerrainRenderer.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <set>
+
+namespace terrain {
+namespace {
+
+using Triangle = std::array<std::pair<int, int>, 3>;
+
+Triangle sorted(glm::ivec2 a, glm::ivec2 b, glm::ivec2 c)
+{
+    Triangle t{std::pair{a.x, a.y}, std::pair{b.x, b.y}, std::pair{c.x, c.y}};
+    std::sort(t.begin(), t.end());
+    return t;
+}
+
+long doubleArea(const Triangle& t)
+{
+    return std::labs(static_cast<long>(t[1].first - t[0].first) * (t[2].second - t[0].second) -
+                     static_cast<long>(t[1].second - t[0].second) * (t[2].first - t[0].first));
+}
+
+TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVerticesBitForBit)
+{
+    test::ScratchDir dir;
+    ASSERT_TRUE(test::buildDemoMap(dir / "trinidad.map").ok());
+    WindowOptions windowOptions;
+    windowOptions.width = 640;
+    windowOptions.height = 360;
+    windowOptions.visible = false;
+    auto window = GlWindow::create(windowOptions);
+    ASSERT_TRUE(window.ok()) << window.error().message;
+    ASSERT_TRUE(TerrainRenderer::tessellationSupported()) << (*window)->description();
+    auto map = MapFile::open(dir / "trinidad.map", ReaderKind::Stream);
+    ASSERT_TRUE(map.ok());
+    const MapHeader& header = (*map)->header();
+    const int n = static_cast<int>(header.chunkSize);
+    TerrainNodeSource source(**map, {nullptr, 0.0, kTessellationBlockQuads});
+    StreamerOptions streamerOptions;
+    streamerOptions.cacheSize = 2048;
+    streamerOptions.workers = 2;
+    auto streamer = TerrainStreamer::create(source, extentOf(header), streamerOptions);
+    ASSERT_TRUE(streamer.ok());
+    auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, header, 16, {2048, false, true});
+    ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+    (*streamer)->onEvict([&renderer](const NodeData& node) { (*renderer)->release(node.id); });
+
+    // Low over a valley, looking along it: near blocks fine, far ones coarse, sides snapped between them.
+    Camera camera;
+    camera.viewportWidth = windowOptions.width;
+    camera.viewportHeight = windowOptions.height;
+    camera.nearPlane = 1.0;
+    camera.farPlane = 150000.0;
+    camera.position = {15000.0, 12000.0, 2496.0};
+    camera.yaw = 47.7 * std::numbers::pi / 180;
+    camera.pitch = -8.0 * std::numbers::pi / 180;
+    const double nodePixels = 1.0, blockPixels = 1.0;
+    for (int round = 0; round < 64 && (*streamer)->update(camera, nodePixels).requested > 0; ++round) {
+        (*streamer)->drain();
+    }
+    const TerrainStreamer& s = **streamer;
+    const LodSelection& selection = s.selection();
+    ASSERT_GT(selection.nodes.size(), 20u);
+    SceneStyle style;
+    std::vector<glm::vec3> feedback;
+    const RenderStats stats = (*renderer)->draw(
+        selection, [&s](const NodeId& id) { return s.node(id); }, camera, style, blockPixels, &feedback);
+    EXPECT_EQ(stats.generatedTriangles, stats.triangles) << "the renderer's count is what the GL made";
+    ASSERT_EQ(feedback.size(), 3 * stats.triangles);
+
+    const QuadtreeExtent extent = extentOf(header);
+    const int q = kTessellationBlockQuads, b = (n - 1) / q;
+    const double heightBase = header.heightOffset - camera.position.z;
+    std::size_t at = 0, shared = 0, snappedSides = 0, skirtTops = 0, checkedVertices = 0;
+    std::set<int> levelsSeen;
+    for (const SelectedNode& selected : selection.nodes) {
+        const NodePtr node = s.node(selected.id);
+        ASSERT_TRUE(node && node->tessellation);
+        const BlockLevels levels = chooseBlockLevels(
+            *node->tessellation, extent.box(selected.id, node->zMin, node->zMax), camera, blockPixels);
+        const double spacing = selected.size / (n - 1);
+        const float morph = selected.id.isRoot() ? 1.0f : selected.morph;
+        auto height = [&](int i, int j) -> double {
+            const int w = node->heights.size;
+            auto h = [&](int a, int c) -> double {
+                return node->heights.height(static_cast<std::size_t>(c + kBorder) * w + a + kBorder);
+            };
+            const int dx = i & 1, dy = j & 1;
+            return morph * h(i, j) + (1.0 - morph) * 0.5 * (h(i - dx, j - dy) + h(i + dx, j + dy));
+        };
+        // Camera-relative corner -> node sample; its position is then checked against the model.
+        auto sample = [&](const glm::vec3& v) {
+            const double x = (v.x - selected.cameraRelativeOrigin.x) / spacing;
+            const double y = (v.y - selected.cameraRelativeOrigin.y) / spacing;
+            const glm::ivec2 p{static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y))};
+            EXPECT_NEAR(x, p.x, 1e-3) << selected.id.toString();
+            EXPECT_NEAR(y, p.y, 1e-3) << selected.id.toString();
+            return p;
+        };
+        std::map<std::pair<int, int>, glm::vec3> surfaceVertex;  // first seen, per sample
+        std::map<std::pair<int, int>, int> blockOf;
+        for (int patch = 0; patch < b * b + 4 * b; ++patch) {
+            const bool skirt = patch >= b * b;
+            const int side = skirt ? (patch - b * b) / b : -1, k = skirt ? (patch - b * b) % b : 0;
+            const int bx = !skirt ? patch % b : side == kEast ? b - 1 : side == kWest ? 0 : k;
+            const int by = !skirt ? patch / b : side == kNorth ? b - 1 : side == kSouth ? 0 : k;
+            const auto block = static_cast<std::size_t>(by * b + bx);
+            if (levels.culled[block]) {
+                continue;
+            }
+            const int t = levels.level[block], f = q >> t;
+            const std::uint64_t count = skirt ? skirtPatchTriangles(f) : 2ull * f * f;
+            ASSERT_LE(at + 3 * count, feedback.size());
+            if (!skirt) {
+                levelsSeen.insert(t);
+                const int snap[4] = {levels.snap[4 * block], levels.snap[4 * block + 1], levels.snap[4 * block + 2],
+                                     levels.snap[4 * block + 3]};
+                for (int e : snap) {
+                    snappedSides += e > t ? 1 : 0;
+                }
+                // The model's triangles: every cell under either diagonal.
+                std::set<Triangle> candidates;
+                for (int c = 0; c < f; ++c) {
+                    for (int a = 0; a < f; ++a) {
+                        const glm::ivec2 v00 = tessellatedVertex(q, bx, by, t, a, c, snap);
+                        const glm::ivec2 v10 = tessellatedVertex(q, bx, by, t, a + 1, c, snap);
+                        const glm::ivec2 v11 = tessellatedVertex(q, bx, by, t, a + 1, c + 1, snap);
+                        const glm::ivec2 v01 = tessellatedVertex(q, bx, by, t, a, c + 1, snap);
+                        for (const Triangle& tri : {sorted(v00, v10, v11), sorted(v00, v11, v01), sorted(v00, v10, v01),
+                                                    sorted(v10, v11, v01)}) {
+                            candidates.insert(tri);
+                        }
+                    }
+                }
+                long area = 0;
+                for (std::uint64_t m = 0; m < count; ++m) {
+                    glm::ivec2 p[3];
+                    for (int c = 0; c < 3; ++c) {
+                        const glm::vec3& v = feedback[at + 3 * m + static_cast<std::size_t>(c)];
+                        p[c] = sample(v);
+                        EXPECT_NEAR(v.z, heightBase + height(p[c].x, p[c].y),
+                                    2e-3 * std::max(1.0, std::abs(double{v.z})));
+                        ++checkedVertices;
+                        const std::pair key{p[c].x, p[c].y};
+                        auto [it, inserted] = surfaceVertex.try_emplace(key, v);
+                        if (!inserted) {
+                            EXPECT_TRUE(it->second == v) << selected.id.toString() << " sample " << p[c].x << ","
+                                                         << p[c].y << ": a vertex made twice differs";
+                            shared += blockOf[key] != patch ? 1 : 0;
+                        } else {
+                            blockOf[key] = patch;
+                        }
+                    }
+                    const Triangle tri = sorted(p[0], p[1], p[2]);
+                    if (doubleArea(tri) == 0) {
+                        continue;  // a cell collapsed by snapping: dropped by the rasterizer
+                    }
+                    EXPECT_TRUE(candidates.count(tri)) << selected.id.toString() << " block " << bx << "," << by
+                                                       << ": a triangle the model does not make";
+                    area += doubleArea(tri);
+                }
+                EXPECT_EQ(area, 2l * q * q) << "the block's triangles cover it once";
+            } else {
+                for (std::uint64_t m = 0; m < 3 * count; ++m) {
+                    const glm::vec3& v = feedback[at + m];
+                    const glm::ivec2 p = sample(v);
+                    const bool onBorder = side == kSouth   ? p.y == 0
+                                          : side == kNorth ? p.y == n - 1
+                                          : side == kEast  ? p.x == n - 1
+                                                           : p.x == 0;
+                    EXPECT_TRUE(onBorder) << selected.id.toString() << " skirt " << side;
+                    // The top of the skirt is the drawn border vertex itself.
+                    auto it = surfaceVertex.find({p.x, p.y});
+                    if (it != surfaceVertex.end() && it->second == v) {
+                        ++skirtTops;
+                    } else {
+                        EXPECT_LT(v.z, heightBase + height(p.x, p.y) + 1e-3) << "skirts hang below the border";
+                    }
+                }
+            }
+            at += 3 * count;
+        }
+    }
+    EXPECT_EQ(at, feedback.size());
+    std::printf(
+        "%zu triangles, %zu vertices checked, %zu made twice by neighbouring blocks, %zu snapped sides, "
+        "%zu skirt tops, levels seen %zu\n",
+        feedback.size() / 3, checkedVertices, shared, snappedSides, skirtTops, levelsSeen.size());
+    EXPECT_GT(shared, 1000u);
+    EXPECT_GT(snappedSides, 50u) << "the frame must have blocks of different levels side by side";
+    EXPECT_GE(levelsSeen.size(), 3u);
+    EXPECT_GT(skirtTops, 1000u);
+}
+
+}  // namespace
+}  // namespace terrain
