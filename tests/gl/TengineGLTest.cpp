@@ -8,6 +8,7 @@
 #include "lod/CameraPath.h"
 #include "lod/LodSelector.h"
 #include "lod/TerrainNodeSource.h"
+#include "quadtree/ChunkGeometry.h"
 #include "quadtree/MapFile.h"
 #include "quadtree/QuadtreeBuilder.h"
 #include "synthesis/LeafErrorEstimator.h"
@@ -15,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <numbers>
@@ -224,6 +226,28 @@ TEST_F(TengineGLTest, TessellationHasNoHolesOneDrawAndFewerTriangles)
                 sumTessellated / static_cast<double>(tessellated.size()),
                 sumChunked / static_cast<double>(chunked.size()), sumChunked / sumTessellated);
     EXPECT_LT(2.0 * sumTessellated, sumChunked);
+}
+
+/// Hardware without tessellation shaders (here: Mesa told to offer OpenGL 3.3 only) draws chunks instead of
+/// failing, and says so in one line.
+TEST_F(TengineGLTest, WithoutTessellationShadersTheTessellationModeFallsBackToChunks)
+{
+    test::ScratchDir frames;
+    ::setenv("MESA_GL_VERSION_OVERRIDE", "3.3", 1);  // inherited by the viewer this test starts
+    auto run = video(frames.path(), {"frames_per_second=1", "render_mode=tessellation"});
+    ::unsetenv("MESA_GL_VERSION_OVERRIDE");
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    EXPECT_NE(run.output.find("OpenGL 3.3"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("render_mode = tessellation needs OpenGL 4.0 tessellation shaders, which this GL "
+                              "lacks: drawing chunks"),
+              std::string::npos)
+        << run.output;
+    const auto rows = readCsv(frames.path() / "frames.csv");
+    ASSERT_FALSE(rows.empty());
+    for (const auto& row : rows) {
+        // Whole chunks: every node with all its triangles and skirts.
+        EXPECT_EQ(std::fmod(row.at("triangles"), static_cast<double>(trianglesPerChunk(65))), 0.0);
+    }
 }
 
 TEST_F(TengineGLTest, SameRunGivesIdenticalFrames)
