@@ -38,13 +38,16 @@ flat out ivec2 vSlots;
 precise gl_Position;
 
 int gSlot;
-float height(ivec2 p) { return texelFetch(uHeights, ivec3(p + 1, gSlot), 0).r; }
+float gLo, gRange;  // the slot's heights: lo + range * code / 65535 (render/NodeTextures.h, quantizeHeightsR16)
+float height(ivec2 p) { return gLo + gRange * texelFetch(uHeights, ivec3(p + 1, gSlot), 0).r; }
 vec2 parentNormalAt(ivec2 p) { return texelFetch(uParentNormals, ivec3(p / 2, gSlot), 0).xy; }
 int snapToLattice(int c, int level) { int g = 1 << level; return (c + g / 2) / g * g; }
 
 void main()
 {
     gSlot = int(eNode1.y);
+    gLo = eNode1.w;
+    gRange = eNode2.z;
     float spacing = eNode0.z;
     float morph = eNode0.w;
     int q = uBlockQuads;

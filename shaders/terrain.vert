@@ -13,8 +13,9 @@ layout(location = 1) in int aSkirt;   // 1: skirt vertex hanging below the edge 
 // Per instance (drawn node), from the frame's constants buffer (TerrainRenderer.cpp, NodeConstants):
 layout(location = 2) in vec4 aNode0;  // origin x, y (the node's south-west corner minus the camera, metres),
                                       // spacing (metres), morph
-layout(location = 3) in vec4 aNode1;  // skirt depth (metres), slot, parent's slot, 0
-layout(location = 4) in vec4 aNode2;  // the node's quadrant in the parent's square (0 or 0.5, 0 or 0.5), 0, 0
+layout(location = 3) in vec4 aNode1;  // skirt depth (metres), slot, parent's slot, lowest height (metres)
+layout(location = 4) in vec4 aNode2;  // the node's quadrant in the parent's square (0 or 0.5, 0 or 0.5),
+                                      // height range (metres), 0
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
 // The node's corner in repeats of each detail layer, fractional part, two layers an attribute.
 layout(location = 5) in vec4 aLayerOrigin[(LAYER_COUNT + 1) / 2];
@@ -23,7 +24,7 @@ layout(location = 5) in vec4 aLayerOrigin[(LAYER_COUNT + 1) / 2];
 uniform mat4 uViewProjection;  // camera-relative world -> clip (rotation and projection only)
 uniform float uInverseCells;   // 1 / (N - 1)
 uniform float uHeightBase;     // the map's height offset minus the camera's height, metres
-uniform sampler2DArray uHeights;  // per slot: the (N + 2)^2 surface window, metres above the map's offset
+uniform sampler2DArray uHeights;  // per slot: the (N + 2)^2 surface window, 16-bit codes over the node's range
 uniform sampler2DArray uParentNormals;  // per slot: ((N + 1) / 2)^2 unit normals (x, y) of the parent
 #ifdef DETAIL
 uniform sampler2DArray uWeights;  // per slot: N x N material weights (3.4.5)
@@ -42,7 +43,8 @@ flat out vec4 vLayerOrigin[(LAYER_COUNT + 1) / 2];
 #endif
 
 int gSlot;
-float height(ivec2 p) { return texelFetch(uHeights, ivec3(p + 1, gSlot), 0).r; }
+float gLo, gRange;  // the slot's heights: lo + range * code / 65535 (render/NodeTextures.h, quantizeHeightsR16)
+float height(ivec2 p) { return gLo + gRange * texelFetch(uHeights, ivec3(p + 1, gSlot), 0).r; }
 // The parent's unit normal (x, y) at node sample p (both even).
 vec2 parentNormalAt(ivec2 p) { return texelFetch(uParentNormals, ivec3(p / 2, gSlot), 0).xy; }
 
@@ -52,6 +54,8 @@ void main()
     vec4 t1 = aNode1;
     vec4 t2 = aNode2;
     gSlot = int(t1.y);
+    gLo = t1.w;
+    gRange = t2.z;
     float spacing = t0.z;
     float morph = t0.w;
 

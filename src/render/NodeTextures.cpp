@@ -92,4 +92,32 @@ std::vector<std::uint16_t> packWeightsRgba4(std::span<const std::uint8_t> weight
     return out;
 }
 
+QuantizedHeights quantizeHeightsR16(std::span<const float> window, int chunkSize)
+{
+    const int n = chunkSize, w = n + 4, inner = n + 2;
+    TERRAIN_EXPECTS(window.size() == static_cast<std::size_t>(w) * static_cast<std::size_t>(w),
+                    "the window must hold (N + 4)^2 heights");
+    QuantizedHeights out;
+    float lo = window[static_cast<std::size_t>(w + 1)], hi = lo;
+    for (int j = 1; j <= inner; ++j) {
+        for (int i = 1; i <= inner; ++i) {
+            const float h = window[static_cast<std::size_t>(j) * w + i];
+            lo = std::min(lo, h);
+            hi = std::max(hi, h);
+        }
+    }
+    out.lo = lo;
+    out.range = hi - lo;
+    out.codes.resize(static_cast<std::size_t>(inner) * inner);
+    const double scale = out.range > 0.0f ? 65535.0 / out.range : 0.0;
+    for (int j = 0; j < inner; ++j) {
+        for (int i = 0; i < inner; ++i) {
+            const double h = window[static_cast<std::size_t>(j + 1) * w + i + 1];
+            out.codes[static_cast<std::size_t>(j) * inner + i] =
+                static_cast<std::uint16_t>(std::clamp(std::lround((h - lo) * scale), 0l, 65535l));
+        }
+    }
+    return out;
+}
+
 }  // namespace terrain

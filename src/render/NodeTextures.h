@@ -24,6 +24,17 @@ std::vector<std::uint8_t> compressDxt1(std::span<const std::uint8_t> rgb, int te
 /// the node's (N + 4)^2 surface `window` (2-sample border); `spacing` is the node's (metres).
 std::vector<std::int8_t> parentNormalsRg8(std::span<const float> window, int chunkSize, double spacing);
 
+/// A node's surface as the pools' 16-bit height layer holds it (GL_R16, unsigned normalised): the (N + 2)^2
+/// inner part of the (N + 4)^2 `window` (a 1-sample border, for the own normals at the edges), each height h
+/// as round((h - lo) / range * 65535), rows south to north. The shaders read lo + range * code / 65535,
+/// which is within range / 131070 metres of h (plus float rounding); a flat window has range 0.
+struct QuantizedHeights {
+    std::vector<std::uint16_t> codes;
+    float lo = 0.0f;
+    float range = 0.0f;
+};
+QuantizedHeights quantizeHeightsR16(std::span<const float> window, int chunkSize);
+
 /// N x N x 4 material weights (0..255) as GL_RGBA4 texels (GL_UNSIGNED_SHORT_4_4_4_4: red in the top 4 bits),
 /// each weight rounded to the nearest of 0, 1/15, ..., 1.
 std::vector<std::uint16_t> packWeightsRgba4(std::span<const std::uint8_t> weights);

@@ -274,8 +274,9 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     const int w = n + 2;  // the surface with a 1-sample border: own normals at the edges need it
     const int m = (n + 1) / 2;
     const int t = static_cast<int>(header.textureSize);
-    r->mHeights = createLayers(GL_R32F, w, layersOf, GL_RED, GL_FLOAT, GL_NEAREST);
-    r->mSlotBytes.heights = static_cast<std::size_t>(w) * w * sizeof(float);
+    r->mHeights = createLayers(GL_R16, w, layersOf, GL_RED, GL_UNSIGNED_SHORT, GL_NEAREST);
+    r->mSlotBytes.heights = static_cast<std::size_t>(w) * w * sizeof(std::uint16_t);
+    r->mSlotHeights.assign(slots, {0.0f, 0.0f});
     r->mParentNormals = createLayers(GL_RG8_SNORM, m, layersOf, GL_RG, GL_BYTE, GL_NEAREST);
     r->mSlotBytes.normals = static_cast<std::size_t>(m) * m * 2;
     r->mDxt1 = pools.compressColour && epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
@@ -348,15 +349,14 @@ int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats)
     std::vector<float> surface(node->heights.base.size());
     node->heights.surface(surface);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    // The window's inner (N + 2)^2: one sample of its 2-sample border.
-    glPixelStorei(GL_UNPACK_ROW_LENGTH, w);
-    glPixelStorei(GL_UNPACK_SKIP_PIXELS, kBorder - 1);
-    glPixelStorei(GL_UNPACK_SKIP_ROWS, kBorder - 1);
+    // The window's inner (N + 2)^2 (one sample of its 2-sample border) as 16-bit codes over the node's range.
+    static_assert(kBorder == 2, "quantizeHeightsR16 keeps one sample of a 2-sample border");
+    (void)w;
+    const QuantizedHeights heights = quantizeHeightsR16(surface, n);
+    mSlotHeights[static_cast<std::size_t>(slot)] = {heights.lo, heights.range};
     glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
-    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, n + 2, n + 2, 1, GL_RED, GL_FLOAT, surface.data());
-    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
-    glPixelStorei(GL_UNPACK_SKIP_PIXELS, 0);
-    glPixelStorei(GL_UNPACK_SKIP_ROWS, 0);
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, n + 2, n + 2, 1, GL_RED, GL_UNSIGNED_SHORT,
+                    heights.codes.data());
     const std::vector<std::int8_t> normals = parentNormalsRg8(surface, n, node->spacing);
     glBindTexture(GL_TEXTURE_2D_ARRAY, mParentNormals.name());
     glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, m, m, 1, GL_RG, GL_BYTE, normals.data());
@@ -456,6 +456,8 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
             c[4] = std::max(parent->deltaC, node->deltaC) + static_cast<float>(mHeader.heightStep);
             c[5] = static_cast<float>(slot);
             c[6] = static_cast<float>(parentSlot);
+            c[7] = mSlotHeights[static_cast<std::size_t>(slot)][0];
+            c[10] = mSlotHeights[static_cast<std::size_t>(slot)][1];
             c[8] = (selected.id.x & 1) ? 0.5f : 0.0f;
             c[9] = (selected.id.y & 1) ? 0.5f : 0.0f;
             if (split && near) {

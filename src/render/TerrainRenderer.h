@@ -17,6 +17,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <filesystem>
 #include <memory>
 #include <unordered_map>
@@ -52,7 +53,7 @@ struct RenderStats {
 
 /// GPU bytes of one slot of the node pools (TerrainRenderer::create): what each resident node costs.
 struct SlotBytes {
-    std::size_t heights = 0;    ///< the surface with a 1-sample border, 32-bit floats
+    std::size_t heights = 0;    ///< the surface with a 1-sample border, 16 bits a sample
     std::size_t normals = 0;    ///< the parent's normals at its samples, 2 bytes each
     std::size_t colour = 0;     ///< the colour texture (RGB8, or DXT1 with node_texture_compression)
     std::size_t weights = 0;    ///< material weights (RGBA4), 0 without materials
@@ -136,10 +137,11 @@ private:
     static constexpr double kDetailFadeRepeats = 40.0;
 
     // The pools: one layer per slot in each texture array.
-    gl::Texture mHeights;        ///< GL_R32F, (N + 2)^2 per layer
-    gl::Texture mParentNormals;  ///< GL_RG8_SNORM, ((N + 1) / 2)^2 per layer
-    gl::Texture mColour;         ///< DXT1 (or GL_RGB8), mColourLayerSize^2 per layer
-    gl::Texture mWeights;        ///< GL_RGBA4, N^2 per layer; none without materials
+    gl::Texture mHeights;                            ///< GL_R16 (quantizeHeightsR16), (N + 2)^2 per layer
+    std::vector<std::array<float, 2>> mSlotHeights;  ///< per slot: lo and range of its height codes
+    gl::Texture mParentNormals;                      ///< GL_RG8_SNORM, ((N + 1) / 2)^2 per layer
+    gl::Texture mColour;                             ///< DXT1 (or GL_RGB8), mColourLayerSize^2 per layer
+    gl::Texture mWeights;                            ///< GL_RGBA4, N^2 per layer; none without materials
     bool mDxt1 = false;
     int mColourLayerSize = 0;
     SlotBytes mSlotBytes;

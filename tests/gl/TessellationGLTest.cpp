@@ -1,8 +1,9 @@
 // The tessellation render mode (issue 13) on the GL itself: transform feedback reads back every triangle the
 // tessellator made for a frame of the bundled terrain, and each is checked against the pure model the error
-// meter measures (lod/TessellationLevels.h): the same vertices at the same heights, cells split along one or
-// the other diagonal only, snapped sides, blocks that meet sharing their vertices bit for bit (no crack inside
-// a node), skirts hanging from the drawn border. The triangle count the renderer reports is what the GL made.
+// meter measures (lod/TessellationLevels.h): the same vertices at the same heights (as the pools quantize them), cells
+// split along one or the other diagonal only, snapped sides, blocks that meet sharing their vertices bit for bit (no
+// crack inside a node), skirts hanging from the drawn border. The triangle count the renderer reports is what the GL
+// made.
 #include "GlTestSupport.h"
 #include "TestSupport.h"
 
@@ -13,6 +14,7 @@
 #include "quadtree/ChunkGeometry.h"
 #include "quadtree/MapFile.h"
 #include "render/GlWindow.h"
+#include "render/NodeTextures.h"
 #include "render/TerrainRenderer.h"
 
 #include <gtest/gtest.h>
@@ -101,10 +103,14 @@ TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVertic
             *node->tessellation, extent.box(selected.id, node->zMin, node->zMax), camera, blockPixels);
         const double spacing = selected.size / (n - 1);
         const float morph = selected.id.isRoot() ? 1.0f : selected.morph;
+        // The heights as the pools hold them (16-bit codes over the node's range), blended as the shaders blend.
+        std::vector<float> surface(node->heights.base.size());
+        node->heights.surface(surface);
+        const QuantizedHeights quantized = quantizeHeightsR16(surface, n);
         auto height = [&](int i, int j) -> double {
-            const int w = node->heights.size;
             auto h = [&](int a, int c) -> double {
-                return node->heights.height(static_cast<std::size_t>(c + kBorder) * w + a + kBorder);
+                return quantized.lo +
+                       quantized.range * (quantized.codes[static_cast<std::size_t>(c + 1) * (n + 2) + a + 1] / 65535.0);
             };
             const int dx = i & 1, dy = j & 1;
             return morph * h(i, j) + (1.0 - morph) * 0.5 * (h(i - dx, j - dy) + h(i + dx, j + dy));

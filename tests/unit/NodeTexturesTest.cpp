@@ -136,5 +136,34 @@ TEST(NodeTexturesTest, ParentNormalsOfAPlaneAreItsNormal)
     EXPECT_EQ(bumped[(2 * 9 + 3) * 2], 0) << "at the bump the central difference is flat";
 }
 
+TEST(NodeTexturesTest, HeightsQuantizeWithinHalfAStepOfTheirRange)
+{
+    const int n = 17, w = n + 4;
+    std::vector<float> window(static_cast<std::size_t>(w) * w);
+    for (int j = 0; j < w; ++j) {
+        for (int i = 0; i < w; ++i) {
+            window[static_cast<std::size_t>(j) * w + i] = static_cast<float>(
+                2400.0 + 300.0 * std::sin(0.3 * i) * std::cos(0.2 * j) + (i == 0 || j == 0 ? 5000.0 : 0.0));
+        }
+    }
+    const QuantizedHeights q = quantizeHeightsR16(window, n);
+    ASSERT_EQ(q.codes.size(), static_cast<std::size_t>((n + 2) * (n + 2)));
+    // The range is the inner (N + 2)^2 only: the outer border (5000 m higher here) is not drawn.
+    EXPECT_LT(q.range, 700.0f);
+    EXPECT_EQ(*std::min_element(q.codes.begin(), q.codes.end()), 0);
+    EXPECT_EQ(*std::max_element(q.codes.begin(), q.codes.end()), 65535);
+    for (int j = 0; j < n + 2; ++j) {
+        for (int i = 0; i < n + 2; ++i) {
+            const double h = window[static_cast<std::size_t>(j + 1) * w + i + 1];
+            const double decoded = q.lo + q.range * (q.codes[static_cast<std::size_t>(j) * (n + 2) + i] / 65535.0);
+            EXPECT_LE(std::abs(decoded - h), q.range / 131070.0 + 1e-4) << i << "," << j;
+        }
+    }
+    // A flat window: range 0, every code 0, decoded exactly.
+    const QuantizedHeights flat = quantizeHeightsR16(std::vector<float>(static_cast<std::size_t>(w) * w, 12.5f), n);
+    EXPECT_EQ(flat.range, 0.0f);
+    EXPECT_EQ(flat.lo, 12.5f);
+}
+
 }  // namespace
 }  // namespace terrain
