@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <unordered_map>
 
 namespace terrain {
 
@@ -104,6 +105,10 @@ Expected<ErrorCommand> parseErrorCommand(const std::filesystem::path& mapFile, c
             command.levels = true;
             continue;
         }
+        if (arg == "--pops") {
+            command.pops = true;
+            continue;
+        }
         if (arg == "--oracle") {
             command.oracle = true;
             continue;
@@ -156,6 +161,9 @@ Expected<ErrorCommand> parseErrorCommand(const std::filesystem::path& mapFile, c
         } else {
             return makeError("unknown option '", arg, "'");
         }
+    }
+    if (command.pops && command.path.empty()) {
+        return makeError("--pops compares consecutive frames: it needs --path");
     }
     if (command.camera.has_value() == !command.path.empty()) {
         return makeError("give exactly one of --camera X,Y,Z,YAW,PITCH and --path FILE.path");
@@ -267,14 +275,26 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
     };
     std::vector<LevelFigures> levels(NodeId::kMaxLevel + 1);
     LodSelection unmorphed;
+    std::unordered_map<std::uint64_t, BlockLevels> previousLevels;  // --pops
+    std::vector<LevelSwitch> switches;
+    std::vector<float> pops;  // px
     std::fprintf(out,
                  "# tau %g px, %dx%d, fov %g deg, detail %s; reference: refined until a level changes it by "
                  "< %g px\n",
                  tau, command.lens.viewportWidth, command.lens.viewportHeight, o.cameraFov, *synthesizer ? "on" : "off",
                  tau / 8.0);
-    std::fprintf(out,
-                 "# frame  time(s)  max(px)  p99(px)  mean(px)  triangles  nodes  refined  within-tau  "
-                 "worst: node, metres\n");
+    if (command.pops) {
+        if (!o.tessellation) {
+            return fail(
+                "--pops measures the tessellation blocks' level switches: --set render_mode=tessellation "
+                "(chunks morph every switch, eq. 3.5)");
+        }
+        std::fprintf(out, "# frame  time(s)  largest pop(px)  triangles  nodes\n");
+    } else {
+        std::fprintf(out,
+                     "# frame  time(s)  max(px)  p99(px)  mean(px)  triangles  nodes  refined  within-tau  "
+                     "worst: node, metres\n");
+    }
     for (std::size_t frame = 0; frame < frames; ++frame) {
         Camera camera = command.lens;
         double t = 0.0;
@@ -312,6 +332,44 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
                 node.morph = 1.0f;
             }
             drawn = &unmorphed;
+        }
+        if (command.pops) {
+            // The blocks' level switches since the previous frame, each at its size on screen now.
+            std::unordered_map<std::uint64_t, BlockLevels> now;
+            std::uint64_t drawnTriangles = 0;
+            const VerticalSegmentProjector projector(camera);
+            double framePop = 0.0;
+            for (const SelectedNode& selected : drawn->nodes) {
+                const NodePtr node = s.node(selected.id);
+                BlockLevels blockLevels =
+                    chooseBlockLevels(*node->tessellation, extentOf(header).box(selected.id, node->zMin, node->zMax),
+                                      camera, blockPixels);
+                drawnTriangles += blockLevels.triangles();
+                if (auto it = previousLevels.find(selected.id.key()); it != previousLevels.end()) {
+                    const int n = static_cast<int>(header.chunkSize);
+                    const std::vector<float> samples =
+                        morphedSamples(*node, n, selected.id.isRoot() ? 1.0f : selected.morph);
+                    switches.clear();
+                    levelSwitches(samples, n, it->second, blockLevels, switches);
+                    const double spacing = selected.size / (n - 1);
+                    for (const LevelSwitch& w : switches) {
+                        const double x = camera.position.x + selected.cameraRelativeOrigin.x + w.lx * spacing;
+                        const double y = camera.position.y + selected.cameraRelativeOrigin.y + w.ly * spacing;
+                        const double z = header.heightOffset + nodeSurfaceAt(*node, n, w.lx, w.ly);
+                        const double px = projector.pixels(x, y, z, w.metres);
+                        if (px >= 0.0) {
+                            pops.push_back(static_cast<float>(px));
+                            framePop = std::max(framePop, px);
+                        }
+                    }
+                }
+                now.emplace(selected.id.key(), std::move(blockLevels));
+            }
+            previousLevels = std::move(now);
+            triangles.push_back(drawnTriangles);
+            std::fprintf(out, "%7zu %8.2f %8.3f %10llu %6zu\n", frame, t, framePop,
+                         static_cast<unsigned long long>(drawnTriangles), drawn->nodes.size());
+            continue;
         }
         auto measured = meter.measure(
             *drawn, [&s](const NodeId& id) { return s.node(id); }, camera, tau, blockPixels);
@@ -404,6 +462,17 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
     std::vector<std::uint64_t> sorted = triangles;
     std::sort(sorted.begin(), sorted.end());
     const std::uint64_t median = sorted[(sorted.size() - 1) / 2];
+    if (command.pops) {
+        std::sort(pops.begin(), pops.end());
+        std::fprintf(out,
+                     "pops: %zu points of switched blocks in %zu frames; largest %.3f px, p99 %.3f px, median %.3f px "
+                     "(blocks' budget %g px); triangles median %llu, max %llu\n",
+                     pops.size(), frames, pops.empty() ? 0.0 : double{pops.back()},
+                     pops.empty() ? 0.0 : double{pops[static_cast<std::size_t>(0.99 * double(pops.size() - 1))]},
+                     pops.empty() ? 0.0 : double{pops[(pops.size() - 1) / 2]}, blockPixels,
+                     static_cast<unsigned long long>(median), static_cast<unsigned long long>(sorted.back()));
+        return 0;
+    }
     std::fprintf(out, "frames over tau: %zu of %zu\n", framesOverTau, frames);
     std::fprintf(out, "refinements that bought nothing: %llu of %llu refined nodes (%.1f%%)\n",
                  static_cast<unsigned long long>(refinedWithinTau), static_cast<unsigned long long>(refined),

@@ -25,6 +25,7 @@ struct ErrorCommand {
     bool levels = false;                ///< --levels: a table of bounds against measured errors per level
     bool oracle = false;                ///< --oracle: the fewest nodes within tau by measured errors, per frame
     int oracleBlocks = 0;               ///< --oracle=B: by B x B blocks' metres projected as bounds (0: pixels)
+    bool pops = false;                  ///< --pops: tessellation blocks' level switches between frames, no error
     Camera lens;                        ///< viewport, field of view, near and far planes
 };
 
@@ -34,8 +35,8 @@ Status parseCameraArgument(const std::string& value, Camera& camera);
 
 /// Parses `error`'s arguments after the map: CONFIG.cfg files and --set key=value (applied in order, as
 /// tengine does), --camera X,Y,Z,YAW,PITCH or --path FILE (exactly one), --tau T, --size WxH, --fov DEG,
-/// --fps F, --levels, --oracle[=B]. `mapFile` becomes the options' map_file. Errors name the argument and what was
-/// wrong.
+/// --fps F, --levels, --oracle[=B], --pops. `mapFile` becomes the options' map_file. Errors name the argument and what
+/// was wrong.
 Expected<ErrorCommand> parseErrorCommand(const std::filesystem::path& mapFile, const std::vector<std::string>& args);
 
 /// Runs the measurement on `map`, printing a line per frame and the summary to `out` and warnings to `err`.

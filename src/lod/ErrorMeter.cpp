@@ -197,7 +197,7 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
                                          const Camera& camera, double tauPixels, double blockPixels)
 {
     const bool tessellated = blockPixels > 0.0;
-    std::vector<float> blended;
+    std::vector<float> blended;  // tessellation mode: the node's samples as the shaders blend them
     TERRAIN_EXPECTS(tauPixels > 0.0, "tau must be > 0 pixels");
     camera.expectValid();
     const View view(mHeader, mExtent, camera);
@@ -246,22 +246,7 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
             TERRAIN_EXPECTS(node->tessellation != nullptr, "tessellation mode needs nodes with tessellation errors");
             levels = chooseBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
                                        blockPixels);
-            // The samples as the shaders blend them (terrain.tese): odd ones towards the mean of their even
-            // neighbours along the template triangulation.
-            blended.resize(static_cast<std::size_t>(n) * n);
-            const int w = node->heights.size;
-            auto at = [&](int i, int j) -> double {
-                return node->heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
-            };
-            const double g = selected.id.isRoot() ? 1.0 : f;
-            for (int j = 0; j < n; ++j) {
-                for (int i = 0; i < n; ++i) {
-                    const int dx = i & 1, dy = j & 1;
-                    const double parentHeight = 0.5 * (at(i - dx, j - dy) + at(i + dx, j + dy));
-                    blended[static_cast<std::size_t>(j) * n + i] =
-                        static_cast<float>(g * at(i, j) + (1.0 - g) * parentHeight);
-                }
-            }
+            blended = morphedSamples(*node, n, selected.id.isRoot() ? 1.0f : f);
         }
         double ownWorst = -1.0;  // metres, own surface; stays < 0 without a point in view
         for (const NodePtr& leaf : leaves) {

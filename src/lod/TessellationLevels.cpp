@@ -3,6 +3,7 @@
 #include "core/Check.h"
 #include "core/Frustum.h"
 #include "lod/LodSelector.h"
+#include "quadtree/ChunkGeometry.h"
 
 #include <algorithm>
 #include <cmath>
@@ -185,6 +186,53 @@ std::pair<double, double> tessellatedHeights(std::span<const float> surface, int
     }
     TERRAIN_ASSERT(foundFirst && foundSecond);
     return {first, second};
+}
+
+std::vector<float> morphedSamples(const NodeData& node, int chunkSize, float morph)
+{
+    const int n = chunkSize, w = node.heights.size;
+    TERRAIN_EXPECTS(w == windowSize(n), "the node's window must be for this chunk size");
+    auto at = [&](int i, int j) -> double {
+        return node.heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder);
+    };
+    std::vector<float> out(static_cast<std::size_t>(n) * n);
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            const int dx = i & 1, dy = j & 1;
+            const double parent = 0.5 * (at(i - dx, j - dy) + at(i + dx, j + dy));
+            out[static_cast<std::size_t>(j) * n + i] = static_cast<float>(morph * at(i, j) + (1.0 - morph) * parent);
+        }
+    }
+    return out;
+}
+
+void levelSwitches(std::span<const float> surface, int chunkSize, const BlockLevels& before, const BlockLevels& after,
+                   std::vector<LevelSwitch>& out)
+{
+    TERRAIN_EXPECTS(before.blocksPerSide == after.blocksPerSide && before.blockQuads == after.blockQuads,
+                    "levels of the same node");
+    const int b = after.blocksPerSide, q = after.blockQuads;
+    for (int k = 0; k < b * b; ++k) {
+        if (before.code(k) == after.code(k) || after.culled[static_cast<std::size_t>(k)] ||
+            before.culled[static_cast<std::size_t>(k)]) {
+            continue;
+        }
+        const int bx = k % b, by = k / b;
+        for (int y = 0; y <= 2 * q; ++y) {
+            for (int x = 0; x <= 2 * q; ++x) {
+                if ((x & 1) != (y & 1)) {
+                    continue;  // samples (both even) and quad centres (both odd)
+                }
+                const double lx = bx * q + x / 2.0, ly = by * q + y / 2.0;
+                const auto [b1, b2] = tessellatedHeights(surface, chunkSize, before, lx, ly);
+                const auto [a1, a2] = tessellatedHeights(surface, chunkSize, after, lx, ly);
+                const double change = std::max(std::abs(a1 - b1), std::abs(a2 - b2));
+                if (change > 0.0) {
+                    out.push_back({lx, ly, change});
+                }
+            }
+        }
+    }
 }
 
 }  // namespace terrain

@@ -18,6 +18,7 @@
 #include "core/Aabb.h"
 #include "core/Camera.h"
 #include "lod/BlockErrors.h"
+#include "lod/NodeData.h"
 
 #include <cstdint>
 #include <span>
@@ -63,5 +64,23 @@ BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node
 /// tessellator's cells (the implementation picks). Both equal where the cell is a triangle.
 std::pair<double, double> tessellatedHeights(std::span<const float> surface, int chunkSize, const BlockLevels& levels,
                                              double lx, double ly);
+
+/// The node's N x N sample heights as the shaders blend them at morph factor `morph` (terrain.vert,
+/// terrain.tese): odd samples move towards the mean of their even neighbours along the template
+/// triangulation, which is where the parent's surface lies.
+std::vector<float> morphedSamples(const NodeData& node, int chunkSize, float morph);
+
+/// A point where a block's switch of levels moves the drawn surface: node sample coordinates and metres.
+struct LevelSwitch {
+    double lx = 0.0, ly = 0.0;
+    double metres = 0.0;
+};
+
+/// Where the blocks whose codes differ between `before` and `after` (levels for the same node) move the
+/// surface `surface` (N x N blended heights, the current frame's) when drawn with the one and then the
+/// other: at the block's samples and quad centres, the larger change of the two diagonals (each compared
+/// with itself). Appends to `out`. The pops of the tessellation mode, which does not morph block levels.
+void levelSwitches(std::span<const float> surface, int chunkSize, const BlockLevels& before, const BlockLevels& after,
+                   std::vector<LevelSwitch>& out);
 
 }  // namespace terrain

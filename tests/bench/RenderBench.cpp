@@ -83,13 +83,16 @@ Scene& scene()
 void BM_ChunkRenderer(benchmark::State& state)
 {
     Scene& s = scene();
-    TerrainNodeSource source(*s.map, {});
+    // render_mode = tessellation (Arg 2 = 1): the selection at 1 px, the blocks at the other 1 px of tau 2.
+    const bool tessellation = state.range(1) != 0;
+    const double nodePixels = tessellation ? 1.0 : 2.0, blockPixels = tessellation ? 1.0 : 0.0;
+    TerrainNodeSource source(*s.map, {nullptr, 0.0, tessellation ? kTessellationBlockQuads : 0});
     StreamerOptions options;
     options.cacheSize = s.map->directory().size();
     options.workers = 2;
-    auto renderer =
-        TerrainRenderer::create(TERRAIN_SHADER_DIR, s.map->header(), 16, {options.cacheSize, state.range(0) != 0})
-            .value();
+    auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, s.map->header(), 16,
+                                            {options.cacheSize, state.range(0) != 0, tessellation})
+                        .value();
     auto streamer = TerrainStreamer::create(source, extentOf(s.map->header()), options).value();
     streamer->onEvict([&renderer](const NodeData& node) { renderer->release(node.id); });
     const ResidentNodeLookup resident = [&streamer](const NodeId& id) { return streamer->node(id); };
@@ -100,12 +103,12 @@ void BM_ChunkRenderer(benchmark::State& state)
     for (auto _ : state) {
         for (const Camera& camera : s.cameras) {
             // Load everything the view wants first: the measurement is drawing only.
-            for (int round = 0; round < 32 && streamer->update(camera, 2.0).requested > 0; ++round) {
+            for (int round = 0; round < 32 && streamer->update(camera, nodePixels).requested > 0; ++round) {
                 streamer->drain();
             }
             for (int r = 0; r < kRepeats; ++r) {
                 auto start = std::chrono::steady_clock::now();
-                RenderStats stats = renderer->draw(streamer->selection(), resident, camera, style);
+                RenderStats stats = renderer->draw(streamer->selection(), resident, camera, style, blockPixels);
                 drawCalls = std::max(drawCalls, stats.drawCalls);
                 glFinish();
                 seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -113,16 +116,26 @@ void BM_ChunkRenderer(benchmark::State& state)
             }
         }
     }
-    s.engineTrianglesPerFrame = triangles / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
-    s.engineMtrisPerSecond = triangles / seconds / 1e6;
-    state.counters["triangles_per_frame"] = s.engineTrianglesPerFrame;
-    state.counters["Mtriangles_per_s"] = s.engineMtrisPerSecond;
+    if (!tessellation) {  // the brute-force mesh draws the chunks' triangles
+        s.engineTrianglesPerFrame = triangles / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
+        s.engineMtrisPerSecond = triangles / seconds / 1e6;
+    }
+    state.counters["triangles_per_frame"] =
+        triangles / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
+    state.counters["Mtriangles_per_s"] = triangles / seconds / 1e6;
     state.counters["ms_per_frame"] = 1e3 * seconds / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
     state.counters["draw_calls"] = static_cast<double>(drawCalls);
     state.counters["gpu_bytes_per_node"] = static_cast<double>(renderer->slotBytes().total());
 }
-// Arg: node_texture_compression (DXT1 colour layers) on, then off; the brute-force ratio is against the last.
-BENCHMARK(BM_ChunkRenderer)->Arg(1)->Arg(0)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+// Args: node_texture_compression (DXT1 colour layers) on or off, render_mode chunks (0) or tessellation (1); the
+// brute-force ratio is against the last (chunks, uncompressed).
+BENCHMARK(BM_ChunkRenderer)
+    ->Args({1, 0})
+    ->Args({0, 1})
+    ->Args({0, 0})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
 
 constexpr const char* kBruteVertex = R"(#version 330 core
 layout(location = 0) in vec3 aPosition;
