@@ -174,5 +174,64 @@ TEST(TessellationLevelsTest, APlaneTakesTheCoarsestLevelHoweverCloseAndNearTakes
               chooseBlockLevels(rough, node, far, 2.0).surfaceTriangles());
 }
 
+TEST(TessellationLevelsTest, MorphedSamplesBlendOddSamplesTowardsTheirEvenNeighbours)
+{
+    const int n = 17, w = n + 4;
+    NodeData node;
+    node.heights.size = w;
+    node.heights.base.resize(static_cast<std::size_t>(w) * w);
+    for (int j = 0; j < w; ++j) {
+        for (int i = 0; i < w; ++i) {
+            node.heights.base[static_cast<std::size_t>(j) * w + i] =
+                static_cast<float>(10.0 * test::unitNoise(3, i, j));
+        }
+    }
+    auto own = [&](int i, int j) { return node.heights.base[static_cast<std::size_t>(j + 2) * w + i + 2]; };
+    const std::vector<float> full = morphedSamples(node, n, 1.0f), parent = morphedSamples(node, n, 0.0f),
+                             half = morphedSamples(node, n, 0.5f);
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            const auto k = static_cast<std::size_t>(j) * n + i;
+            EXPECT_FLOAT_EQ(full[k], own(i, j));
+            // Odd along x: between west and east; along y: south and north; both: south-west and north-east.
+            const int dx = i & 1, dy = j & 1;
+            const float mean = 0.5f * (own(i - dx, j - dy) + own(i + dx, j + dy));
+            EXPECT_FLOAT_EQ(parent[k], (dx | dy) ? mean : own(i, j));
+            EXPECT_NEAR(half[k], 0.5 * (full[k] + parent[k]), 1e-5);
+        }
+    }
+}
+
+TEST(TessellationLevelsTest, LevelSwitchesAreTheChangeOfTheDrawnSurfaceWhereBlocksChanged)
+{
+    const int n = 33;
+    const std::vector<float> surface = hills(n, 7, 5.0);
+    const TessellationErrors errors = computeTessellationErrors(surface, n, 8);
+    const auto [lo, hi] = std::minmax_element(surface.begin(), surface.end());
+    const Aabb node{{0.0, 0.0, *lo}, {320.0, 320.0, *hi}};
+    const BlockLevels near = chooseBlockLevels(errors, node, cameraAt({160.0, 160.0, 400.0}, 0.0, -89.0), 1.0);
+    const BlockLevels far = chooseBlockLevels(errors, node, cameraAt({160.0, 160.0, 1200.0}, 0.0, -89.0), 1.0);
+    std::vector<LevelSwitch> none, some;
+    levelSwitches(surface, n, near, near, none);
+    EXPECT_TRUE(none.empty());
+    levelSwitches(surface, n, near, far, some);
+    ASSERT_FALSE(some.empty());
+    int changedBlocks = 0;
+    for (int k = 0; k < 16; ++k) {
+        changedBlocks += near.code(k) != far.code(k) ? 1 : 0;
+    }
+    EXPECT_GT(changedBlocks, 0);
+    for (const LevelSwitch& w : some) {
+        const auto [b1, b2] = tessellatedHeights(surface, n, near, w.lx, w.ly);
+        const auto [a1, a2] = tessellatedHeights(surface, n, far, w.lx, w.ly);
+        EXPECT_DOUBLE_EQ(w.metres, std::max(std::abs(a1 - b1), std::abs(a2 - b2)));
+        const int block = static_cast<int>(w.ly / 8) * 4 + static_cast<int>(w.lx / 8);
+        const bool onChanged = near.code(std::min(block, 15)) != far.code(std::min(block, 15));
+        // Points on a block's edge belong to two blocks; the one that changed may be either.
+        const bool onEdge = std::fmod(w.lx, 8.0) == 0.0 || std::fmod(w.ly, 8.0) == 0.0;
+        EXPECT_TRUE(onChanged || onEdge) << w.lx << "," << w.ly;
+    }
+}
+
 }  // namespace
 }  // namespace terrain
