@@ -2,8 +2,8 @@
 // tessellator made for a frame of the bundled terrain, and each is checked against the pure model the error
 // meter measures (lod/TessellationLevels.h): the same vertices at the same heights (as the pools quantize them), cells
 // split along one or the other diagonal only, snapped sides, blocks that meet sharing their vertices bit for bit (no
-// crack inside a node), skirts hanging from the drawn border. The triangle count the renderer reports is what the GL
-// made.
+// crack inside a node; and the frame shows no clear colour where the terrain must be), skirts hanging from the drawn
+// border. The triangle count the renderer reports is what the GL made.
 #include "GlTestSupport.h"
 #include "TestSupport.h"
 
@@ -13,6 +13,7 @@
 #include "lod/TessellationLevels.h"
 #include "quadtree/ChunkGeometry.h"
 #include "quadtree/MapFile.h"
+#include "render/FrameCapture.h"
 #include "render/GlWindow.h"
 #include "render/NodeTextures.h"
 #include "render/TerrainRenderer.h"
@@ -84,10 +85,30 @@ TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVertic
     const TerrainStreamer& s = **streamer;
     const LodSelection& selection = s.selection();
     ASSERT_GT(selection.nodes.size(), 20u);
+    // The hole check's style: no sky, the clear colour where nothing is drawn.
     SceneStyle style;
+    style.drawSky = false;
+    style.clearColour = {1.0f, 0.0f, 1.0f};
+    style.hazeDistance = 1e9f;
     std::vector<glm::vec3> feedback;
     const RenderStats stats = (*renderer)->draw(
         selection, [&s](const NodeId& id) { return s.node(id); }, camera, style, blockPixels, &feedback);
+    // No crack inside a node where blocks of different levels meet, nor between nodes: no pixel whose view ray
+    // must hit the terrain shows the clear colour.
+    glFinish();
+    const Image image = captureFrame(camera.viewportWidth, camera.viewportHeight);
+    const double zMin = header.heightOf((*map)->directory().front().minCode);
+    int holes = 0, mustHit = 0;
+    for (int y = 0; y < image.height; ++y) {
+        for (int x = 0; x < image.width; ++x) {
+            if (test::mustHitTerrain(camera, header, zMin, x, y)) {
+                ++mustHit;
+                holes += test::isHole(image.pixel(x, y)) ? 1 : 0;
+            }
+        }
+    }
+    EXPECT_EQ(holes, 0) << "pixels of the clear colour where the terrain must be";
+    EXPECT_GT(mustHit, image.width * image.height / 4);
     EXPECT_EQ(stats.generatedTriangles, stats.triangles) << "the renderer's count is what the GL made";
     ASSERT_EQ(feedback.size(), 3 * stats.triangles);
 
