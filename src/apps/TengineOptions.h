@@ -68,7 +68,7 @@ struct TengineOptions {
     bool wireframe = false;                   ///< wireframe
     bool geomorph = true;                     ///< geomorph: off draws every node at its own detail (pops)
     bool nodeTextureCompression = false;      ///< node_texture_compression: DXT1 colour textures on the GPU
-    bool tessellation = false;                ///< render_mode: false chunks, true tessellation (issue 13)
+    bool tessellation = true;                 ///< render_mode: true tessellation (issue 13), false chunks
     double tessellationShare = 0.5;           ///< tessellation_error_share: the part of tau the blocks spend
     double sunAzimuth = 135.0;                ///< sun_azimuth: degrees in [0, 360], clockwise from north
     double sunElevation = 35.0;               ///< sun_elevation: degrees in [-90, 90] above the horizon

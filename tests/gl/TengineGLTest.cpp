@@ -192,7 +192,7 @@ void TengineGLTest::expectNoHolesAlongTheFlight(const std::vector<std::string>& 
 
 TEST_F(TengineGLTest, NoHolesAlongTheFlight)
 {
-    expectNoHolesAlongTheFlight({});
+    expectNoHolesAlongTheFlight({"render_mode=chunks"});
 }
 
 /// render_mode = tessellation (issue 13): no holes, neither between nodes (skirts) nor inside them where
@@ -202,11 +202,11 @@ TEST_F(TengineGLTest, TessellationHasNoHolesOneDrawAndFewerTriangles)
 {
     expectNoHolesAlongTheFlight({"render_mode=tessellation"});
     test::ScratchDir a, b, chunks;
-    const std::vector<std::string> settings = {"frames_per_second=2", "render_mode=tessellation"};
+    const std::vector<std::string> settings = {"frames_per_second=2", "render_mode=tessellation"};  // the default
     auto run = video(a.path(), settings);
     ASSERT_EQ(run.exitCode, 0) << run.output;
     ASSERT_EQ(video(b.path(), settings).exitCode, 0);
-    ASSERT_EQ(video(chunks.path(), {"frames_per_second=2"}).exitCode, 0);
+    ASSERT_EQ(video(chunks.path(), {"frames_per_second=2", "render_mode=chunks"}).exitCode, 0);
     for (int f = 0; f <= 16; ++f) {
         Image first = frame(a.path(), f), second = frame(b.path(), f);
         ASSERT_EQ(first.pixels.size(), second.pixels.size());
@@ -253,7 +253,8 @@ TEST_F(TengineGLTest, WithoutTessellationShadersTheTessellationModeFallsBackToCh
 TEST_F(TengineGLTest, SameRunGivesIdenticalFrames)
 {
     test::ScratchDir a, b;
-    std::vector<std::string> settings = {"frames_per_second=2", "worker_threads=2"};
+    // Chunks here; TessellationHasNoHolesOneDrawAndFewerTriangles checks the default mode's frames.
+    std::vector<std::string> settings = {"frames_per_second=2", "worker_threads=2", "render_mode=chunks"};
     ASSERT_EQ(video(a.path(), settings).exitCode, 0);
     ASSERT_EQ(video(b.path(), settings).exitCode, 0);
     for (int f = 0; f <= 16; ++f) {
@@ -364,17 +365,21 @@ TEST_F(TengineGLTest, MissingMapIsAClearError)
 
 TEST_F(TengineGLTest, BrokenShaderIsAClearError)
 {
-    test::ScratchDir shaders;
-    for (const auto& entry : std::filesystem::directory_iterator(TERRAIN_SHADER_DIR)) {
-        std::filesystem::copy(entry.path(), shaders / entry.path().filename().string());
+    // Each render mode's own stage broken in turn.
+    for (const auto& [file, mode] : {std::pair{"terrain.vert", "chunks"}, std::pair{"terrain.tese", "tessellation"}}) {
+        test::ScratchDir shaders;
+        for (const auto& entry : std::filesystem::directory_iterator(TERRAIN_SHADER_DIR)) {
+            std::filesystem::copy(entry.path(), shaders / entry.path().filename().string());
+        }
+        std::ofstream(shaders / file, std::ios::app) << "\nthis is not GLSL;\n";
+        test::ScratchDir frames;
+        auto run = video(frames.path(), {"video_frames=1", "shader_path=" + shaders.path().string(),
+                                         std::string("render_mode=") + mode});
+        EXPECT_NE(run.exitCode, 0) << mode;
+        EXPECT_NE(run.output.find(file), std::string::npos) << run.output;
+        EXPECT_NE(run.output.find("does not compile"), std::string::npos) << run.output;
+        EXPECT_TRUE(frames.list().empty()) << "no frames from a run that failed";
     }
-    std::ofstream(shaders / "terrain.vert", std::ios::app) << "\nthis is not GLSL;\n";
-    test::ScratchDir frames;
-    auto run = video(frames.path(), {"video_frames=1", "shader_path=" + shaders.path().string()});
-    EXPECT_NE(run.exitCode, 0);
-    EXPECT_NE(run.output.find("terrain.vert"), std::string::npos) << run.output;
-    EXPECT_NE(run.output.find("does not compile"), std::string::npos) << run.output;
-    EXPECT_TRUE(frames.list().empty()) << "no frames from a run that failed";
 }
 
 TEST_F(TengineGLTest, BadConfigIsAnErrorNamingFileAndLine)
@@ -456,8 +461,9 @@ TEST_F(TengineGLTest, GeomorphingHidesTheSwitchBetweenDetailLevels)
              "--set", "video_ffmpeg=false", "--set", "image_path=" + frames.string(), "--set", "window_width=320",
              "--set", "window_height=180", "--set", "frames_per_second=1", "--set", "draw_user_interface=false",
              "--set", std::string("geomorph=") + (geomorph ? "true" : "false"), "--set", "lod_error=2",
-             // The split was found in the static tree: no dynamic nodes, whose errors differ.
-             "--set", "detail_create_new_nodes=false"});
+             // The split was found in the static tree: no dynamic nodes, whose errors differ. Chunks: the
+             // split is the selection's at all of tau (tessellation selects for part of it).
+             "--set", "detail_create_new_nodes=false", "--set", "render_mode=chunks"});
         EXPECT_EQ(run.exitCode, 0) << run.output;
         return meanDifference(frame(frames, 0), frame(frames, 1));
     };

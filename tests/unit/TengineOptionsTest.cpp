@@ -154,7 +154,7 @@ const std::vector<ValidCase>& validCases()
         {"clear_color=0, 0.5,1", [](const O& o) { return o.clearColor == glm::vec3(0.0f, 0.5f, 1.0f); }},
         {"geomorph=off", [](const O& o) { return !o.geomorph; }},
         {"node_texture_compression=on", [](const O& o) { return o.nodeTextureCompression; }},
-        {"render_mode=Tessellation", [](const O& o) { return o.tessellation; }},
+        {"render_mode=Chunks", [](const O& o) { return !o.tessellation; }},
         {"tessellation_error_share=0.25", [](const O& o) { return o.tessellationShare == 0.25; }},
         {"shader_path=my/shaders", [](const O& o) { return o.shaderPath == "my/shaders"; }},
         {"log_file=logs/tengine.log", [](const O& o) { return o.logFile == "logs/tengine.log"; }},
