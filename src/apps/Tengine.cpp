@@ -348,7 +348,8 @@ Camera initialCamera(const TengineOptions& o, const Scene& scene)
     return camera;
 }
 
-/// The overlay's lines: rate (measured) or frame and time (video), triangles, nodes, cache, camera.
+/// The overlay's lines: rate (measured) or frame and time (video), triangles, nodes (and tessellated blocks),
+/// cache, camera.
 std::vector<std::string> overlayLines(bool video, std::size_t frame, double time, std::optional<double> fps,
                                       const RenderStats& render, const Scene& scene, const Camera& camera, double tau,
                                       bool wireframe)
@@ -364,7 +365,12 @@ std::vector<std::string> overlayLines(bool video, std::size_t frame, double time
         std::snprintf(line, sizeof line, "-- fps  %.2f Mtriangles", mtriangles);
     }
     lines.emplace_back(line);
-    std::snprintf(line, sizeof line, "nodes %zu static, %zu dynamic", render.staticNodes, render.dynamicNodes);
+    if (scene.tessellation) {
+        std::snprintf(line, sizeof line, "nodes %zu static, %zu dynamic, %zu blocks tessellated", render.staticNodes,
+                      render.dynamicNodes, render.blocks);
+    } else {
+        std::snprintf(line, sizeof line, "nodes %zu static, %zu dynamic", render.staticNodes, render.dynamicNodes);
+    }
     lines.emplace_back(line);
     const auto server = scene.streamer->serverStats();
     std::snprintf(line, sizeof line, "cache %zu / %zu nodes, requests pending %zu", scene.streamer->cache().size(),
