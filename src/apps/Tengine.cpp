@@ -282,8 +282,8 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
         const SlotBytes& b = scene->renderer->slotBytes();
         log("node pools: " + std::to_string(scene->renderer->slots()) + " slots of " + std::to_string(b.total()) +
             " bytes (heights " + std::to_string(b.heights) + ", parent normals " + std::to_string(b.normals) +
-            ", colour " + std::to_string(b.colour) +
-            ", material weights " + std::to_string(b.weights) + ", constants " + std::to_string(b.constants) + ")");
+            ", colour " + std::to_string(b.colour) + ", material weights " + std::to_string(b.weights) +
+            ", constants " + std::to_string(b.constants) + ")");
     }
     auto overlay = TextOverlay::create(shaders);
     if (!overlay.ok()) {

@@ -120,8 +120,7 @@ void BM_ChunkRenderer(benchmark::State& state)
         s.engineTrianglesPerFrame = triangles / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
         s.engineMtrisPerSecond = triangles / seconds / 1e6;
     }
-    state.counters["triangles_per_frame"] =
-        triangles / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
+    state.counters["triangles_per_frame"] = triangles / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
     state.counters["Mtriangles_per_s"] = triangles / seconds / 1e6;
     state.counters["ms_per_frame"] = 1e3 * seconds / (static_cast<double>(state.iterations()) * kFrames * kRepeats);
     state.counters["draw_calls"] = static_cast<double>(drawCalls);
