@@ -66,6 +66,33 @@ gl::Texture createLayers(GLenum internalFormat, int size, GLsizei layers, GLenum
     return texture;
 }
 
+/// Points the per-instance attributes 2 .. 2 + texels - 1 of the bound vertex array at `buffer`'s node
+/// constants, `texels` vec4s a node, starting at node `first`.
+void pointNodeConstants(const gl::Buffer& buffer, int texels, std::size_t first)
+{
+    const auto stride = static_cast<GLsizei>(texels * 4 * sizeof(float));
+    glBindBuffer(GL_ARRAY_BUFFER, buffer.name());
+    for (int k = 0; k < texels; ++k) {
+        const std::size_t offset =
+            (first * static_cast<std::size_t>(texels) + static_cast<std::size_t>(k)) * 4 * sizeof(float);
+        glVertexAttribPointer(static_cast<GLuint>(2 + k), 4, GL_FLOAT, GL_FALSE, stride,
+                              reinterpret_cast<const void*>(offset));
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
+/// Enables the node constants as per-instance attributes of the bound vertex array (terrain.vert and
+/// terrain_tess.vert: locations 2 ..), from the first node on.
+void enableNodeConstants(const gl::Buffer& buffer, int texels)
+{
+    for (int k = 0; k < texels; ++k) {
+        const auto location = static_cast<GLuint>(2 + k);
+        glEnableVertexAttribArray(location);
+        glVertexAttribDivisor(location, 1);
+    }
+    pointNodeConstants(buffer, texels, 0);
+}
+
 }  // namespace
 
 Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::filesystem::path& shaderDirectory,
@@ -213,15 +240,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
                            reinterpret_cast<const void*>(offsetof(TemplateVertex, skirt)));
     // Per-instance node constants: attributes 2.. from the frame's constants buffer, a node's texels apart.
     r->mConstantsBuffer = gl::Buffer::create();
-    glBindBuffer(GL_ARRAY_BUFFER, r->mConstantsBuffer.name());
-    const auto stride = static_cast<GLsizei>(r->mNodeTexels * 4 * sizeof(float));
-    for (int k = 0; k < r->mNodeTexels; ++k) {
-        const auto location = static_cast<GLuint>(2 + k);
-        glEnableVertexAttribArray(location);
-        glVertexAttribPointer(location, 4, GL_FLOAT, GL_FALSE, stride,
-                              reinterpret_cast<const void*>(static_cast<std::uintptr_t>(k) * 4 * sizeof(float)));
-        glVertexAttribDivisor(location, 1);
-    }
+    enableNodeConstants(r->mConstantsBuffer, r->mNodeTexels);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, r->mTemplateIndices.name());
     if (narrow) {
         const std::vector<std::uint16_t> shortIndices = narrowIndices(indices);
@@ -248,15 +267,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(ids.size() * sizeof(float)), ids.data(), GL_STATIC_DRAW);
         glEnableVertexAttribArray(0);
         glVertexAttribPointer(0, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
-        glBindBuffer(GL_ARRAY_BUFFER, r->mConstantsBuffer.name());
-        for (int k = 0; k < r->mNodeTexels; ++k) {
-            const auto location = static_cast<GLuint>(2 + k);
-            glEnableVertexAttribArray(location);
-            glVertexAttribPointer(location, 4, GL_FLOAT, GL_FALSE, stride,
-                                  reinterpret_cast<const void*>(static_cast<std::uintptr_t>(k) * 4 * sizeof(float)));
-            glVertexAttribDivisor(location, 1);
-        }
-        glBindBuffer(GL_ARRAY_BUFFER, 0);
+        enableNodeConstants(r->mConstantsBuffer, r->mNodeTexels);
         glBindVertexArray(0);
         r->mLevelsBuffer = gl::Buffer::create();
         glBindBuffer(GL_TEXTURE_BUFFER, r->mLevelsBuffer.name());
@@ -584,15 +595,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         }
         mPrograms[p].use();
         // The instances' constants start at `first`: the per-instance attributes are pointed there.
-        const auto stride = static_cast<GLsizei>(texels * 4 * sizeof(float));
-        glBindBuffer(GL_ARRAY_BUFFER, mConstantsBuffer.name());
-        for (int k = 0; k < texels; ++k) {
-            const std::size_t offset =
-                (first * static_cast<std::size_t>(texels) + static_cast<std::size_t>(k)) * 4 * sizeof(float);
-            glVertexAttribPointer(static_cast<GLuint>(2 + k), 4, GL_FLOAT, GL_FALSE, stride,
-                                  reinterpret_cast<const void*>(offset));
-        }
-        glBindBuffer(GL_ARRAY_BUFFER, 0);
+        pointNodeConstants(mConstantsBuffer, texels, first);
         if (mTessellation) {
             glUniform1i(mPrograms[p].uniform("uFirstInstance"), static_cast<GLint>(first));
             GLuint query = 0, generated = 0;
