@@ -129,7 +129,8 @@ double triangleError(std::span<const float> surface, int chunkSize, glm::ivec2 p
         }
     }
     // The edges' crossings with the template's lines: x = k, y = k and x - y = k (south-west to north-east).
-    for (auto [a, b] : {std::pair{p, q}, std::pair{q, r}, std::pair{r, p}}) {
+    for (const auto& edge : {std::pair{p, q}, std::pair{q, r}, std::pair{r, p}}) {
+        const glm::ivec2 a = edge.first, b = edge.second;  // not a structured binding: the lambdas capture them
         const double ha = h(a), hb = h(b);
         auto at = [&](double s) {
             const double x = a.x + s * (b.x - a.x), y = a.y + s * (b.y - a.y);
