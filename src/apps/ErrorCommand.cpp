@@ -400,19 +400,8 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
             }
             l.ratios.push_back(ratio);
         }
-        if (o.tessellation) {
-            std::uint64_t drawnTriangles = 0;
-            for (const SelectedNode& selected : drawn->nodes) {
-                const NodePtr node = s.node(selected.id);
-                drawnTriangles +=
-                    chooseBlockLevels(*node->tessellation, extentOf(header).box(selected.id, node->zMin, node->zMax),
-                                      camera, blockPixels)
-                        .triangles();
-            }
-            triangles.push_back(drawnTriangles);
-        } else {
-            triangles.push_back(e.nodes * trianglesPerNode);
-        }
+        // The meter chose the blocks' levels as the renderer does: its count is what tessellation draws.
+        triangles.push_back(o.tessellation ? e.tessellatedTriangles : e.nodes * trianglesPerNode);
         std::fprintf(out, "%7zu %8.2f %8.3f %8.3f %9.4f %10llu %6zu %8zu %11zu  %s %.3f\n", frame, t, e.maxPixels,
                      e.p99Pixels, e.meanPixels, static_cast<unsigned long long>(triangles.back()), e.nodes, e.refined,
                      e.refinedWithinTau, e.worstNode.toString().c_str(), e.maxMetres);

@@ -247,6 +247,7 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
             levels = chooseBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
                                        blockPixels);
             blended = morphedSamples(*node, n, selected.id.isRoot() ? 1.0f : f);
+            out.tessellatedTriangles += levels.triangles();
         }
         double ownWorst = -1.0;  // metres, own surface; stays < 0 without a point in view
         for (const NodePtr& leaf : leaves) {

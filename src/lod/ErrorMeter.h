@@ -44,7 +44,8 @@ struct FrameError {
     double meanPixels = 0.0;
     double maxMetres = 0.0;  ///< vertical distance at the worst point
     std::size_t points = 0;
-    std::size_t nodes = 0;  ///< selected nodes (drawn), all of them
+    std::size_t nodes = 0;                   ///< selected nodes (drawn), all of them
+    std::uint64_t tessellatedTriangles = 0;  ///< tessellation mode: the triangles of the measured blocks' levels
     /// Refined nodes (ancestors of selected nodes, resident, with a point in view) and those of them whose own
     /// surface, drawn instead of their descendants, would already have been within tau at every point:
     /// refinements that bought nothing.
