@@ -4,6 +4,7 @@
 // bundled real terrain (demos/data). Target: median <= 200 us with an 8-octave fBm material.
 // Prints figures, never gates.
 #include "heightfield/HeightFieldIo.h"
+#include "lod/BlockErrors.h"
 #include "synthesis/DetailErrorModel.h"
 #include "synthesis/DetailSynthesizer.h"
 
@@ -119,6 +120,34 @@ BENCHMARK_CAPTURE(dynamicNode, grass_and_rock_with_error_bound, shippedMaterials
     ->Unit(benchmark::kMicrosecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
+
+/// What the tessellation mode adds to every node on the loading threads (computeTessellationErrors, 8 x 8-quad
+/// blocks): the block errors lambda, the snapped bands' errors and the level-0 diagonal flips, of a dynamic
+/// child of the real leaf with the shipped materials.
+void tessellationErrors(benchmark::State& state)
+{
+    auto synthesizer = DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, shippedMaterials()}).value();
+    const Leaf leaf = makeLeaf(*synthesizer);
+    WindowPlacement where = leaf.where;
+    where.spacing *= 0.5;
+    where.gx0 = 2 * (leaf.where.gx0 + kBorder) - kBorder;
+    where.gy0 = 2 * (leaf.where.gy0 + kBorder) - kBorder;
+    const DualHeightMap child = synthesizer->synthesizeChild(leaf.map, 0, where);
+    std::vector<float> surface(static_cast<std::size_t>(kChunk) * kChunk);
+    for (int j = 0; j < kChunk; ++j) {
+        for (int i = 0; i < kChunk; ++i) {
+            surface[static_cast<std::size_t>(j) * kChunk + i] =
+                child.height(static_cast<std::size_t>(j + kBorder) * kWindow + i + kBorder);
+        }
+    }
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(computeTessellationErrors(surface, kChunk, 8).snap.data());
+    }
+    state.counters["nodes/s"] =
+        benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+BENCHMARK(tessellationErrors)->Unit(benchmark::kMicrosecond)->Repetitions(5)->ReportAggregatesOnly(true);
 
 }  // namespace
 }  // namespace terrain

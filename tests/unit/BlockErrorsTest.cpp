@@ -137,7 +137,12 @@ TEST(BlockErrorsTest, TriangleErrorIsTheExactMaximumOverTheTriangle)
                                        {{2, 2}, {2, 9}, {7, 5}},
                                        {{16, 0}, {0, 16}, {9, 11}},
                                        {{4, 4}, {5, 4}, {4, 5}},
-                                       {{1, 3}, {13, 4}, {6, 6}}};
+                                       {{1, 3}, {13, 4}, {6, 6}},
+                                       // Edges through samples between their ends, and the node's far
+                                       // row and column.
+                                       {{0, 0}, {6, 3}, {2, 5}},
+                                       {{16, 16}, {10, 13}, {16, 4}},
+                                       {{3, 16}, {15, 12}, {9, 16}}};
     for (const auto& t : triangles) {
         const double exact = triangleError(s, n, t[0], t[1], t[2]);
         // Dense barycentric sampling: never above the exact maximum, and close to it.
