@@ -12,6 +12,7 @@
 #include "quadtree/MapVerifier.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -36,6 +37,10 @@ constexpr const char* kUsage = R"(usage: tengine-tool COMMAND FILE.map [argument
                           Without --depth: the finest static level. With it: the rendered surface at
                           quadtree level D, synthesized below the static leaves exactly as tengine draws
                           it with its default detail options (or these materials, blended in order)
+  height FILE.map --points FILE|- [same options]
+                          the same for many points: one "X Y" a line in (blank lines and # comments
+                          skipped; - reads standard input), one height a line out, in order; exit 1 at
+                          the first bad line or point outside, naming its line
   texture FILE.map LEVEL/X/Y OUT.png
                           write a static node's texture as a PNG (north up)
   select FILE.map --camera X,Y,Z,YAW,PITCH [--tau 2] [--size 1280x720] [--fov 60]
@@ -411,17 +416,27 @@ int main(int argc, char** argv)
         }
         return texture(**map, args[2], args[3]);
     }
-    if (args.size() < 4) {
-        return fail("height needs X and Y (metres)");
-    }
-    auto x = parseDouble(args[2]);
-    auto y = parseDouble(args[3]);
-    if (!x.ok() || !y.ok()) {
-        return fail("height: " + (x.ok() ? y : x).error().message);
+    // height: X Y, or --points FILE.
+    std::optional<std::string> pointsFile;
+    double x = 0.0, y = 0.0;
+    const std::size_t first = 4;
+    if (args.size() >= 4 && args[2] == "--points") {
+        pointsFile = args[3];
+    } else {
+        if (args.size() < 4) {
+            return fail("height needs X and Y (metres), or --points FILE");
+        }
+        auto px = parseDouble(args[2]);
+        auto py = parseDouble(args[3]);
+        if (!px.ok() || !py.ok()) {
+            return fail("height: " + (px.ok() ? py : px).error().message);
+        }
+        x = *px;
+        y = *py;
     }
     std::optional<int> depth;
     TengineOptions detail;  // tengine's defaults: what the viewer draws
-    for (std::size_t i = 4; i < args.size(); ++i) {
+    for (std::size_t i = first; i < args.size(); ++i) {
         const std::string& arg = args[i];
         if (arg == "--depth" && i + 1 < args.size()) {
             auto d = parseInteger(args[++i]);
@@ -437,35 +452,107 @@ int main(int argc, char** argv)
             return fail("height: unknown or incomplete option '" + arg + "'");
         }
     }
-    if (!depth) {
-        if (args.size() > 4) {
-            return fail("height: --material and --no-material need --depth");
+    if (!depth && args.size() > first) {
+        return fail("height: --material and --no-material need --depth");
+    }
+    std::unique_ptr<const DetailSynthesizer> synthesizer;
+    std::optional<TerrainNodeSource> source;
+    std::optional<SurfaceSampler> sampler;
+    if (depth) {
+        std::vector<std::string> warnings;
+        auto made = makeDetailSynthesizer(detail, static_cast<int>((*map)->header().chunkSize), TERRAIN_MATERIALS_DIR,
+                                          warnings);
+        for (const auto& warning : warnings) {
+            std::fprintf(stderr, "tengine-tool: warning: %s\n", warning.c_str());
         }
-        auto sample = staticHeightAt(**map, *x, *y);
-        if (!sample.ok()) {
-            return fail(sample.error().message);
+        if (!made.ok()) {
+            return fail(made.error().message);
         }
-        std::printf("%.6f\n", sample->height);
-        return 0;
+        synthesizer = std::move(made).value();
+        source.emplace(**map, DetailPolicy{synthesizer.get(), detail.lodMinimumSpacing});
+        sampler.emplace(**map, *source, *depth);
     }
-    std::vector<std::string> warnings;
-    auto synthesizer =
-        makeDetailSynthesizer(detail, static_cast<int>((*map)->header().chunkSize), TERRAIN_MATERIALS_DIR, warnings);
-    for (const auto& warning : warnings) {
-        std::fprintf(stderr, "tengine-tool: warning: %s\n", warning.c_str());
+    int shallowest = NodeId::kMaxLevel + 1;  // the coarsest level a point stopped at, for the note
+    NodeId stoppedAt;
+    auto heightAt = [&](double px, double py) -> Expected<double> {
+        if (!depth) {
+            auto sample = staticHeightAt(**map, px, py);
+            TERRAIN_TRY(sample);
+            return sample->height;
+        }
+        auto sample = sampler->at(px, py);
+        TERRAIN_TRY(sample);
+        if (sample->node.level < shallowest) {
+            shallowest = sample->node.level;
+            stoppedAt = sample->node;
+        }
+        return sample->height;
+    };
+    if (!pointsFile) {
+        auto h = heightAt(x, y);
+        if (!h.ok()) {
+            return fail(h.error().message);
+        }
+        std::printf("%.6f\n", *h);
+    } else {
+        FILE* in = *pointsFile == "-" ? stdin : std::fopen(pointsFile->c_str(), "r");
+        if (!in) {
+            return fail("height: cannot open " + *pointsFile + ": " + std::strerror(errno));
+        }
+        const std::string name = *pointsFile == "-" ? std::string("standard input") : *pointsFile;
+        std::string line;
+        int number = 0;
+        int status = 0;
+        for (int c = 0; status == 0 && c != EOF;) {
+            line.clear();
+            while ((c = std::fgetc(in)) != EOF && c != '\n') {
+                line.push_back(static_cast<char>(c));
+            }
+            if (c == EOF && line.empty()) {
+                break;
+            }
+            ++number;
+            const std::size_t hash = line.find('#');
+            std::string text = line.substr(0, hash);
+            std::vector<std::string> fields;
+            for (std::size_t at = 0; at < text.size();) {
+                const std::size_t begin = text.find_first_not_of(" \t\r,", at);
+                if (begin == std::string::npos) {
+                    break;
+                }
+                const std::size_t stop = text.find_first_of(" \t\r,", begin);
+                fields.push_back(text.substr(begin, stop == std::string::npos ? std::string::npos : stop - begin));
+                at = stop == std::string::npos ? text.size() : stop;
+            }
+            if (fields.empty()) {
+                continue;
+            }
+            auto px = fields.size() == 2 ? parseDouble(fields[0]) : Expected<double>(makeError("expected 'X Y'"));
+            auto py = fields.size() == 2 ? parseDouble(fields[1]) : Expected<double>(makeError("expected 'X Y'"));
+            if (!px.ok() || !py.ok()) {
+                std::fprintf(stderr, "tengine-tool: %s:%d: %s, found '%s'\n", name.c_str(), number,
+                             (px.ok() ? py : px).error().message.c_str(), line.c_str());
+                status = 1;
+                break;
+            }
+            auto h = heightAt(*px, *py);
+            if (!h.ok()) {
+                std::fprintf(stderr, "tengine-tool: %s:%d: %s\n", name.c_str(), number, h.error().message.c_str());
+                status = 1;
+                break;
+            }
+            std::printf("%.6f\n", *h);
+        }
+        if (in != stdin) {
+            std::fclose(in);
+        }
+        if (status != 0) {
+            return status;
+        }
     }
-    if (!synthesizer.ok()) {
-        return fail(synthesizer.error().message);
-    }
-    TerrainNodeSource source(**map, {synthesizer->get(), detail.lodMinimumSpacing});
-    auto sample = surfaceHeightAt(**map, source, *x, *y, *depth);
-    if (!sample.ok()) {
-        return fail(sample.error().message);
-    }
-    std::printf("%.6f\n", sample->height);
-    if (sample->node.level < *depth) {
+    if (depth && shallowest < *depth) {
         std::fprintf(stderr, "tengine-tool: note: the surface stops at level %d (%s); lod_minimum_spacing is %g m\n",
-                     sample->node.level, sample->node.toString().c_str(), detail.lodMinimumSpacing);
+                     shallowest, stoppedAt.toString().c_str(), detail.lodMinimumSpacing);
     }
     return 0;
 }

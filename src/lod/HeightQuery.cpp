@@ -76,28 +76,62 @@ Expected<HeightSample> staticHeightAt(const MapFile& map, double x, double y)
 
 Expected<HeightSample> surfaceHeightAt(const MapFile& map, TerrainNodeSource& source, double x, double y, int depth)
 {
+    SurfaceSampler sampler(map, source, depth, 1);
+    return sampler.at(x, y);
+}
+
+SurfaceSampler::SurfaceSampler(const MapFile& map, TerrainNodeSource& source, int depth, std::size_t cachedGroups)
+    : mMap(map), mSource(source), mDepth(depth), mCachedGroups(cachedGroups)
+{
     TERRAIN_EXPECTS(depth >= 0 && depth <= NodeId::kMaxLevel, "depth must be in [0, NodeId::kMaxLevel]");
-    const MapHeader& h = map.header();
+    TERRAIN_EXPECTS(cachedGroups >= 1, "the sampler keeps at least one group");
+}
+
+Expected<const ChildNodes*> SurfaceSampler::children(const NodeData& parent)
+{
+    const std::uint64_t key = parent.id.key();
+    auto it = mCache.find(key);
+    if (it == mCache.end()) {
+        if (mCache.size() >= mCachedGroups) {
+            auto oldest = std::min_element(mCache.begin(), mCache.end(),
+                                           [](const auto& a, const auto& b) { return a.second.used < b.second.used; });
+            mCache.erase(oldest);
+        }
+        auto group = mSource.loadChildren(parent);
+        TERRAIN_TRY(group);
+        ++mGroupsMade;
+        it = mCache.emplace(key, CachedGroup{std::move(group).value(), 0}).first;
+    }
+    it->second.used = ++mStamp;
+    return &it->second.nodes;
+}
+
+Expected<HeightSample> SurfaceSampler::at(double x, double y)
+{
+    const MapHeader& h = mMap.header();
     const double gx = (x - h.originX) / h.sampleSpacing;
     const double gy = (y - h.originY) / h.sampleSpacing;
     const double eps = 1e-9;
     if (!(gx >= h.validX0 - eps && gx <= h.validX0 + h.validWidth - 1 + eps && gy >= h.validY0 - eps &&
           gy <= h.validY0 + h.validHeight - 1 + eps)) {
-        return makeError(map.name(), ": position (", x, ", ", y, ") is outside the terrain");
+        return makeError(mMap.name(), ": position (", x, ", ", y, ") is outside the terrain");
     }
-    auto root = source.loadRoot();
-    TERRAIN_TRY(root);
-    NodePtr node = std::move(root).value();
+    if (!mRoot) {
+        auto root = mSource.loadRoot();
+        TERRAIN_TRY(root);
+        mRoot = std::move(root).value();
+    }
+    NodePtr node = mRoot;
     // Position in units of root nodes (0..1 over the root's square).
     const double rootSize = h.nodeSizeAt(0);
     const double ux = (x - h.originX) / rootSize, uy = (y - h.originY) / rootSize;
-    while (node->id.level < depth && node->hasChildren) {
+    while (node->id.level < mDepth && node->hasChildren) {
         const double cells = std::ldexp(1.0, node->id.level + 1);
         const int qx = std::clamp(static_cast<int>(std::floor(ux * cells)) - 2 * static_cast<int>(node->id.x), 0, 1);
         const int qy = std::clamp(static_cast<int>(std::floor(uy * cells)) - 2 * static_cast<int>(node->id.y), 0, 1);
-        auto children = source.loadChildren(*node);
-        TERRAIN_TRY(children);
-        node = (*children)[static_cast<std::size_t>(qx | (qy << 1))];
+        auto group = children(*node);
+        TERRAIN_TRY(group);
+        node = (**group)[static_cast<std::size_t>(qx | (qy << 1))];
     }
     const double n1 = h.chunkSize - 1.0;
     const double cells = std::ldexp(1.0, node->id.level);

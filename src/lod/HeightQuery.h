@@ -6,7 +6,9 @@
 #include "lod/TerrainNodeSource.h"
 #include "quadtree/MapFile.h"
 
+#include <cstdint>
 #include <optional>
+#include <unordered_map>
 
 namespace terrain {
 
@@ -27,6 +29,36 @@ Expected<HeightSample> staticHeightAt(const MapFile& map, double x, double y);
 /// Nodes come from `source` (its detail policy decides what is synthesized), so the query and the viewer
 /// share one code path. Fails outside the input's valid region and when a node cannot be read.
 Expected<HeightSample> surfaceHeightAt(const MapFile& map, TerrainNodeSource& source, double x, double y, int depth);
+
+/// surfaceHeightAt for many points: the groups of children made on the way are kept (the least recently
+/// used dropped beyond `cachedGroups`), so neighbouring points share their nodes instead of synthesizing
+/// the path from the root again. The same heights as surfaceHeightAt, bit for bit.
+class SurfaceSampler {
+public:
+    /// `map` and `source` must outlive the sampler. Preconditions: depth in [0, NodeId::kMaxLevel],
+    /// cachedGroups >= 1.
+    SurfaceSampler(const MapFile& map, TerrainNodeSource& source, int depth, std::size_t cachedGroups = 256);
+
+    Expected<HeightSample> at(double x, double y);
+    /// Groups of children made so far (statistics).
+    std::uint64_t groupsMade() const { return mGroupsMade; }
+
+private:
+    struct CachedGroup {
+        ChildNodes nodes;
+        std::uint64_t used = 0;
+    };
+    Expected<const ChildNodes*> children(const NodeData& parent);
+
+    const MapFile& mMap;
+    TerrainNodeSource& mSource;
+    int mDepth;
+    std::size_t mCachedGroups;
+    NodePtr mRoot;
+    std::unordered_map<std::uint64_t, CachedGroup> mCache;
+    std::uint64_t mStamp = 0;
+    std::uint64_t mGroupsMade = 0;
+};
 
 /// The surface of `node` (N = `chunkSize` samples a side) at local grid position (lx, ly), in samples east
 /// and north of its south-west corner (clamped to [0, N - 1]), interpolated along the template triangulation:

@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include <csignal>
+#include <sstream>
 
 namespace terrain {
 namespace {
@@ -691,6 +692,54 @@ TEST(TengineToolCliTest, VerifyReportsTheCorruptNodeAndExitsOne)
     }
     auto good = test::runProgram(kTool, {"verify", (dir / "m.map").string()});
     EXPECT_EQ(good.exitCode, 0) << good.output;
+}
+
+TEST_F(PrepRealDataTest, HeightPointsAnswersEachLineAsTheSinglePointForm)
+{
+    const auto& [spec, prep] = built("jacksboro");
+    ASSERT_EQ(prep.exitCode, 0) << prep.output;
+    const std::string map = (*sDir / "jacksboro.map").string();
+    // Points on samples, between them and across node borders (64 samples of 90 m a node), with a comment,
+    // a blank line and commas.
+    const std::vector<std::pair<double, double>> points = {{0.0, 0.0},         {5760.0, 5760.0},   {5761.25, 100.5},
+                                                           {12345.6, 20000.1}, {30000.0, 15000.0}, {36180.0, 30870.0}};
+    const auto file = *sDir / "points.txt";
+    std::string text = "# x y\n\n";
+    for (const auto& [x, y] : points) {
+        text += std::to_string(x) + ", " + std::to_string(y) + "\n";
+    }
+    test::writeFileBytes(file, test::Bytes(text.begin(), text.end()));
+    for (const std::vector<std::string>& depth :
+         {std::vector<std::string>{}, std::vector<std::string>{"--depth", "7"}}) {
+        std::vector<std::string> args = {"height", map, "--points", file.string()};
+        args.insert(args.end(), depth.begin(), depth.end());
+        auto batch = test::runProgram(kTool, args);
+        ASSERT_EQ(batch.exitCode, 0) << batch.output;
+        std::istringstream lines(batch.output);
+        for (const auto& [x, y] : points) {
+            std::vector<std::string> one = {"height", map, std::to_string(x), std::to_string(y)};
+            one.insert(one.end(), depth.begin(), depth.end());
+            auto single = test::runProgram(kTool, one);
+            ASSERT_EQ(single.exitCode, 0) << single.output;
+            std::string line;
+            ASSERT_TRUE(std::getline(lines, line)) << batch.output;
+            EXPECT_EQ(line + "\n", single.output.substr(0, single.output.find('\n') + 1)) << x << " " << y;
+        }
+    }
+    // A bad line and a point outside stop the run, naming the file and the line.
+    test::writeFileBytes(file, test::Bytes{'1', ' ', '2', '\n', '3', ' ', 'x', '\n'});
+    auto bad = test::runProgram(kTool, {"height", map, "--points", file.string()});
+    EXPECT_EQ(bad.exitCode, 1);
+    EXPECT_TRUE(mentions(bad.output, file.string() + ":2")) << bad.output;
+    const std::string outside = "1 2\n\n-500 2\n";
+    test::writeFileBytes(file, test::Bytes(outside.begin(), outside.end()));
+    bad = test::runProgram(kTool, {"height", map, "--points", file.string(), "--depth", "6"});
+    EXPECT_EQ(bad.exitCode, 1);
+    EXPECT_TRUE(mentions(bad.output, file.string() + ":3")) << bad.output;
+    EXPECT_TRUE(mentions(bad.output, "outside")) << bad.output;
+    bad = test::runProgram(kTool, {"height", map, "--points", (*sDir / "none.txt").string()});
+    EXPECT_EQ(bad.exitCode, 1);
+    EXPECT_TRUE(mentions(bad.output, (*sDir / "none.txt").string())) << bad.output;
 }
 
 TEST(TengineToolCliTest, ErrorsAndExitCodes)
