@@ -15,7 +15,8 @@ std::vector<std::filesystem::path> detailMaterialFiles(const TengineOptions& opt
     return {directory / (options.detailMaterialType == 0 ? "grass.mat" : "rock.mat")};
 }
 
-Expected<std::unique_ptr<const DetailSynthesizer>> makeDetailSynthesizer(const TengineOptions& options, int chunkSize,
+Expected<std::unique_ptr<const DetailSynthesizer>> makeDetailSynthesizer(const TengineOptions& options,
+                                                                         const MapHeader& header,
                                                                          const std::filesystem::path& builtInDirectory,
                                                                          std::vector<std::string>& warnings)
 {
@@ -30,7 +31,10 @@ Expected<std::unique_ptr<const DetailSynthesizer>> makeDetailSynthesizer(const T
         TERRAIN_TRY(materials);
         settings.materials = std::move(materials).value();
     }
-    return DetailSynthesizer::create(chunkSize, std::move(settings));
+    if (options.detailRoughness) {
+        settings.roughness = makeRoughnessNoise(header, settings.materials.get());
+    }
+    return DetailSynthesizer::create(static_cast<int>(header.chunkSize), std::move(settings));
 }
 
 std::vector<std::filesystem::path> synthesizedMaterialFiles(const TengineOptions& options,
@@ -44,7 +48,11 @@ std::vector<std::filesystem::path> synthesizedMaterialFiles(const TengineOptions
 Expected<DetailRecipe> viewerDetailRecipe(const TengineOptions& options, const DetailSynthesizer& synthesizer,
                                           const std::filesystem::path& builtInDirectory)
 {
-    return makeDetailRecipe(synthesizer.settings(), synthesizedMaterialFiles(options, synthesizer, builtInDirectory));
+    auto recipe =
+        makeDetailRecipe(synthesizer.settings(), synthesizedMaterialFiles(options, synthesizer, builtInDirectory));
+    TERRAIN_TRY(recipe);
+    recipe->roughness = synthesizer.settings().roughness != nullptr;
+    return recipe;
 }
 
 std::optional<std::string> detailRecipeMismatch(const MapHeader& header, const std::string& mapName,
@@ -63,6 +71,9 @@ std::optional<std::string> detailRecipeMismatch(const MapHeader& header, const s
     }
     if (viewerFiles.empty()) {
         command += " --no-material";
+    }
+    if (!viewer.roughness) {
+        command += " --no-roughness";
     }
     if (viewer.scheme != "kobbelt") {
         command += " --detail-scheme " + viewer.scheme;

@@ -19,10 +19,12 @@ namespace terrain {
 std::vector<std::filesystem::path> detailMaterialFiles(const TengineOptions& options,
                                                        const std::filesystem::path& builtInDirectory);
 
-/// The synthesizer for `options` and chunk size N, or null when detail_create_new_nodes is off. With
-/// detail_add_material off, subdivision only. A single material covers the whole terrain whatever its
-/// placement rules. Material warnings go to `warnings`; errors name the file and line.
-Expected<std::unique_ptr<const DetailSynthesizer>> makeDetailSynthesizer(const TengineOptions& options, int chunkSize,
+/// The synthesizer for `options` and the map with `header` (its chunk size; with detail_roughness, its
+/// roughness grid), or null when detail_create_new_nodes is off. With detail_add_material off, no materials.
+/// A single material covers the whole terrain whatever its placement rules. Material warnings go to
+/// `warnings`; errors name the file and line.
+Expected<std::unique_ptr<const DetailSynthesizer>> makeDetailSynthesizer(const TengineOptions& options,
+                                                                         const MapHeader& header,
                                                                          const std::filesystem::path& builtInDirectory,
                                                                          std::vector<std::string>& warnings);
 

@@ -206,7 +206,7 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
         std::fprintf(err, "tengine-tool: warning: %s\n", warning.c_str());
     }
     std::vector<std::string> warnings;
-    auto synthesizer = makeDetailSynthesizer(o, static_cast<int>(header.chunkSize), builtInMaterials, warnings);
+    auto synthesizer = makeDetailSynthesizer(o, header, builtInMaterials, warnings);
     for (const auto& warning : warnings) {
         std::fprintf(err, "tengine-tool: warning: %s\n", warning.c_str());
     }

@@ -48,13 +48,16 @@ Builds a terrain map (.map) from a height field: PNG (8/16-bit gray), VTP .bt, T
                        grass.mat alone)
   --no-material        no material: the detail below the leaves is subdivision only (the viewer's
                        detail_add_material = false)
+  --no-roughness       the detail errors assume the viewer does not continue the terrain's roughness
+                       below the leaves (detail_roughness = false); the roughness is measured and
+                       stored either way
   --detail-scheme S    subdivision of the synthesized detail: kobbelt, bilinear or catmull-clark
                        (default kobbelt)
   --detail-factor W    Kobbelt's omega in [0, 2]: 0 linear, 1 Kobbelt (default 1)
   --help               this text
 
 The map stores the estimated error of the detail synthesized below its static leaves (paper 3.4.1), so
-the viewer refines past them, and what it was estimated for (materials, scheme, factor): the viewer warns
+the viewer refines past them, and what it was estimated for (materials, scheme, factor, roughness): the viewer warns
 when its own detail_* options differ. The defaults are the viewer's defaults.
 )";
 
@@ -68,6 +71,7 @@ struct Arguments {
     std::vector<std::string> warnings;             ///< about options that have no effect
     std::vector<std::filesystem::path> materials;  ///< empty: the viewer's default (built-in grass.mat)
     bool noMaterial = false;                       ///< --no-material
+    bool noRoughness = false;                      ///< --no-roughness
 };
 
 Expected<Arguments> parseArguments(int argc, char** argv)
@@ -166,6 +170,8 @@ Expected<Arguments> parseArguments(int argc, char** argv)
             args.read.rawHeight = static_cast<int>(*h);
         } else if (arg == "--no-material") {
             args.noMaterial = true;
+        } else if (arg == "--no-roughness") {
+            args.noRoughness = true;
         } else if (arg == "--raw-signed") {
             args.read.rawSigned = true;
         } else if (arg == "--raw-big-endian") {
@@ -208,6 +214,7 @@ Expected<std::unique_ptr<const DetailSynthesizer>> makeSynthesizer(Arguments& ar
     }
     auto recipe = makeDetailRecipe(settings, args.materials);
     TERRAIN_TRY(recipe);
+    recipe->roughness = !args.noRoughness;
     args.build.detailRecipe = std::move(recipe).value();
     if (!isValidChunkSize(args.build.chunkSize)) {
         return std::unique_ptr<const DetailSynthesizer>();
@@ -285,7 +292,7 @@ int main(int argc, char** argv)
         return 1;
     }
     if (*synthesizer) {
-        args->build.leafDetailError = leafDetailErrorFunction(**synthesizer);
+        args->build.leafDetailError = leafDetailErrorFunction(**synthesizer, !args->noRoughness);
         args->build.detailDisplacementRange = detailDisplacementRange(**synthesizer);
     }
     auto field = readHeightField(args->input, args->read);

@@ -217,8 +217,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
 
     // Detail synthesis (3.4): the synthesizer dynamic nodes are made with, null when it is off.
     std::vector<std::string> materialWarnings;
-    auto synthesizer =
-        makeDetailSynthesizer(o, static_cast<int>(header.chunkSize), TERRAIN_MATERIALS_DIR, materialWarnings);
+    auto synthesizer = makeDetailSynthesizer(o, header, TERRAIN_MATERIALS_DIR, materialWarnings);
     for (const auto& warning : materialWarnings) {
         log("warning: " + warning);
     }

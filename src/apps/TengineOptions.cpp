@@ -314,6 +314,12 @@ std::vector<OptionSpec> makeOptionTable()
                            &O::detailSubdivisionFactor, closedInterval(0, 2), ""));
     t.push_back(boolOption("detail_add_material", kGroupDetail,
                            "Add the material's fractal displacement to subdivided nodes.", &O::detailAddMaterial));
+    t.push_back(boolOption("detail_roughness", kGroupDetail,
+                           "Continue the terrain's own roughness below the map's finest level: noise whose amplitude "
+                           "follows the power law prep measured around each static leaf, from the data's spacing "
+                           "down to where the materials' octaves take over (maps of format 5; older maps have "
+                           "none).",
+                           &O::detailRoughness));
     t.push_back(intOption("detail_material_type", kGroupDetail,
                           "Which built-in material covers the terrain when detail_materials is empty: 0 soft "
                           "grass/soil (grass.mat), 1 ridged rock (rock.mat).",

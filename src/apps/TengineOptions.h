@@ -43,6 +43,7 @@ struct TengineOptions {
     bool detailCreateNewNodes = true;                 ///< detail_create_new_nodes
     double detailSubdivisionFactor = 1.0;             ///< detail_subdivision_factor: omega in [0, 2]
     bool detailAddMaterial = true;                    ///< detail_add_material
+    bool detailRoughness = true;                      ///< detail_roughness
     int detailMaterialType = 0;                       ///< detail_material_type: 0 (grass.mat) or 1 (rock.mat)
     std::string detailSubdivisionScheme = "kobbelt";  ///< detail_subdivision_scheme: kobbelt | bilinear | catmull-clark
     std::vector<std::filesystem::path>

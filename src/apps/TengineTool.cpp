@@ -460,8 +460,7 @@ int main(int argc, char** argv)
     std::optional<SurfaceSampler> sampler;
     if (depth) {
         std::vector<std::string> warnings;
-        auto made = makeDetailSynthesizer(detail, static_cast<int>((*map)->header().chunkSize), TERRAIN_MATERIALS_DIR,
-                                          warnings);
+        auto made = makeDetailSynthesizer(detail, (*map)->header(), TERRAIN_MATERIALS_DIR, warnings);
         for (const auto& warning : warnings) {
             std::fprintf(stderr, "tengine-tool: warning: %s\n", warning.c_str());
         }

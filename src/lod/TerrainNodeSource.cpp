@@ -20,6 +20,9 @@ TerrainNodeSource::TerrainNodeSource(const MapFile& map, DetailPolicy policy) : 
             }
         }
     }
+    if (policy.synthesizer && policy.synthesizer->settings().roughness) {
+        mDisplacementBound += policy.synthesizer->settings().roughness->bound(0);
+    }
     if (policy.synthesizer) {
         mErrorModel = std::make_unique<const DetailErrorModel>(*policy.synthesizer, map.header().spacingAt(0));
     }
@@ -110,8 +113,10 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     data->materialWeights = synthesizer.materialWeights(data->heights, where);
     // The synthesis model's bound from the node's own data (DetailErrorModel.h), instead of 3.4.1's "half the
     // error of their parent"; at most the parent's / kErrorNesting, so errors nest with a geomorph range.
+    // The roughness octaves still to come below it add at most roughnessBound (triangle inequality).
     data->deltaC =
-        std::min(parent.deltaC / kErrorNesting, mErrorModel->bound(data->heights, data->materialWeights, id.level));
+        std::min(parent.deltaC / kErrorNesting, mErrorModel->bound(data->heights, data->materialWeights, id.level) +
+                                                    static_cast<float>(synthesizer.roughnessBound(where)));
     data->texture = upsampleTexture(parent.texture, static_cast<int>(h.textureSize), quadrant);
     // The box: the node's base samples plus whatever displacement its descendants may add, kept inside the
     // parent's so boxes stay nested (3.2.12).

@@ -36,7 +36,8 @@ double MapHeader::spacingAt(int level) const
 
 bool DetailRecipe::sameSynthesis(const DetailRecipe& other) const
 {
-    return scheme == other.scheme && materials == other.materials && (scheme != "kobbelt" || omega == other.omega);
+    return scheme == other.scheme && materials == other.materials && roughness == other.roughness &&
+           (scheme != "kobbelt" || omega == other.omega);
 }
 
 std::string DetailRecipe::describe() const
@@ -54,10 +55,13 @@ std::string DetailRecipe::describe() const
         std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(materials[i].hash));
         s << (i == 0 ? ", materials " : ", ") << materials[i].name << " (hash " << hash << ")";
     }
+    if (roughness) {
+        s << ", the terrain's roughness continued";
+    }
     return s.str();
 }
 
-std::vector<std::uint8_t> encodeDetailRecipe(const DetailRecipe& recipe)
+std::vector<std::uint8_t> encodeDetailRecipe(const DetailRecipe& recipe, std::uint32_t version)
 {
     TERRAIN_EXPECTS(recipe.scheme.size() <= 32 && recipe.materials.size() <= kMaxRecipeMaterials,
                     "encodeDetailRecipe: scheme of at most 32 bytes, at most kMaxRecipeMaterials materials");
@@ -76,6 +80,9 @@ std::vector<std::uint8_t> encodeDetailRecipe(const DetailRecipe& recipe)
         putText(m.name, std::min(m.name.size(), kMaxRecipeNameBytes));
         w.put(m.hash);
     }
+    if (version >= 5) {
+        w.put(static_cast<std::uint8_t>(recipe.roughness ? 1 : 0));
+    }
     return bytes;
 }
 
@@ -85,7 +92,7 @@ void setDetailRecipe(MapHeader& header, std::optional<DetailRecipe> recipe)
     header.detailRecipeBytes = 0;
     header.detailRecipeCrc = 0;
     if (header.detailRecipe) {
-        const auto bytes = encodeDetailRecipe(*header.detailRecipe);
+        const auto bytes = encodeDetailRecipe(*header.detailRecipe, header.version);
         header.detailRecipeBytes = static_cast<std::uint32_t>(bytes.size());
         header.detailRecipeCrc = crc32Of(bytes);
     }
@@ -121,6 +128,13 @@ Status decodeDetailRecipe(std::span<const std::uint8_t> bytes, MapHeader& header
         m.hash = r.get<std::uint64_t>();
         recipe.materials.push_back(std::move(m));
     }
+    if (header.version >= 5) {
+        const auto flag = r.get<std::uint8_t>();
+        if (flag > 1) {
+            return bad("roughness flag ", int{flag}, ", expected 0 or 1");
+        }
+        recipe.roughness = flag == 1;
+    }
     if (r.failed() || r.position() != bytes.size()) {
         return bad("its fields do not fill its ", bytes.size(), " bytes");
     }
@@ -128,6 +142,79 @@ Status decodeDetailRecipe(std::span<const std::uint8_t> bytes, MapHeader& header
         return bad("empty scheme or omega not finite");
     }
     header.detailRecipe = std::move(recipe);
+    return {};
+}
+
+std::vector<std::uint8_t> encodeRoughness(const RoughnessGrid& grid)
+{
+    TERRAIN_EXPECTS(grid.leavesPerSide >= 1 && grid.leavesPerSide <= kMaxRoughnessLeavesPerSide &&
+                        grid.laws.size() == static_cast<std::size_t>(grid.leavesPerSide) * grid.leavesPerSide,
+                    "encodeRoughness: leavesPerSide^2 laws");
+    std::vector<std::uint8_t> bytes;
+    bytes.reserve(4 + grid.laws.size() * 8);
+    ByteWriter w(bytes);
+    w.put(static_cast<std::uint32_t>(grid.leavesPerSide));
+    for (const RoughnessLaw& law : grid.laws) {
+        w.put(static_cast<float>(law.amplitude));
+        w.put(static_cast<float>(law.exponent));
+    }
+    return bytes;
+}
+
+void setRoughness(MapHeader& header, std::optional<RoughnessGrid> grid)
+{
+    header.roughness = std::move(grid);
+    header.roughnessBytes = 0;
+    header.roughnessCrc = 0;
+    if (header.roughness) {
+        TERRAIN_EXPECTS(header.roughness->leavesPerSide == (1 << (header.levels - 1)),
+                        "the roughness grid has one law per leaf of the finest static level");
+        // Stored as float: the laws the reader gets, so writer and reader synthesize the same surface.
+        for (RoughnessLaw& law : header.roughness->laws) {
+            law.amplitude = static_cast<float>(law.amplitude);
+            law.exponent = static_cast<float>(law.exponent);
+        }
+        const auto bytes = encodeRoughness(*header.roughness);
+        header.roughnessBytes = static_cast<std::uint32_t>(bytes.size());
+        header.roughnessCrc = crc32Of(bytes);
+    }
+}
+
+Status decodeRoughness(std::span<const std::uint8_t> bytes, MapHeader& header, const std::string& name)
+{
+    auto bad = [&](auto&&... what) { return makeError(name, ": invalid roughness block: ", what...); };
+    if (bytes.size() != header.roughnessBytes) {
+        return bad(bytes.size(), " bytes, the header says ", header.roughnessBytes);
+    }
+    if (crc32Of(bytes) != header.roughnessCrc) {
+        return makeError(name, ": roughness block checksum mismatch (file is corrupt)");
+    }
+    ByteReader r(bytes);
+    RoughnessGrid grid;
+    const auto side = r.get<std::uint32_t>();
+    const std::uint64_t expected = std::uint64_t{1} << (header.levels - 1);
+    if (side != expected) {
+        return bad(side, " leaves per side, the map has ", expected);
+    }
+    if (bytes.size() != 4 + std::uint64_t{side} * side * 8) {
+        return bad(bytes.size(), " bytes for ", side, " x ", side, " leaves (", 4 + std::uint64_t{side} * side * 8,
+                   " expected)");
+    }
+    grid.leavesPerSide = static_cast<int>(side);
+    grid.laws.resize(static_cast<std::size_t>(side) * side);
+    for (std::size_t k = 0; k < grid.laws.size(); ++k) {
+        RoughnessLaw& law = grid.laws[k];
+        law.amplitude = r.get<float>();
+        law.exponent = r.get<float>();
+        if (!(law.amplitude >= 0.0 && std::isfinite(law.amplitude)) ||
+            !(law.exponent >= static_cast<float>(kMinRoughnessExponent) &&
+              law.exponent <= static_cast<float>(kMaxRoughnessExponent))) {
+            return bad("leaf ", k % side, ",", k / side, ": amplitude ", law.amplitude, " m, exponent ", law.exponent,
+                       " (expected an amplitude >= 0 and an exponent in [", kMinRoughnessExponent, ", ",
+                       kMaxRoughnessExponent, "])");
+        }
+    }
+    header.roughness = std::move(grid);
     return {};
 }
 
@@ -166,6 +253,10 @@ std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& h)
     if (h.version >= 3) {
         w.put(h.detailRecipeBytes);
         w.put(h.detailRecipeCrc);
+    }
+    if (h.version >= 5) {
+        w.put(h.roughnessBytes);
+        w.put(h.roughnessCrc);
     }
     w.padTo(kHeaderBytes - 4);
     w.put(crc32Of(bytes));
@@ -224,6 +315,10 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
         h.detailRecipeBytes = r.get<std::uint32_t>();
         h.detailRecipeCrc = r.get<std::uint32_t>();
     }
+    if (h.version >= 5) {
+        h.roughnessBytes = r.get<std::uint32_t>();
+        h.roughnessCrc = r.get<std::uint32_t>();
+    }
 
     auto bad = [&](auto&&... what) { return makeError(name, ": invalid header: ", what...); };
     if (headerBytes != kHeaderBytes) {
@@ -262,6 +357,10 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
     // wraps past 2^64 could match a small file while claiming a directory of hundreds of gigabytes.
     if (h.detailRecipeBytes > kMaxRecipeBytes) {
         return bad("detail recipe of ", h.detailRecipeBytes, " bytes, at most ", kMaxRecipeBytes);
+    }
+    if (h.roughnessBytes != 0 && h.roughnessBytes != 4 + (std::uint64_t{1} << (2 * (h.levels - 1))) * 8) {
+        return bad("roughness block of ", h.roughnessBytes, " bytes, expected 0 or ",
+                   4 + (std::uint64_t{1} << (2 * (h.levels - 1))) * 8, " for ", h.levels, " levels");
     }
     if (h.nodeCount < 1 || h.directoryBytes != std::uint64_t{h.nodeCount} * kDirectoryEntryBytes ||
         h.directoryOffset < h.nodeAreaOffset() || h.directoryOffset > UINT64_MAX - h.directoryBytes) {

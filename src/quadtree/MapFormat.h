@@ -8,6 +8,7 @@
 #pragma once
 
 #include "core/Expected.h"
+#include "heightfield/Roughness.h"
 #include "quadtree/ChunkGeometry.h"
 #include "quadtree/NodeId.h"
 
@@ -24,8 +25,10 @@ inline constexpr std::array<std::uint8_t, 8> kMapMagic = {0x89, 'T', 'M', 'A', '
 /// Version written. 2 added detail_delta_c to the directory entries (3.4.1); 3 the detail recipe block
 /// after the header (what those errors were estimated for); 4 (same layout) measured errors: delta_c is the
 /// largest distance to the leaves below, nested with max, and the leaves' detail errors come from the
-/// synthesis model (issue 12). Versions 1 to 3 are still read.
-inline constexpr std::uint32_t kMapVersion = 4;
+/// synthesis model (issue 12); 5 the roughness block (each static leaf's RoughnessLaw, issue 14) and the
+/// recipe's roughness flag. Versions 1 to 4 are still read: they have no roughness (the synthesis below
+/// their leaves is subdivision and materials only, as they were made for).
+inline constexpr std::uint32_t kMapVersion = 5;
 /// Version 4 errors nest as delta_c(node) = max(measured, kErrorNesting x the children's largest): a parent's
 /// error stays a quarter above its children's, so every split has a geomorph range (eq. 3.5 morphs a node
 /// in between its own distance and its parent's); with plain max they could coincide and the split pop.
@@ -53,6 +56,9 @@ struct DetailRecipe {
     std::string scheme = "kobbelt";   ///< detail_subdivision_scheme (at most 32 bytes)
     double omega = 1.0;               ///< detail_subdivision_factor; means something for kobbelt only
     std::vector<Material> materials;  ///< in order, the first the ground; empty: subdivision only
+    /// Version 5: the terrain's own roughness is continued below the leaves (the map's RoughnessGrid);
+    /// false for older maps.
+    bool roughness = false;
 
     bool operator==(const DetailRecipe&) const = default;
     /// Whether the synthesis is the same: scheme, materials and, for kobbelt, omega.
@@ -65,6 +71,20 @@ struct DetailRecipe {
 inline constexpr std::size_t kMaxRecipeMaterials = 64;
 inline constexpr std::size_t kMaxRecipeNameBytes = 255;
 inline constexpr std::size_t kMaxRecipeBytes = 1 << 16;
+
+/// How rough the terrain is around each static leaf (heightfield/Roughness.h), measured by prep on the
+/// input's samples (the finest static level) so the synthesis can continue it below the leaves. Version 5.
+struct RoughnessGrid {
+    int leavesPerSide = 0;           ///< 2^(levels - 1): the finest static level's nodes per side
+    std::vector<RoughnessLaw> laws;  ///< leavesPerSide^2, leaf (x, y) at y * leavesPerSide + x (rows south
+                                     ///< to north); laws at the spacing of the finest static level
+
+    const RoughnessLaw& at(int x, int y) const { return laws[static_cast<std::size_t>(y) * leavesPerSide + x]; }
+    bool operator==(const RoughnessGrid&) const = default;
+};
+
+/// Most leaves per side a roughness block may hold (2^14: 2 GiB of laws at 8 bytes each would be absurd).
+inline constexpr int kMaxRoughnessLeavesPerSide = 1 << 14;
 
 /// Everything needed to interpret a map: geometry of the grid and of the chunks, height quantization.
 struct MapHeader {
@@ -96,6 +116,11 @@ struct MapHeader {
     std::optional<DetailRecipe> detailRecipe;
     std::uint32_t detailRecipeBytes = 0;  ///< size of the recipe block at offset kHeaderBytes; 0 = none
     std::uint32_t detailRecipeCrc = 0;    ///< its CRC32
+    /// Version 5: the leaves' roughness; empty when the writer did not measure it (or older versions). Set
+    /// it with setRoughness(), which also sets the two fields below.
+    std::optional<RoughnessGrid> roughness;
+    std::uint32_t roughnessBytes = 0;  ///< size of the roughness block after the recipe block; 0 = none
+    std::uint32_t roughnessCrc = 0;    ///< its CRC32
 
     /// Samples per side of the whole padded grid at the finest level: (N - 1) * 2^(levels-1) + 1.
     std::uint64_t gridSize() const { return std::uint64_t{chunkSize - 1} * (std::uint64_t{1} << (levels - 1)) + 1; }
@@ -113,8 +138,10 @@ struct MapHeader {
     double heightOf(std::uint16_t code) const { return heightOffset + heightStep * code; }
     /// Whether directory entries carry detailDeltaC (version 2 and later).
     bool hasDetailErrors() const { return version >= 2; }
-    /// Where node payloads may start: after the header and the recipe block.
-    std::uint64_t nodeAreaOffset() const { return kHeaderBytes + detailRecipeBytes; }
+    /// Where the roughness block starts: after the header and the recipe block.
+    std::uint64_t roughnessOffset() const { return kHeaderBytes + detailRecipeBytes; }
+    /// Where node payloads may start: after the header, the recipe and the roughness blocks.
+    std::uint64_t nodeAreaOffset() const { return kHeaderBytes + detailRecipeBytes + std::uint64_t{roughnessBytes}; }
 };
 
 /// One directory entry: where a node's payload is and what the LOD selection needs without loading it.
@@ -139,12 +166,22 @@ struct DirectoryEntry {
 
 /// The recipe block's bytes: scheme (u8 length + bytes), omega (f64), material count (u32), per material
 /// its name (u8 length + bytes) and hash (u64).
-std::vector<std::uint8_t> encodeDetailRecipe(const DetailRecipe& recipe);
+/// Version 5 appends the roughness flag (u8, 0 or 1).
+std::vector<std::uint8_t> encodeDetailRecipe(const DetailRecipe& recipe, std::uint32_t version = kMapVersion);
 /// Sets header.detailRecipe and the block's size and CRC (empty: no block).
 void setDetailRecipe(MapHeader& header, std::optional<DetailRecipe> recipe);
 /// Parses the recipe block (header.detailRecipeBytes bytes read at kHeaderBytes) into header.detailRecipe,
 /// checking its CRC and limits; `name` is used in messages.
 Status decodeDetailRecipe(std::span<const std::uint8_t> bytes, MapHeader& header, const std::string& name);
+
+/// The roughness block's bytes: leaves per side (u32), then per leaf its amplitude and exponent (f32 each).
+std::vector<std::uint8_t> encodeRoughness(const RoughnessGrid& grid);
+/// Sets header.roughness and the block's size and CRC (empty: no block). Precondition: the grid has
+/// 2^(levels - 1) leaves per side.
+void setRoughness(MapHeader& header, std::optional<RoughnessGrid> grid);
+/// Parses the roughness block (header.roughnessBytes bytes read at header.roughnessOffset()) into
+/// header.roughness, checking its CRC, size and values; `name` is used in messages.
+Status decodeRoughness(std::span<const std::uint8_t> bytes, MapHeader& header, const std::string& name);
 
 /// Serializes the header into kHeaderBytes bytes, including its CRC.
 std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& header);

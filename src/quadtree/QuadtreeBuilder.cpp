@@ -308,6 +308,69 @@ private:
 
 }  // namespace
 
+RoughnessGrid measureLeafRoughness(const HeightField& field, double metresPerUnit, const MapHeader& header, int threads)
+{
+    TERRAIN_EXPECTS(header.levels >= 1 && header.levels <= 15, "roughness grids are for maps of 1 to 15 levels");
+    TERRAIN_EXPECTS(field.samples.size() == static_cast<std::size_t>(field.width) * field.height,
+                    "the field must hold width x height samples");
+    const int side = 1 << (header.levels - 1);
+    const int cells = static_cast<int>(header.chunkSize) - 1;
+    RoughnessGrid grid;
+    grid.leavesPerSide = side;
+    grid.laws.assign(static_cast<std::size_t>(side) * side, RoughnessLaw{});
+    std::vector<std::uint8_t> measured(grid.laws.size(), 0);
+    auto measure = [&](int x0, int y0, int x1, int y1, bool& enough) {
+        std::array<double, kRoughnessLags.size()> rms{};
+        enough = true;
+        for (std::size_t k = 0; k < kRoughnessLags.size(); ++k) {
+            const MidpointSums sums = midpointDeviation(field.samples, field.width, field.height, kRoughnessLags[k], x0,
+                                                        y0, x1, y1, metresPerUnit);
+            enough = enough && sums.count >= kMinRoughnessSamples;
+            rms[k] = sums.rms();
+        }
+        return fitRoughnessLaw(rms);
+    };
+    parallelFor(grid.laws.size(), std::max(threads, 1), [&](std::size_t k) {
+        const int lx = static_cast<int>(k % side), ly = static_cast<int>(k / side);
+        const int x0 = std::min(lx * cells, field.width), y0 = std::min(ly * cells, field.height);
+        const int x1 = lx == side - 1 ? field.width : std::min((lx + 1) * cells, field.width);
+        const int y1 = ly == side - 1 ? field.height : std::min((ly + 1) * cells, field.height);
+        bool enough = false;
+        grid.laws[k] = measure(x0, y0, x1, y1, enough);
+        measured[k] = enough ? 1 : 0;
+    });
+    if (std::find(measured.begin(), measured.end(), 1) == measured.end()) {
+        bool enough = false;
+        const RoughnessLaw whole = measure(0, 0, field.width, field.height, enough);
+        std::fill(grid.laws.begin(), grid.laws.end(), whole);
+        return grid;
+    }
+    // The others: the nearest measured leaf (squared leaf distance; ties to the lowest index).
+    std::vector<int> sources;
+    for (std::size_t k = 0; k < measured.size(); ++k) {
+        if (measured[k]) {
+            sources.push_back(static_cast<int>(k));
+        }
+    }
+    for (std::size_t k = 0; k < measured.size(); ++k) {
+        if (measured[k]) {
+            continue;
+        }
+        const int lx = static_cast<int>(k % side), ly = static_cast<int>(k / side);
+        long best = -1;
+        int from = sources.front();
+        for (int source : sources) {
+            const long dx = source % side - lx, dy = source / side - ly;
+            if (best < 0 || dx * dx + dy * dy < best) {
+                best = dx * dx + dy * dy;
+                from = source;
+            }
+        }
+        grid.laws[k] = grid.laws[static_cast<std::size_t>(from)];
+    }
+    return grid;
+}
+
 Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, const std::filesystem::path& output)
 {
     const auto start = std::chrono::steady_clock::now();
@@ -393,6 +456,15 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     header.source = field.description;
     setDetailRecipe(header, options.detailRecipe);
 
+    if (options.measureRoughness && header.levels <= 15) {
+        progress(0.0, "measuring roughness");
+        setRoughness(header, measureLeafRoughness(field, scale, header, options.threads));
+    } else if (options.measureRoughness) {
+        warn("a map of " + std::to_string(header.levels) +
+             " levels is too large for a roughness grid: the detail below its leaves will not continue the "
+             "terrain's roughness");
+    }
+
     auto quantization = chooseQuantization(field, scale, field.verticalOffset + options.offset, options.maxError);
     TERRAIN_TRY(quantization);
     header.heightOffset = quantization->offset;
@@ -450,7 +522,10 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     TERRAIN_TRY(file);
     file->write(encodeHeader(header).data(), kHeaderBytes);  // patched at the end
     if (header.detailRecipe) {
-        file->write(encodeDetailRecipe(*header.detailRecipe));
+        file->write(encodeDetailRecipe(*header.detailRecipe, header.version));
+    }
+    if (header.roughness) {
+        file->write(encodeRoughness(*header.roughness));
     }
 
     std::atomic<std::uint64_t> done{0};

@@ -40,11 +40,25 @@ struct BuildOptions {
     /// What leafDetailError estimates for (the synthesis settings and materials), stored in the map so the
     /// viewer can tell whether its own settings match. Empty: the map says nothing about it.
     std::optional<DetailRecipe> detailRecipe;
+    /// Measure each leaf's roughness (measureLeafRoughness) and store it in the map (RoughnessGrid), for the
+    /// synthesis to continue below the leaves. Maps of more than 15 levels never get it (with a warning).
+    bool measureRoughness = true;
     /// Called now and then with the fraction done (0..1) and the current stage.
     std::function<void(double, std::string_view)> progress;
     /// Called for each warning (an option that had no effect, a default that was assumed).
     std::function<void(std::string_view)> warn;
 };
+
+/// The roughness law of each leaf of a map with `header`'s geometry (chunk size, levels, valid region) over
+/// `field` (heights in metres = native x metresPerUnit + any offset, which changes nothing here): the midpoint
+/// deviation at kRoughnessLags over the leaf's input samples (lags reaching into the neighbouring leaves),
+/// fitted by fitRoughnessLaw. A leaf with fewer than kMinRoughnessSamples deviations at some lag (padding, a
+/// narrow strip of input) takes the law of the nearest measured leaf (ties: the lowest index), and with none
+/// measured every leaf gets the whole input's law. Deterministic; `threads` >= 1 share the leaves.
+RoughnessGrid measureLeafRoughness(const HeightField& field, double metresPerUnit, const MapHeader& header,
+                                   int threads = 1);
+/// Fewer deviations than this at a lag and a leaf's law is not its own (measureLeafRoughness).
+inline constexpr std::uint64_t kMinRoughnessSamples = 256;
 
 /// What a build produced, for prep's summary and for benchmarks.
 struct BuildReport {

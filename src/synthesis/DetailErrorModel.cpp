@@ -261,16 +261,20 @@ float DetailErrorModel::bound(const DualHeightMap& heights, std::span<const std:
 }
 
 std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
-    const DetailSynthesizer& synthesizer)
+    const DetailSynthesizer& synthesizer, bool roughness)
 {
     struct Shared {
         std::mutex mutex;
         double rootSpacing = 0.0;
         std::shared_ptr<const DetailErrorModel> model;
+        const RoughnessGrid* grid = nullptr;  ///< the header's grid the noise was made for
+        std::shared_ptr<const RoughnessNoise> noise;
     };
     auto shared = std::make_shared<Shared>();
-    return [&synthesizer, shared](const MapHeader& h, const NodeId& id, std::span<const std::uint16_t> codes) {
+    return [&synthesizer, shared, roughness](const MapHeader& h, const NodeId& id,
+                                             std::span<const std::uint16_t> codes) {
         std::shared_ptr<const DetailErrorModel> model;
+        std::shared_ptr<const RoughnessNoise> noise;
         {
             std::lock_guard lock(shared->mutex);
             if (!shared->model || shared->rootSpacing != h.spacingAt(0)) {
@@ -278,6 +282,11 @@ std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16
                 shared->rootSpacing = h.spacingAt(0);
             }
             model = shared->model;
+            if (roughness && h.roughness && shared->grid != &*h.roughness) {
+                shared->noise = makeRoughnessNoise(h, synthesizer.settings().materials.get());
+                shared->grid = &*h.roughness;
+            }
+            noise = roughness && h.roughness ? shared->noise : nullptr;
         }
         DualHeightMap leaf;
         leaf.size = h.windowSize();
@@ -287,7 +296,15 @@ std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16
         }
         const WindowPlacement where = windowPlacement(h, id);
         synthesizer.displace(where, nullptr, 0, leaf);
-        return model->bound(leaf, synthesizer.materialWeights(leaf, where), id.level);
+        const float bound = model->bound(leaf, synthesizer.materialWeights(leaf, where), id.level);
+        if (!noise) {
+            return bound;
+        }
+        // The roughness octaves below the leaf (all of them: none is present at its samples), added: the
+        // triangle inequality over the subdivision and materials' surface and the roughness noise.
+        const double extra = noise->bound(0, static_cast<int>(id.x), static_cast<int>(id.y), static_cast<int>(id.x),
+                                          static_cast<int>(id.y));
+        return static_cast<float>(bound + extra);
     };
 }
 

@@ -86,10 +86,11 @@ private:
 
 /// QuadtreeBuilder's leafDetailError for `synthesizer` (paper 3.4.1, with this model): the leaf's codes as
 /// the viewer's base heights, displaced and placed as the viewer does a static node (windowPlacement), and
-/// DetailErrorModel::bound at the leaf's level. Thread-safe; the model is made on the first call for the
-/// map's spacing. `synthesizer` must outlive the returned function.
+/// DetailErrorModel::bound at the leaf's level; with `roughness` and a header with a roughness grid, plus the
+/// most the roughness octaves below the leaf add (makeRoughnessNoise, RoughnessNoise::bound). Thread-safe;
+/// the model is made on the first call for the map's spacing. `synthesizer` must outlive the returned function.
 std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
-    const DetailSynthesizer& synthesizer);
+    const DetailSynthesizer& synthesizer, bool roughness = false);
 
 /// QuadtreeBuilder's detailDisplacementRange: 2 x the largest amplitude of the synthesizer's materials.
 double detailDisplacementRange(const DetailSynthesizer& synthesizer);

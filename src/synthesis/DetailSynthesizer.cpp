@@ -91,14 +91,58 @@ void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightM
     }
     const std::size_t count = static_cast<std::size_t>(w) * w;
     map.displacement.assign(count, 0.0f);
-    // One material covers everything: its weight is 1 whatever the slope and height.
-    const bool placed = mSettings.materials->materials().size() > 1;
     const int half = (chunkSize() - 1) / 2;
     const int px0 = 1 + (quadrant & 1) * half, py0 = 1 + (quadrant >> 1) * half;
     if (parent) {
         TERRAIN_EXPECTS(parent->size == w && parent->displacement.size() == count, "the parent has no displacement");
-        TERRAIN_EXPECTS(!placed || parent->slope.size() == count, "the parent has no placement slopes");
         TERRAIN_EXPECTS(quadrant >= 0 && quadrant < 4, "quadrant must be 0..3");
+        // Even samples have the parent's position, slope and height: its displacement, bit for bit (the
+        // roughness octave this level adds is zero there).
+        for (int j = 0; j < w; j += 2) {
+            for (int i = 0; i < w; i += 2) {
+                map.displacement[static_cast<std::size_t>(j) * w + i] =
+                    parent->displacement[static_cast<std::size_t>(py0 + j / 2) * w + px0 + i / 2];
+            }
+        }
+    }
+    const std::span<const std::uint8_t> mask =
+        parent ? std::span<const std::uint8_t>(mNewSamples) : std::span<const std::uint8_t>();
+    if (addsMaterials()) {
+        displaceByMaterials(where, parent, px0, py0, mask, map);
+    } else {
+        map.slope.clear();
+    }
+    if (mSettings.roughness) {
+        mSettings.roughness->add(where.gx0, where.gy0, w, w, mSettings.roughness->levelsBelow(where.spacing),
+                                 map.displacement, mask);
+    }
+}
+
+double DetailSynthesizer::roughnessBound(const WindowPlacement& where) const
+{
+    if (!mSettings.roughness) {
+        return 0.0;
+    }
+    const RoughnessNoise& r = *mSettings.roughness;
+    const int below = r.levelsBelow(where.spacing);
+    // The node's samples in leaf-level samples, then in leaves.
+    const double scale = std::ldexp(1.0, -below);
+    const double u0 = static_cast<double>(where.gx0 + kBorder) * scale;
+    const double v0 = static_cast<double>(where.gy0 + kBorder) * scale;
+    const double extent = (chunkSize() - 1) * scale;
+    auto leaf = [&](double u) { return static_cast<int>(std::floor(u / r.leafCells())); };
+    return r.bound(std::max(below, 0), leaf(u0), leaf(v0), leaf(u0 + extent), leaf(v0 + extent));
+}
+
+void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const DualHeightMap* parent, int px0, int py0,
+                                            std::span<const std::uint8_t> mask, DualHeightMap& map) const
+{
+    const int w = windowSize();
+    const std::size_t count = static_cast<std::size_t>(w) * w;
+    // One material covers everything: its weight is 1 whatever the slope and height.
+    const bool placed = mSettings.materials->materials().size() > 1;
+    if (parent) {
+        TERRAIN_EXPECTS(!placed || parent->slope.size() == count, "the parent has no placement slopes");
     }
     std::vector<float> height;
     if (placed) {
@@ -134,17 +178,6 @@ void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightM
         map.slope.clear();
         height.assign(count, 0.0f);
     }
-    std::span<const std::uint8_t> mask;
-    if (parent) {
-        // Even samples have the parent's position, slope and height: its displacement, bit for bit.
-        mask = mNewSamples;
-        for (int j = 0; j < w; j += 2) {
-            for (int i = 0; i < w; i += 2) {
-                map.displacement[static_cast<std::size_t>(j) * w + i] =
-                    parent->displacement[static_cast<std::size_t>(py0 + j / 2) * w + px0 + i / 2];
-            }
-        }
-    }
     std::vector<float> noSlope;
     if (!placed) {
         noSlope.assign(count, 0.0f);
@@ -170,7 +203,7 @@ DualHeightMap DetailSynthesizer::synthesizeChild(const DualHeightMap& parent, in
 std::vector<std::uint8_t> DetailSynthesizer::materialWeights(const DualHeightMap& map,
                                                              const WindowPlacement& where) const
 {
-    if (!addsDisplacement()) {
+    if (!addsMaterials()) {
         return {};
     }
     const int n = chunkSize();

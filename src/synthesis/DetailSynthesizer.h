@@ -21,6 +21,7 @@
 #include "synthesis/DualHeightMap.h"
 #include "synthesis/Fractal.h"
 #include "synthesis/Material.h"
+#include "synthesis/RoughnessNoise.h"
 #include "synthesis/Subdivider.h"
 
 #include <cstdint>
@@ -38,6 +39,10 @@ struct DetailSettings {
     /// detail_add_material: the materials whose displacement is added; null adds none (subdivision only).
     /// At most kMaxDetailMaterials materials (the renderer blends that many detail textures).
     std::shared_ptr<const MaterialSet> materials;
+    /// detail_roughness with a map that measured its roughness (issue 14): the terrain's own roughness
+    /// continued below the static leaves (RoughnessNoise.h), added to the displacement of dynamic nodes.
+    /// Null: none (detail_roughness off, or a map without a roughness block).
+    std::shared_ptr<const RoughnessNoise> roughness = nullptr;
 };
 
 /// Most materials a set may hold: their weights travel to the GPU as one RGBA8 value per sample.
@@ -71,7 +76,13 @@ public:
     int chunkSize() const { return mSubdivider->chunkSize(); }
     int windowSize() const { return terrain::windowSize(chunkSize()); }
     const DetailSettings& settings() const { return mSettings; }
-    bool addsDisplacement() const { return mSettings.materials != nullptr; }
+    /// Whether nodes get a displacement field: materials, roughness or both.
+    bool addsDisplacement() const { return mSettings.materials != nullptr || mSettings.roughness != nullptr; }
+    bool addsMaterials() const { return mSettings.materials != nullptr; }
+
+    /// The most the roughness octaves not yet present in the node at `where` (RoughnessNoise::bound from
+    /// the node's level below the leaves) can add to its surface anywhere below it, metres; 0 without.
+    double roughnessBound(const WindowPlacement& where) const;
 
     /// Sets map.displacement (and with several materials map.slope) from map.base (W x W): with `parent`
     /// (a dynamic child: the parent's map, this node its child `quadrant`), the placement slopes are the
@@ -99,6 +110,10 @@ public:
 
 private:
     DetailSynthesizer(std::unique_ptr<Subdivider> subdivider, DetailSettings settings);
+    /// The materials' part of displace(): placement slopes and the new samples' (all without a parent)
+    /// material displacement. px0, py0: the parent window's sample under the child's (0, 0).
+    void displaceByMaterials(const WindowPlacement& where, const DualHeightMap* parent, int px0, int py0,
+                             std::span<const std::uint8_t> mask, DualHeightMap& map) const;
 
     std::unique_ptr<Subdivider> mSubdivider;
     DetailSettings mSettings;

@@ -28,11 +28,12 @@ const char* readerName(ReaderKind kind)
 }
 
 std::filesystem::path buildSmallMap(const test::ScratchDir& dir, const std::string& name = "small.map",
-                                    double maxError = 0.0, bool detail = false)
+                                    double maxError = 0.0, bool detail = false, bool roughness = true)
 {
     // 65 x 65 samples, chunk 17: three levels, 21 nodes. With `detail`, leaves get fake detail errors.
     BuildOptions options = test::testOptions(17);
     options.maxError = maxError;
+    options.measureRoughness = roughness;
     if (detail) {
         options.leafDetailError = test::fakeLeafDetailError;
     }
@@ -178,7 +179,7 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     auto f32 = [&](std::size_t offset) { return std::bit_cast<float>(u32(offset)); };
     const Bytes magic = {0x89, 'T', 'M', 'A', 'P', 0x0d, 0x0a, 0x1a};
     EXPECT_TRUE(std::equal(magic.begin(), magic.end(), bytes.begin()));
-    EXPECT_EQ(u32(8), 4u);
+    EXPECT_EQ(u32(8), 5u);
     EXPECT_EQ(u32(12), 256u);
     EXPECT_EQ(u32(16), 17u);
     EXPECT_EQ(u32(20), 2u);
@@ -201,7 +202,18 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     EXPECT_EQ(std::string(reinterpret_cast<const char*>(&bytes[140])), "generated 65x65");
     EXPECT_EQ(u32(236), 0u) << "built without a detail recipe: no block";
     EXPECT_EQ(u32(240), 0u);
+    // The roughness block right after the header (no recipe): 4 x 4 leaves, amplitude and exponent each.
+    const std::size_t roughnessBytes = 4 + 16 * 8;
+    EXPECT_EQ(u32(244), roughnessBytes);
+    EXPECT_EQ(u32(248), zlibCrc(std::span(bytes).subspan(256, roughnessBytes)));
     EXPECT_EQ(u32(252), zlibCrc(std::span(bytes).first(252)));
+    ASSERT_TRUE(h.roughness.has_value());
+    EXPECT_EQ(u32(256), 4u);
+    for (std::size_t k = 0; k < 16; ++k) {
+        EXPECT_EQ(f32(260 + 8 * k), h.roughness->laws[k].amplitude) << k;
+        EXPECT_EQ(f32(264 + 8 * k), h.roughness->laws[k].exponent) << k;
+        EXPECT_GT(h.roughness->laws[k].amplitude, 0.0) << k;
+    }
 
     // Directory: sorted by key, each CRC over its payload; the payloads tile the node area, siblings
     // together in quadrant order, the root last.
@@ -232,7 +244,7 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     }
     std::vector<Raw> byOffset = raw;
     std::sort(byOffset.begin(), byOffset.end(), [](const Raw& a, const Raw& b) { return a.offset < b.offset; });
-    EXPECT_EQ(byOffset.front().offset, 256u);
+    EXPECT_EQ(byOffset.front().offset, 256u + roughnessBytes);
     for (std::size_t k = 1; k < byOffset.size(); ++k) {
         EXPECT_EQ(byOffset[k].offset, byOffset[k - 1].offset + byOffset[k - 1].size) << byOffset[k].id.toString();
     }
@@ -563,7 +575,9 @@ TEST(MapFileTest, BadHeaderFieldsAreErrors)
     const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
     const Case cases[] = {
         {"magic", 1, 1, 'X', false, "not a terrain map"},
-        {"version 5", 8, 4, 5, true, "version 5"},
+        {"version 6", 8, 4, 6, true, "version 6"},
+        {"roughness block of the wrong size", 244, 4, 140, true, "roughness block of 140 bytes"},
+        {"roughness block checksum", 248, 4, 0x12345678, true, "roughness block checksum"},
         {"detail recipe over 64 KiB", 236, 4, 70000, true, "detail recipe of 70000 bytes"},
         {"detail recipe that is not there", 236, 4, 40, true, "detail recipe"},
         {"version 0", 8, 4, 0, true, "version 0"},
@@ -642,7 +656,12 @@ TEST(MapFileTest, OversizedHeaderFieldsAreRefusedBeforeAllocating)
          "directory of 4294967295 nodes"},
         {"directory of 2^63 bytes", {{128, 8, 1ull << 63}}, "9223372036854775808 bytes"},
         // Accepted by the header: the largest chunks, levels and textures the format allows.
-        {"chunk 1025, 24 levels, texture 4097", {{16, 4, 1025}, {24, 4, 24}, {28, 4, 4097}}, "node 0/0/0"},
+        {"roughness block of 2^32 - 1 bytes", {{244, 4, 0xffffffff}}, "roughness block of 4294967295 bytes"},
+        // Accepted by the header: the largest chunks, levels and textures the format allows (a map of 24
+        // levels has no roughness block).
+        {"chunk 1025, 24 levels, texture 4097",
+         {{16, 4, 1025}, {24, 4, 24}, {28, 4, 4097}, {244, 4, 0}, {248, 4, 0}},
+         "node 0/0/0"},
     };
     std::string checked;
     for (const Case& c : cases) {
@@ -871,9 +890,10 @@ TEST(MapFileTest, DetailDeltaCRoundTripsThroughTheDirectory)
 TEST(MapFileTest, Version1MapsStillOpenDecodeAndVerify)
 {
     // A version 1 file written by hand from the format description: version 1 in the header, the last 4
-    // bytes of every directory entry zero, both checksums recomputed.
+    // bytes of every directory entry zero, both checksums recomputed (from a map without a roughness block,
+    // which version 1 does not have).
     test::ScratchDir dir;
-    const auto path = buildSmallMap(dir, "v2.map", 0.0, true);
+    const auto path = buildSmallMap(dir, "v2.map", 0.0, true, false);
     Bytes bytes = test::readFileBytes(path);
     const std::uint64_t directoryOffset = test::readLe(bytes, 120, 8);
     const std::uint64_t count = test::readLe(bytes, 116, 4);
@@ -1008,6 +1028,7 @@ TEST(MapFileTest, DetailRecipeRoundTripsAndIsChecked)
     recipe.scheme = "catmull-clark";
     recipe.omega = 0.75;
     recipe.materials = {{"grass", 0x0123456789abcdefull}, {"rock", 0xfedcba9876543210ull}, {"", 7}};
+    recipe.roughness = true;
     BuildOptions options = test::testOptions(17);
     options.leafDetailError = test::fakeLeafDetailError;
     options.detailRecipe = recipe;
@@ -1024,7 +1045,8 @@ TEST(MapFileTest, DetailRecipeRoundTripsAndIsChecked)
     // Written from the format description: the block's size and CRC at 236 and 240, the block at 256.
     Bytes bytes = test::readFileBytes(dir / "recipe.map");
     const std::uint64_t size = test::readLe(bytes, 236, 4);
-    ASSERT_EQ(size, 1 + 13 + 8 + 4 + (1 + 5 + 8) + (1 + 4 + 8) + (1 + 0 + 8));
+    ASSERT_EQ(size, 1 + 13 + 8 + 4 + (1 + 5 + 8) + (1 + 4 + 8) + (1 + 0 + 8) + 1);
+    EXPECT_EQ(bytes[256 + size - 1], 1) << "version 5: the roughness flag ends the block";
     EXPECT_EQ(test::readLe(bytes, 240, 4), zlibCrc(std::span(bytes).subspan(256, size)));
     EXPECT_EQ(std::string(bytes.begin() + 257, bytes.begin() + 270), "catmull-clark");
 
@@ -1045,7 +1067,7 @@ TEST(MapFileTest, DetailRecipeRoundTripsAndIsChecked)
     }
 
     // Version 2 (no recipe fields: bytes 236..243 zero) still opens, without a recipe.
-    const auto plain = buildSmallMap(dir, "plain.map", 0.0, true);
+    const auto plain = buildSmallMap(dir, "plain.map", 0.0, true, false);
     Bytes v2 = test::readFileBytes(plain);
     ASSERT_EQ(test::readLe(v2, 236, 4), 0u) << "a map built without a recipe has no block";
     test::writeLe(v2, 8, 2, 4);
@@ -1065,6 +1087,7 @@ TEST(MapFileTest, DetailRecipesCompareBySynthesis)
     EXPECT_FALSE(a.sameSynthesis({"kobbelt", 0.5, {{"grass", 1}}})) << "omega matters for kobbelt";
     EXPECT_FALSE(a.sameSynthesis({"kobbelt", 1.0, {{"grass", 2}}})) << "an edited material file";
     EXPECT_FALSE(a.sameSynthesis({"kobbelt", 1.0, {}}));
+    EXPECT_FALSE(a.sameSynthesis({"kobbelt", 1.0, {{"grass", 1}}, true})) << "roughness continued or not";
     EXPECT_FALSE(a.sameSynthesis({"bilinear", 1.0, {{"grass", 1}}}));
     DetailRecipe b{"bilinear", 1.0, {{"rock", 3}, {"grass", 1}}};
     EXPECT_TRUE(b.sameSynthesis({"bilinear", 0.25, {{"rock", 3}, {"grass", 1}}})) << "omega is not bilinear's";

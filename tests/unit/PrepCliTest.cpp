@@ -464,7 +464,7 @@ TEST(PrepCliTest, TheMapRecordsWhatItsDetailErrorsAssumeAndDefaultsMatchTheViewe
 
     const TengineOptions viewer;  // the viewer's defaults
     std::vector<std::string> warnings;
-    auto synthesizer = makeDetailSynthesizer(viewer, 9, materials, warnings);
+    auto synthesizer = makeDetailSynthesizer(viewer, header, materials, warnings);
     ASSERT_TRUE(synthesizer.ok() && *synthesizer);
     auto recipe = viewerDetailRecipe(viewer, **synthesizer, materials);
     ASSERT_TRUE(recipe.ok()) << recipe.error().message;
@@ -483,7 +483,8 @@ TEST(PrepCliTest, TheMapRecordsWhatItsDetailErrorsAssumeAndDefaultsMatchTheViewe
     const DetailRecipe expected{"kobbelt",
                                 0.5,
                                 {{"rock", hashFileContent(materials / "rock.mat").value()},
-                                 {"grass", hashFileContent(materials / "grass.mat").value()}}};
+                                 {"grass", hashFileContent(materials / "grass.mat").value()}},
+                                true};
     EXPECT_EQ((*other)->header().detailRecipe, expected);
     auto mismatch =
         detailRecipeMismatch((*other)->header(), "other.map", *recipe, detailMaterialFiles(viewer, materials));
@@ -616,7 +617,9 @@ TEST(PrepCliTest, MaterialsGiveLeafDetailErrorsIndependentOfThreads)
     ASSERT_EQ(one.exitCode, 0) << one.output;
     const RunResult two = prep("two.map", twoThreads);
     ASSERT_EQ(two.exitCode, 0) << two.output;
-    const RunResult plain = prep("plain.map", {"--threads", "2", "--no-material"});
+    // Subdivision alone: no materials, and no roughness continued (without materials its octaves would go
+    // down to a metre).
+    const RunResult plain = prep("plain.map", {"--threads", "2", "--no-material", "--no-roughness"});
     ASSERT_EQ(plain.exitCode, 0) << plain.output;
     const RunResult bilinear =
         prep("bilinear.map", {"--detail-scheme", "bilinear", "--detail-factor", "0", "--no-material"});
@@ -626,6 +629,8 @@ TEST(PrepCliTest, MaterialsGiveLeafDetailErrorsIndependentOfThreads)
     EXPECT_TRUE(mentions(one.output, "), rock (hash ")) << one.output;
     EXPECT_TRUE(mentions(one.output, "estimating")) << one.output;
     EXPECT_TRUE(mentions(plain.output, "for kobbelt omega 1, no materials (subdivision only)")) << plain.output;
+    EXPECT_FALSE(mentions(plain.output, "roughness continued")) << plain.output;
+    EXPECT_TRUE(mentions(one.output, "the terrain's roughness continued")) << one.output;
     EXPECT_TRUE(mentions(bilinear.output, "for bilinear, no materials")) << bilinear.output;
     EXPECT_TRUE(mentions(bilinear.output, "warning: --detail-factor has no effect")) << bilinear.output;
 

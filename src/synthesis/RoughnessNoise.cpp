@@ -1,0 +1,235 @@
+#include "synthesis/RoughnessNoise.h"
+
+#include "core/Check.h"
+#include "core/SplitMix64.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace terrain {
+
+namespace {
+
+/// Amplitudes below this are taken as this (log A must be finite): a micrometre, nothing visible.
+constexpr double kTinyAmplitude = 1e-6;
+/// Lags 2^-m of a wavelength summed in the calibration: the terms fall as 2^((2H - 4) m).
+constexpr int kCalibrationLags = 12;
+/// Positions per lag the calibration averages over.
+constexpr int kCalibrationPositions = 2048;
+
+}  // namespace
+
+RoughnessNoise::RoughnessNoise(RoughnessGrid grid, int leafCells, double dataSpacing, int octaves, std::uint64_t seed)
+    : mGrid(std::move(grid)), mLeafCells(leafCells), mDataSpacing(dataSpacing)
+{
+    TERRAIN_EXPECTS(dataSpacing > 0.0 && std::isfinite(dataSpacing), "the data's spacing must be > 0");
+    TERRAIN_EXPECTS(mGrid.leavesPerSide >= 1 &&
+                        mGrid.laws.size() == static_cast<std::size_t>(mGrid.leavesPerSide) * mGrid.leavesPerSide,
+                    "the roughness grid must hold leavesPerSide^2 laws");
+    TERRAIN_EXPECTS(leafCells >= 2, "a leaf has at least 2 cells a side");
+    TERRAIN_EXPECTS(octaves >= 0 && octaves <= kMaxRoughnessOctaves, "octaves must be in [0, kMaxRoughnessOctaves]");
+    for (int k = 0; k < octaves; ++k) {
+        mNoise.emplace_back(seed + static_cast<std::uint64_t>(k));
+    }
+    mLogAmplitude.reserve(mGrid.laws.size());
+    for (const RoughnessLaw& law : mGrid.laws) {
+        mLogAmplitude.push_back(std::log(std::max(law.amplitude, kTinyAmplitude)));
+    }
+    // g_m^2 for m = 1 .. kCalibrationLags, at positions a level's samples take on an octave's lattice: whole
+    // cells plus multiples of 2^-m, along x and along y.
+    const PerlinNoise noise(seed ^ 0xca11b4a7e0ull);
+    std::vector<double> g2(kCalibrationLags + 1, 0.0);
+    SplitMix64 random(seed);
+    for (int m = 1; m <= kCalibrationLags; ++m) {
+        const double step = std::ldexp(1.0, -m);
+        double sum = 0.0;
+        for (int p = 0; p < kCalibrationPositions; ++p) {
+            const std::uint64_t r = random.next();
+            const double x = static_cast<double>(r & 1023) + static_cast<double>((r >> 10) & ((1u << m) - 1)) * step;
+            const double y =
+                static_cast<double>((r >> 24) & 1023) + static_cast<double>((r >> 34) & ((1u << m) - 1)) * step;
+            const double centre = noise(x, y);
+            const double dx = centre - 0.5 * (noise(x - step, y) + noise(x + step, y));
+            const double dy = centre - 0.5 * (noise(x, y - step) + noise(x, y + step));
+            sum += dx * dx + dy * dy;
+        }
+        g2[static_cast<std::size_t>(m)] = sum / (2.0 * kCalibrationPositions);
+    }
+    const int entries =
+        static_cast<int>(std::lround((kMaxRoughnessExponent - kMinRoughnessExponent) / kRoughnessCalibrationStep)) + 1;
+    for (int i = 0; i < entries; ++i) {
+        const double h = kMinRoughnessExponent + i * kRoughnessCalibrationStep;
+        double total = 0.0;
+        for (int m = 1; m <= kCalibrationLags; ++m) {
+            total += std::exp2(2.0 * h * m) * g2[static_cast<std::size_t>(m)];
+        }
+        mCalibration.push_back(1.0 / std::sqrt(total));
+    }
+}
+
+int RoughnessNoise::octavesDownTo(double dataSpacing, double finestWavelength)
+{
+    TERRAIN_EXPECTS(dataSpacing > 0.0 && finestWavelength > 0.0, "spacing and wavelength must be > 0");
+    int octaves = 0;
+    while (octaves < kMaxRoughnessOctaves && std::ldexp(dataSpacing, -octaves) >= finestWavelength) {
+        ++octaves;
+    }
+    return octaves;
+}
+
+int RoughnessNoise::levelsBelow(double spacing) const
+{
+    TERRAIN_EXPECTS(spacing > 0.0, "a spacing must be > 0");
+    return static_cast<int>(std::lround(std::log2(mDataSpacing / spacing)));
+}
+
+double RoughnessNoise::calibration(double exponent) const
+{
+    const double t = (std::clamp(exponent, kMinRoughnessExponent, kMaxRoughnessExponent) - kMinRoughnessExponent) /
+                     kRoughnessCalibrationStep;
+    const auto i = std::min(static_cast<std::size_t>(t), mCalibration.size() - 2);
+    const double f = t - static_cast<double>(i);
+    return (1.0 - f) * mCalibration[i] + f * mCalibration[i + 1];
+}
+
+RoughnessLaw RoughnessNoise::lawAt(double u, double v) const
+{
+    const int side = mGrid.leavesPerSide;
+    // Leaf centres at (x + 0.5) leafCells.
+    auto split = [&](double w, int& i0, int& i1, double& t) {
+        const double f = std::clamp(w / mLeafCells - 0.5, 0.0, static_cast<double>(side - 1));
+        i0 = std::min(static_cast<int>(f), side - 1);
+        i1 = std::min(i0 + 1, side - 1);
+        t = f - i0;
+    };
+    int x0, x1, y0, y1;
+    double tx, ty;
+    split(u, x0, x1, tx);
+    split(v, y0, y1, ty);
+    auto index = [&](int x, int y) { return static_cast<std::size_t>(y) * side + x; };
+    auto blend = [&](auto value) {
+        const double south = (1.0 - tx) * value(index(x0, y0)) + tx * value(index(x1, y0));
+        const double north = (1.0 - tx) * value(index(x0, y1)) + tx * value(index(x1, y1));
+        return (1.0 - ty) * south + ty * north;
+    };
+    RoughnessLaw law;
+    law.amplitude = std::exp(blend([&](std::size_t k) { return mLogAmplitude[k]; }));
+    law.exponent = blend([&](std::size_t k) { return mGrid.laws[k].exponent; });
+    if (law.amplitude <= kTinyAmplitude * (1.0 + 1e-9)) {
+        law.amplitude = 0.0;
+    }
+    return law;
+}
+
+void RoughnessNoise::amplitudes(double u, double v, int count, double* out) const
+{
+    const RoughnessLaw law = lawAt(u, v);
+    const double ratio = std::exp2(-law.exponent);
+    double a = calibration(law.exponent) * law.amplitude;
+    for (int k = 0; k < count; ++k) {
+        out[k] = a;
+        a *= ratio;
+    }
+}
+
+float RoughnessNoise::at(std::int64_t gx, std::int64_t gy, int below) const
+{
+    TERRAIN_EXPECTS(below <= 30, "at most 30 levels below the leaves");
+    const int count = std::min(below, octaves());
+    if (count <= 0) {
+        return 0.0f;
+    }
+    double a[kMaxRoughnessOctaves];
+    amplitudes(std::ldexp(static_cast<double>(gx), -below), std::ldexp(static_cast<double>(gy), -below), count, a);
+    float sum = 0.0f;
+    for (int k = 0; k < count; ++k) {
+        // Octave k's lattice has 2^m of this level's samples a cell: cell and fraction are exact.
+        const int m = below - k;
+        const std::int64_t mask = (std::int64_t{1} << m) - 1;
+        const double scale = std::ldexp(1.0, -m);
+        const float p = mNoise[static_cast<std::size_t>(k)].cell(
+            gx >> m, gy >> m, static_cast<double>(gx & mask) * scale, static_cast<double>(gy & mask) * scale);
+        sum += static_cast<float>(a[k]) * p;
+    }
+    return sum;
+}
+
+void RoughnessNoise::add(std::int64_t gx0, std::int64_t gy0, int width, int height, int below, std::span<float> out,
+                         std::span<const std::uint8_t> mask) const
+{
+    TERRAIN_EXPECTS(width >= 0 && height >= 0 && out.size() >= static_cast<std::size_t>(width) * height,
+                    "out must hold width x height values");
+    TERRAIN_EXPECTS(mask.empty() || mask.size() >= static_cast<std::size_t>(width) * height,
+                    "the mask must hold width x height values");
+    if (std::min(below, octaves()) <= 0) {
+        return;
+    }
+    for (int j = 0; j < height; ++j) {
+        for (int i = 0; i < width; ++i) {
+            const std::size_t k = static_cast<std::size_t>(j) * width + i;
+            if (mask.empty() || mask[k] != 0) {
+                out[k] += at(gx0 + i, gy0 + j, below);
+            }
+        }
+    }
+}
+
+double RoughnessNoise::bound(int from, int x0, int y0, int x1, int y1) const
+{
+    const int side = mGrid.leavesPerSide;
+    x0 = std::clamp(x0 - 1, 0, side - 1);
+    y0 = std::clamp(y0 - 1, 0, side - 1);
+    x1 = std::clamp(x1 + 1, 0, side - 1);
+    y1 = std::clamp(y1 + 1, 0, side - 1);
+    double amplitude = 0.0, lo = kMaxRoughnessExponent, hi = kMinRoughnessExponent;
+    for (int y = y0; y <= y1; ++y) {
+        for (int x = x0; x <= x1; ++x) {
+            const RoughnessLaw& law = mGrid.at(x, y);
+            amplitude = std::max(amplitude, law.amplitude);
+            lo = std::min(lo, law.exponent);
+            hi = std::max(hi, law.exponent);
+        }
+    }
+    if (amplitude == 0.0 || from >= octaves()) {
+        return 0.0;
+    }
+    // Each octave's largest c(H) 2^(-k H) over the exponents there (the calibration table's entries and
+    // the ends), with a margin for the curvature between entries.
+    double total = 0.0;
+    for (int k = std::max(from, 0); k < octaves(); ++k) {
+        double most = 0.0;
+        for (double h = lo;; h = std::min(h + kRoughnessCalibrationStep, hi)) {
+            most = std::max(most, calibration(h) * std::exp2(-k * h));
+            if (h >= hi) {
+                break;
+            }
+        }
+        total += most;
+    }
+    return 1.01 * amplitude * total;
+}
+
+double RoughnessNoise::bound(int from) const
+{
+    return bound(from, 0, 0, mGrid.leavesPerSide - 1, mGrid.leavesPerSide - 1);
+}
+
+std::shared_ptr<const RoughnessNoise> makeRoughnessNoise(const MapHeader& header, const MaterialSet* materials)
+{
+    if (!header.roughness) {
+        return nullptr;
+    }
+    double finest = kRoughnessFinestWavelength;
+    if (materials) {
+        for (const Material& m : materials->materials()) {
+            if (m.displacement) {
+                finest = std::max(finest, m.fractal.wavelength);
+            }
+        }
+    }
+    return std::make_shared<const RoughnessNoise>(*header.roughness, static_cast<int>(header.chunkSize) - 1,
+                                                  header.sampleSpacing,
+                                                  RoughnessNoise::octavesDownTo(header.sampleSpacing, finest));
+}
+
+}  // namespace terrain

@@ -1,0 +1,103 @@
+// The terrain's own roughness continued below its data (issue 14): noise whose amplitude follows the power
+// law prep measured around each static leaf (heightfield/Roughness.h, quadtree/MapFormat.h RoughnessGrid),
+// from the data's spacing s0 downwards.
+//
+// Octave k (k = 0, 1, ...) is Perlin gradient noise on a lattice of spacing s0 2^-k aligned with the map's
+// sample grid, with amplitude a_k = c(H) A (2^-k)^H, A and H the law interpolated at the point. Gradient
+// noise is zero at its lattice points, so:
+//  - at the static samples every octave is zero: the real data is left exactly as it is;
+//  - at the samples of level l below the leaves (spacing s0 2^-l) octaves k >= l are zero: each dynamic
+//    level adds the next octave, the one its spacing resolves (random midpoint displacement, made
+//    deterministic), and nothing aliases;
+//  - the value depends only on the sample's position and the stored laws: every node, level and thread
+//    gets the same bits, so shared edges stay bit-identical and a child's even samples equal its parent's.
+// c(H) calibrates the sum so that the RMS midpoint deviation of the synthesized samples at a lag of one of
+// their spacings, s0 2^-j, is the law's A 2^(-jH): with g_m the RMS midpoint deviation of one octave at a
+// lag of 2^-m of its wavelength, measured at the positions a level's samples take on it,
+// c(H)^-2 = sum_{m >= 1} 2^(2 H m) g_m^2 (the octaves k < j contribute with m = j - k).
+//
+// The law varies smoothly: log A and H are interpolated bilinearly between leaf centres (clamped at the
+// map's edges), so no leaf border shows.
+#pragma once
+
+#include "quadtree/MapFormat.h"
+#include "synthesis/Material.h"
+#include "synthesis/PerlinNoise.h"
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace terrain {
+
+/// The noise's seed unless told otherwise (octave k uses seed + k).
+inline constexpr std::uint64_t kRoughnessSeed = 0x5eed5eedull;
+/// Most octaves (a 2^-24 of the data's spacing is below any use).
+inline constexpr int kMaxRoughnessOctaves = 24;
+/// Exponent step of the calibration table (c(H) is interpolated linearly between its entries).
+inline constexpr double kRoughnessCalibrationStep = 0.01;
+
+class RoughnessNoise {
+public:
+    /// `grid` from the map; `leafCells` = N - 1 (samples per leaf side, minus one); `dataSpacing` s0, metres
+    /// between the finest static samples; `octaves` in [0, kMaxRoughnessOctaves]: octave k has wavelength
+    /// s0 2^-k. Preconditions: grid has leavesPerSide^2 laws, dataSpacing > 0.
+    RoughnessNoise(RoughnessGrid grid, int leafCells, double dataSpacing, int octaves,
+                   std::uint64_t seed = kRoughnessSeed);
+
+    /// The octaves with wavelength s0 2^-k >= `finestWavelength` (metres), for data of spacing `dataSpacing`:
+    /// the octaves synthesized before the materials' own take over. At most kMaxRoughnessOctaves.
+    static int octavesDownTo(double dataSpacing, double finestWavelength);
+
+    int octaves() const { return static_cast<int>(mNoise.size()); }
+    int leafCells() const { return mLeafCells; }
+    double dataSpacing() const { return mDataSpacing; }
+    /// Levels below the static leaves of nodes with sample spacing `spacing` (negative above them):
+    /// round(log2(s0 / spacing)).
+    int levelsBelow(double spacing) const;
+    const RoughnessGrid& grid() const { return mGrid; }
+
+    /// The law at (u, v), in samples of the finest static level from the map's grid origin (any real value).
+    RoughnessLaw lawAt(double u, double v) const;
+    /// c(H), for exponents in [kMinRoughnessExponent, kMaxRoughnessExponent] (clamped).
+    double calibration(double exponent) const;
+
+    /// The noise at global sample (gx, gy) of the level `below` levels below the static leaves (spacing s0
+    /// 2^-below): sum over k < min(below, octaves()) of a_k P_k, in float; exactly 0 for below <= 0.
+    /// Precondition: below <= 30.
+    float at(std::int64_t gx, std::int64_t gy, int below) const;
+    /// out[j * width + i] += at(gx0 + i, gy0 + j, below) (bit for bit), only where mask[k] != 0 when a mask
+    /// is given. Preconditions: out (and mask) hold width * height values.
+    void add(std::int64_t gx0, std::int64_t gy0, int width, int height, int below, std::span<float> out,
+             std::span<const std::uint8_t> mask = {}) const;
+
+    /// The most the octaves k >= `from` can add anywhere in the leaf square [x0, x1] x [y0, y1] (leaf
+    /// indices, inclusive, clamped to the grid) and around it as far as the interpolation reaches: sum of
+    /// the largest a_k there (|P| <= 1). metres, >= 0.
+    double bound(int from, int x0, int y0, int x1, int y1) const;
+    /// bound() over the whole map.
+    double bound(int from) const;
+
+private:
+    /// a_k at the interpolated law: c(H) A 2^(-k H), for k = 0 .. count - 1, into amplitudes.
+    void amplitudes(double u, double v, int count, double* out) const;
+
+    RoughnessGrid mGrid;
+    int mLeafCells;
+    double mDataSpacing;
+    std::vector<PerlinNoise> mNoise;
+    std::vector<double> mLogAmplitude;  ///< per leaf: log(max(A, tiny))
+    std::vector<double> mCalibration;   ///< c(H) at kMinRoughnessExponent + i * kRoughnessCalibrationStep
+};
+
+/// Where the roughness octaves stop without materials: a metre (finer relief is the materials' business).
+inline constexpr double kRoughnessFinestWavelength = 1.0;
+
+/// The roughness synthesized below the leaves of the map with `header`: its RoughnessGrid, octaves from the
+/// data's spacing down to the coarsest material wavelength (octave 0, where the materials' own octaves take
+/// over), or to kRoughnessFinestWavelength without materials. Null when the map has no roughness block.
+/// The one rule shared by the viewer, the height queries and prep's leaf errors.
+std::shared_ptr<const RoughnessNoise> makeRoughnessNoise(const MapHeader& header, const MaterialSet* materials);
+
+}  // namespace terrain
