@@ -90,6 +90,24 @@ int info(const MapFile& map)
     std::printf("detail     %s\n", h.detailRecipe ? ("errors estimated for " + h.detailRecipe->describe()).c_str()
                                    : h.hasDetailErrors() ? "errors below the leaves, settings not recorded"
                                                          : "no errors below the leaves (version 1)");
+    // The leaves' roughness laws (version 5), which detail_roughness continues below them.
+    if (h.roughness) {
+        std::vector<double> amplitudes, exponents;
+        for (const RoughnessLaw& law : h.roughness->laws) {
+            amplitudes.push_back(law.amplitude);
+            exponents.push_back(law.exponent);
+        }
+        std::sort(amplitudes.begin(), amplitudes.end());
+        std::sort(exponents.begin(), exponents.end());
+        const std::size_t mid = amplitudes.size() / 2;
+        std::printf(
+            "roughness  D(r) = A (r / %g m)^H over %zu leaves: A %.3g / %.3g / %.3g m, H %.2f / %.2f / %.2f "
+            "(min / median / max)\n",
+            h.sampleSpacing, amplitudes.size(), amplitudes.front(), amplitudes[mid], amplitudes.back(),
+            exponents.front(), exponents[mid], exponents.back());
+    } else {
+        std::printf("roughness  not measured (%s)\n", h.version < 5 ? "made before format 5" : "prep left it out");
+    }
 
     struct LevelStats {
         std::uint64_t nodes = 0, heightBytes = 0, textureBytes = 0;

@@ -52,11 +52,12 @@ MidpointSums midpointDeviation(std::span<const float> heights, int width, int he
 RoughnessLaw fitRoughnessLaw(std::span<const double> rms)
 {
     TERRAIN_EXPECTS(rms.size() == kRoughnessLags.size(), "one RMS per lag of kRoughnessLags");
-    std::vector<double> lx, ly;
+    std::vector<double> lx, ly, wt;
     for (std::size_t k = 0; k < rms.size(); ++k) {
         if (rms[k] > 0.0 && std::isfinite(rms[k])) {
             lx.push_back(std::log(static_cast<double>(kRoughnessLags[k])));
             ly.push_back(std::log(rms[k]));
+            wt.push_back(kRoughnessLagWeights[k]);
         }
     }
     RoughnessLaw law;
@@ -65,20 +66,23 @@ RoughnessLaw fitRoughnessLaw(std::span<const double> rms)
         law.exponent = 0.5 * (kMinRoughnessExponent + kMaxRoughnessExponent);
         return law;
     }
-    const auto n = static_cast<double>(lx.size());
+    double n = 0.0;
+    for (double w : wt) {
+        n += w;
+    }
     double mx = 0.0, my = 0.0;
     for (std::size_t k = 0; k < lx.size(); ++k) {
-        mx += lx[k] / n;
-        my += ly[k] / n;
+        mx += wt[k] * lx[k] / n;
+        my += wt[k] * ly[k] / n;
     }
     double sxx = 0.0, sxy = 0.0;
     for (std::size_t k = 0; k < lx.size(); ++k) {
-        sxx += (lx[k] - mx) * (lx[k] - mx);
-        sxy += (lx[k] - mx) * (ly[k] - my);
+        sxx += wt[k] * (lx[k] - mx) * (lx[k] - mx);
+        sxy += wt[k] * (lx[k] - mx) * (ly[k] - my);
     }
     const double slope = sxx > 0.0 ? sxy / sxx : 0.5 * (kMinRoughnessExponent + kMaxRoughnessExponent);
     law.exponent = std::clamp(slope, kMinRoughnessExponent, kMaxRoughnessExponent);
-    // log A = mean of (log D - H log r): the geometric mean of D(r) / r^H.
+    // log A = weighted mean of (log D - H log r): the weighted geometric mean of D(r) / r^H.
     law.amplitude = std::exp(my - law.exponent * mx);
     return law;
 }

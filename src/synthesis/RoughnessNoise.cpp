@@ -4,6 +4,7 @@
 #include "core/SplitMix64.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace terrain {
@@ -35,35 +36,50 @@ RoughnessNoise::RoughnessNoise(RoughnessGrid grid, int leafCells, double dataSpa
     for (const RoughnessLaw& law : mGrid.laws) {
         mLogAmplitude.push_back(std::log(std::max(law.amplitude, kTinyAmplitude)));
     }
-    // g_m^2 for m = 1 .. kCalibrationLags, at positions a level's samples take on an octave's lattice: whole
-    // cells plus multiples of 2^-m, along x and along y.
+    // G_{m,L}: the mean square midpoint deviation of one octave at a lag of L 2^-m cells (L in
+    // kRoughnessLags), at positions a level's samples take on its lattice (whole cells plus multiples of
+    // 2^-m), along x and along y, for m = 1 .. kCalibrationLags.
     const PerlinNoise noise(seed ^ 0xca11b4a7e0ull);
-    std::vector<double> g2(kCalibrationLags + 1, 0.0);
+    constexpr std::size_t kLagCount = kRoughnessLags.size();
+    std::vector<std::array<double, kLagCount>> g(kCalibrationLags + 1);
     SplitMix64 random(seed);
     for (int m = 1; m <= kCalibrationLags; ++m) {
         const double step = std::ldexp(1.0, -m);
-        double sum = 0.0;
+        std::array<double, kLagCount> sums{};
         for (int p = 0; p < kCalibrationPositions; ++p) {
             const std::uint64_t r = random.next();
             const double x = static_cast<double>(r & 1023) + static_cast<double>((r >> 10) & ((1u << m) - 1)) * step;
             const double y =
                 static_cast<double>((r >> 24) & 1023) + static_cast<double>((r >> 34) & ((1u << m) - 1)) * step;
             const double centre = noise(x, y);
-            const double dx = centre - 0.5 * (noise(x - step, y) + noise(x + step, y));
-            const double dy = centre - 0.5 * (noise(x, y - step) + noise(x, y + step));
-            sum += dx * dx + dy * dy;
+            for (std::size_t l = 0; l < kLagCount; ++l) {
+                const double lag = kRoughnessLags[l] * step;
+                const double dx = centre - 0.5 * (noise(x - lag, y) + noise(x + lag, y));
+                const double dy = centre - 0.5 * (noise(x, y - lag) + noise(x, y + lag));
+                sums[l] += dx * dx + dy * dy;
+            }
         }
-        g2[static_cast<std::size_t>(m)] = sum / (2.0 * kCalibrationPositions);
+        for (std::size_t l = 0; l < kLagCount; ++l) {
+            g[static_cast<std::size_t>(m)][l] = sums[l] / (2.0 * kCalibrationPositions);
+        }
     }
+    // Level j's samples see octaves k < j, at m = j - k: at a lag of L samples, D^2 = c^2 A^2 2^(-2jH)
+    // sum_m 2^(2Hm) G_{m,L}, the law's A^2 L^(2H) 2^(-2jH) for c = c_L. The grid-aligned octaves are not
+    // exactly self-similar (at longer lags the finer octaves add their whole variance), so the c_L differ;
+    // c is their geometric mean: the law holds on average over the lags prep fits it on.
     const int entries =
         static_cast<int>(std::lround((kMaxRoughnessExponent - kMinRoughnessExponent) / kRoughnessCalibrationStep)) + 1;
     for (int i = 0; i < entries; ++i) {
         const double h = kMinRoughnessExponent + i * kRoughnessCalibrationStep;
-        double total = 0.0;
-        for (int m = 1; m <= kCalibrationLags; ++m) {
-            total += std::exp2(2.0 * h * m) * g2[static_cast<std::size_t>(m)];
+        double logC = 0.0;
+        for (std::size_t l = 0; l < kLagCount; ++l) {
+            double total = 0.0;
+            for (int m = 1; m <= kCalibrationLags; ++m) {
+                total += std::exp2(2.0 * h * m) * g[static_cast<std::size_t>(m)][l];
+            }
+            logC += std::log(std::pow(kRoughnessLags[l], h) / std::sqrt(total)) / kLagCount;
         }
-        mCalibration.push_back(1.0 / std::sqrt(total));
+        mCalibration.push_back(std::exp(logC));
     }
 }
 

@@ -244,6 +244,8 @@ TEST_F(PrepRealDataTest, ToolInfoDescribesTheMap)
     EXPECT_TRUE(mentions(result.output, "403 x 344")) << result.output;
     EXPECT_TRUE(mentions(result.output, "levels     4")) << result.output;
     EXPECT_TRUE(mentions(result.output, "lossless")) << result.output;
+    // The leaves' roughness: 8 x 8 leaves of the finest level, laws at 90 m.
+    EXPECT_TRUE(mentions(result.output, "roughness  D(r) = A (r / 90 m)^H over 64 leaves")) << result.output;
 }
 
 TEST_F(PrepRealDataTest, ToolTextureWritesTheNodeTextureNorthUp)
