@@ -155,8 +155,9 @@ float RoughnessNoise::at(std::int64_t gx, std::int64_t gy, int below) const
     if (count <= 0) {
         return 0.0f;
     }
+    const double toLeafLevel = std::ldexp(1.0, -below);  // exact: a power of two
     double a[kMaxRoughnessOctaves];
-    amplitudes(std::ldexp(static_cast<double>(gx), -below), std::ldexp(static_cast<double>(gy), -below), count, a);
+    amplitudes(static_cast<double>(gx) * toLeafLevel, static_cast<double>(gy) * toLeafLevel, count, a);
     float sum = 0.0f;
     for (int k = 0; k < count; ++k) {
         // Octave k's lattice has 2^m of this level's samples a cell: cell and fraction are exact.
@@ -177,16 +178,77 @@ void RoughnessNoise::add(std::int64_t gx0, std::int64_t gy0, int width, int heig
                     "out must hold width x height values");
     TERRAIN_EXPECTS(mask.empty() || mask.size() >= static_cast<std::size_t>(width) * height,
                     "the mask must hold width x height values");
-    if (std::min(below, octaves()) <= 0) {
+    TERRAIN_EXPECTS(below <= 30, "at most 30 levels below the leaves");
+    const int count = std::min(below, octaves());
+    if (count <= 0) {
         return;
     }
+    // at() for batches of samples: the same operations in the same order for each, with the octaves' noise
+    // evaluated 64 cells at a time (PerlinNoise::cells, bit for bit its cell32).
+    constexpr int kBatch = LatticeBatch::kSize;
+    const SimdPath path = bestSimdPath();
+    const double toLeafLevel = std::ldexp(1.0, -below);
+    std::size_t index[kBatch];
+    std::int64_t sx[kBatch], sy[kBatch];
+    float amplitude[kMaxRoughnessOctaves][kBatch];
+    float sum[kBatch];
+    LatticeBatch batch;
+    float noise[kBatch];
+    int filled = 0;
+    auto flush = [&] {
+        for (int s = filled; s < kBatch; ++s) {  // unused lanes: any valid cell
+            batch.cellX[s] = batch.cellY[s] = 0;
+            batch.tx[s] = batch.ty[s] = batch.u[s] = batch.v[s] = 0.0f;
+        }
+        for (int s = 0; s < filled; ++s) {
+            sum[s] = 0.0f;
+        }
+        for (int k = 0; k < count; ++k) {
+            const int m = below - k;
+            const std::int64_t low = (std::int64_t{1} << m) - 1;
+            const double scale = std::ldexp(1.0, -m);
+            for (int s = 0; s < filled; ++s) {
+                const double tx = static_cast<double>(sx[s] & low) * scale,
+                             ty = static_cast<double>(sy[s] & low) * scale;
+                batch.cellX[s] = static_cast<std::uint32_t>(sx[s] >> m);
+                batch.cellY[s] = static_cast<std::uint32_t>(sy[s] >> m);
+                batch.tx[s] = static_cast<float>(tx);
+                batch.ty[s] = static_cast<float>(ty);
+                batch.u[s] = PerlinNoise::fade(tx);
+                batch.v[s] = PerlinNoise::fade(ty);
+            }
+            mNoise[static_cast<std::size_t>(k)].cells(batch, noise, path);
+            for (int s = 0; s < filled; ++s) {
+                sum[s] += amplitude[k][s] * noise[s];
+            }
+        }
+        for (int s = 0; s < filled; ++s) {
+            out[index[s]] += sum[s];
+        }
+        filled = 0;
+    };
     for (int j = 0; j < height; ++j) {
         for (int i = 0; i < width; ++i) {
             const std::size_t k = static_cast<std::size_t>(j) * width + i;
-            if (mask.empty() || mask[k] != 0) {
-                out[k] += at(gx0 + i, gy0 + j, below);
+            if (!mask.empty() && mask[k] == 0) {
+                continue;
+            }
+            const std::int64_t gx = gx0 + i, gy = gy0 + j;
+            double a[kMaxRoughnessOctaves];
+            amplitudes(static_cast<double>(gx) * toLeafLevel, static_cast<double>(gy) * toLeafLevel, count, a);
+            for (int o = 0; o < count; ++o) {
+                amplitude[o][filled] = static_cast<float>(a[o]);
+            }
+            index[filled] = k;
+            sx[filled] = gx;
+            sy[filled] = gy;
+            if (++filled == kBatch) {
+                flush();
             }
         }
+    }
+    if (filled > 0) {
+        flush();
     }
 }
 

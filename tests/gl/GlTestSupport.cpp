@@ -33,7 +33,9 @@ Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::fi
         synthesizer = std::move(made).value();
         auto recipe = makeDetailRecipe(settings, materials);
         TERRAIN_TRY(recipe);
-        options.leafDetailError = leafDetailErrorFunction(*synthesizer);
+        // As prep makes it: the errors include the roughness the viewer continues (detail_roughness).
+        recipe->roughness = true;
+        options.leafDetailError = leafDetailErrorFunction(*synthesizer, true);
         options.detailDisplacementRange = detailDisplacementRange(*synthesizer);
         options.detailRecipe = std::move(recipe).value();
     }
