@@ -19,6 +19,10 @@ Expected<std::unique_ptr<const DetailSynthesizer>> DetailSynthesizer::create(int
         return makeError("a material set holds at most ", kMaxDetailMaterials, " materials, not ",
                          settings.materials->materials().size());
     }
+    if (settings.roughness && settings.roughness->leafCells() != chunkSize - 1) {
+        return makeError("the roughness noise is for leaves of ", settings.roughness->leafCells() + 1,
+                         " samples a side, the synthesizer for ", chunkSize);
+    }
     auto subdivider = makeSubdivider(settings.scheme, chunkSize, settings.omega);
     TERRAIN_TRY(subdivider);
     return std::unique_ptr<const DetailSynthesizer>(

@@ -221,6 +221,17 @@ TEST(RoughnessNoiseTest, PrepMeasuresEachLeafAndFillsThePadding)
     EXPECT_EQ(grid.at(0, 0), fitRoughnessLaw(rms));
 }
 
+TEST(RoughnessNoiseTest, ASynthesizerRefusesNoiseMadeForAnotherChunkSize)
+{
+    auto noise = std::make_shared<const RoughnessNoise>(uniformGrid(2, {1.0, 0.5}), 64, 90.0, 2);
+    DetailSettings settings;
+    settings.roughness = noise;
+    auto wrong = DetailSynthesizer::create(17, settings);
+    ASSERT_FALSE(wrong.ok());
+    EXPECT_NE(wrong.error().message.find("roughness"), std::string::npos) << wrong.error().message;
+    EXPECT_TRUE(DetailSynthesizer::create(65, settings).ok());
+}
+
 /// A map of rough hills at 160 m (3 roughness octaves above the 40 m of grass), and the viewer's
 /// synthesizer for it with the roughness continued.
 class RoughSynthesisTest : public ::testing::Test {
