@@ -302,8 +302,8 @@ std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16
         }
         // The roughness octaves below the leaf (all of them: none is present at its samples), added: the
         // triangle inequality over the subdivision and materials' surface and the roughness noise.
-        const double extra = noise->bound(0, static_cast<int>(id.x), static_cast<int>(id.y), static_cast<int>(id.x),
-                                          static_cast<int>(id.y));
+        const double extra =
+            noise->nodeBound(where.spacing, where.gx0 + kBorder, where.gy0 + kBorder, synthesizer.chunkSize() - 1);
         return static_cast<float>(bound + extra);
     };
 }

@@ -124,18 +124,9 @@ void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightM
 
 double DetailSynthesizer::roughnessBound(const WindowPlacement& where) const
 {
-    if (!mSettings.roughness) {
-        return 0.0;
-    }
-    const RoughnessNoise& r = *mSettings.roughness;
-    const int below = r.levelsBelow(where.spacing);
-    // The node's samples in leaf-level samples, then in leaves.
-    const double scale = std::ldexp(1.0, -below);
-    const double u0 = static_cast<double>(where.gx0 + kBorder) * scale;
-    const double v0 = static_cast<double>(where.gy0 + kBorder) * scale;
-    const double extent = (chunkSize() - 1) * scale;
-    auto leaf = [&](double u) { return static_cast<int>(std::floor(u / r.leafCells())); };
-    return r.bound(std::max(below, 0), leaf(u0), leaf(v0), leaf(u0 + extent), leaf(v0 + extent));
+    return mSettings.roughness ? mSettings.roughness->nodeBound(where.spacing, where.gx0 + kBorder, where.gy0 + kBorder,
+                                                                chunkSize() - 1)
+                               : 0.0;
 }
 
 void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const DualHeightMap* parent, int px0, int py0,

@@ -268,6 +268,11 @@ double RoughnessNoise::bound(int from, int x0, int y0, int x1, int y1) const
             hi = std::max(hi, law.exponent);
         }
     }
+    return octaveSum(from, amplitude, lo, hi);
+}
+
+double RoughnessNoise::octaveSum(int from, double amplitude, double lo, double hi) const
+{
     if (amplitude == 0.0 || from >= octaves()) {
         return 0.0;
     }
@@ -285,6 +290,43 @@ double RoughnessNoise::bound(int from, int x0, int y0, int x1, int y1) const
         total += most;
     }
     return 1.01 * amplitude * total;
+}
+
+double RoughnessNoise::boundOver(int from, double u0, double v0, double u1, double v1) const
+{
+    TERRAIN_EXPECTS(u0 <= u1 && v0 <= v1, "the rectangle must not be empty");
+    // The rectangle's corners, and the leaf centres' lines (u or v = (i + 0.5) leafCells) inside it.
+    auto breaks = [&](double a, double b) {
+        std::vector<double> at = {a, b};
+        for (int i = 0; i < mGrid.leavesPerSide; ++i) {
+            const double c = (i + 0.5) * mLeafCells;
+            if (c > a && c < b) {
+                at.push_back(c);
+            }
+        }
+        return at;
+    };
+    const std::vector<double> us = breaks(u0, u1), vs = breaks(v0, v1);
+    double amplitude = 0.0, lo = kMaxRoughnessExponent, hi = kMinRoughnessExponent;
+    for (double u : us) {
+        for (double v : vs) {
+            const RoughnessLaw law = lawAt(u, v);
+            amplitude = std::max(amplitude, law.amplitude);
+            lo = std::min(lo, law.exponent);
+            hi = std::max(hi, law.exponent);
+        }
+    }
+    // lawAt rounds: a hair of margin on the amplitude.
+    return octaveSum(from, amplitude * (1.0 + 1e-9), std::max(lo - 1e-9, kMinRoughnessExponent),
+                     std::min(hi + 1e-9, kMaxRoughnessExponent));
+}
+
+double RoughnessNoise::nodeBound(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const
+{
+    const int below = levelsBelow(spacing);
+    const double scale = std::ldexp(1.0, -below);  // the node's samples in samples of the finest static level
+    const double u0 = static_cast<double>(firstX) * scale, v0 = static_cast<double>(firstY) * scale;
+    return boundOver(std::max(below, 0), u0, v0, u0 + cells * scale, v0 + cells * scale);
 }
 
 double RoughnessNoise::bound(int from) const

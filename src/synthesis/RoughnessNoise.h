@@ -80,8 +80,20 @@ public:
     double bound(int from, int x0, int y0, int x1, int y1) const;
     /// bound() over the whole map.
     double bound(int from) const;
+    /// The same over the rectangle [u0, u1] x [v0, v1] (samples of the finest static level, as lawAt), from
+    /// the law there: log A and H are bilinear between leaf centres, so their extremes over the rectangle lie
+    /// at its corners, where the centres' lines cross its edges, and at the centres inside it. At most
+    /// bound() of the leaves it touches.
+    double boundOver(int from, double u0, double v0, double u1, double v1) const;
+    /// What the octaves a node does not have yet can add anywhere below it: boundOver() from its level below
+    /// the leaves (0 above them) over its square. The node has sample spacing `spacing` and `cells` cells a
+    /// side from global sample (firstX, firstY) of its level.
+    double nodeBound(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const;
 
 private:
+    /// Sum over octaves k >= from of the largest c(H) 2^(-kH) for H in [lo, hi], times 1.01 (the curvature
+    /// between calibration entries) and `amplitude`.
+    double octaveSum(int from, double amplitude, double lo, double hi) const;
     /// a_k at the interpolated law: c(H) A 2^(-k H), for k = 0 .. count - 1, into amplitudes.
     void amplitudes(double u, double v, int count, double* out) const;
 

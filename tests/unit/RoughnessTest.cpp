@@ -221,6 +221,40 @@ TEST(RoughnessNoiseTest, PrepMeasuresEachLeafAndFillsThePadding)
     EXPECT_EQ(grid.at(0, 0), fitRoughnessLaw(rms));
 }
 
+TEST(RoughnessNoiseTest, ANodesBoundCoversItsNoiseAndIsAtMostItsLeaves)
+{
+    // Laws varying leaf to leaf: the bound over a node's own square covers the noise there, and is at most
+    // the bound of the leaves around it.
+    RoughnessGrid grid = uniformGrid(4, {2.0, 0.5});
+    for (std::size_t k = 0; k < grid.laws.size(); ++k) {
+        grid.laws[k] = {1.0 + 9.0 * static_cast<double>((k * 7) % 5) / 4.0, 0.2 + 0.2 * static_cast<double>(k % 5)};
+    }
+    const RoughnessNoise noise(grid, 16, 50.0, 6);
+    for (int below : {1, 2, 4}) {
+        for (const auto& [x, y] : {std::pair{0, 0}, std::pair{5, 3}, std::pair{13, 9}}) {
+            // Node (x, y) of its level: 16 cells from global sample (16 x, 16 y).
+            const double spacing = std::ldexp(50.0, -below);
+            const double bound = noise.nodeBound(spacing, 16 * x, 16 * y, 16);
+            const int leafX = (16 * x >> below) / 16, leafY = (16 * y >> below) / 16;
+            EXPECT_LE(bound, noise.bound(below, leafX, leafY, leafX, leafY) * (1.0 + 1e-8));
+            // All the octaves over its square cover the noise at the finest level's samples inside it.
+            double worst = 0.0;
+            const int finer = 6 - below;
+            for (int j = 0; j <= 16 << finer; ++j) {
+                for (int i = 0; i <= 16 << finer; ++i) {
+                    const std::int64_t gx = (16 * x << finer) + i, gy = (16 * y << finer) + j;
+                    worst = std::max(worst, std::abs(static_cast<double>(noise.at(gx, gy, 6))));
+                }
+            }
+            const double scale = std::ldexp(1.0, -below);
+            EXPECT_LE(worst,
+                      noise.boundOver(0, 16 * x * scale, 16 * y * scale, 16 * (x + 1) * scale, 16 * (y + 1) * scale))
+                << below << " " << x << "," << y;
+            EXPECT_GT(bound, 0.0);
+        }
+    }
+}
+
 TEST(RoughnessNoiseTest, ASynthesizerRefusesNoiseMadeForAnotherChunkSize)
 {
     auto noise = std::make_shared<const RoughnessNoise>(uniformGrid(2, {1.0, 0.5}), 64, 90.0, 2);
