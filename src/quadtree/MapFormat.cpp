@@ -98,15 +98,28 @@ void setDetailRecipe(MapHeader& header, std::optional<DetailRecipe> recipe)
     }
 }
 
+namespace {
+
+/// A block after the header (`what`: "detail recipe", "roughness block") has the size and CRC the header
+/// gives it.
+Status checkBlock(std::span<const std::uint8_t> bytes, std::uint32_t size, std::uint32_t crc, const std::string& name,
+                  const char* what)
+{
+    if (bytes.size() != size) {
+        return makeError(name, ": invalid ", what, ": ", bytes.size(), " bytes, the header says ", size);
+    }
+    if (crc32Of(bytes) != crc) {
+        return makeError(name, ": ", what, " checksum mismatch (file is corrupt)");
+    }
+    return {};
+}
+
+}  // namespace
+
 Status decodeDetailRecipe(std::span<const std::uint8_t> bytes, MapHeader& header, const std::string& name)
 {
     auto bad = [&](auto&&... what) { return makeError(name, ": invalid detail recipe: ", what...); };
-    if (bytes.size() != header.detailRecipeBytes) {
-        return bad(bytes.size(), " bytes, the header says ", header.detailRecipeBytes);
-    }
-    if (crc32Of(bytes) != header.detailRecipeCrc) {
-        return makeError(name, ": detail recipe checksum mismatch (file is corrupt)");
-    }
+    TERRAIN_TRY(checkBlock(bytes, header.detailRecipeBytes, header.detailRecipeCrc, name, "detail recipe"));
     ByteReader r(bytes);
     auto text = [&](std::size_t length) {
         std::string t;
@@ -183,12 +196,7 @@ void setRoughness(MapHeader& header, std::optional<RoughnessGrid> grid)
 Status decodeRoughness(std::span<const std::uint8_t> bytes, MapHeader& header, const std::string& name)
 {
     auto bad = [&](auto&&... what) { return makeError(name, ": invalid roughness block: ", what...); };
-    if (bytes.size() != header.roughnessBytes) {
-        return bad(bytes.size(), " bytes, the header says ", header.roughnessBytes);
-    }
-    if (crc32Of(bytes) != header.roughnessCrc) {
-        return makeError(name, ": roughness block checksum mismatch (file is corrupt)");
-    }
+    TERRAIN_TRY(checkBlock(bytes, header.roughnessBytes, header.roughnessCrc, name, "roughness block"));
     ByteReader r(bytes);
     RoughnessGrid grid;
     const auto side = r.get<std::uint32_t>();
