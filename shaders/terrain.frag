@@ -1,10 +1,14 @@
 #version 330 core
 // Chunk fragment program: the node's texture blended with its parent's by the morph factor (eq. 3.6,
 // textural morphing), lit by the sun from the morphed normal, hazed with distance. The node's data comes
-// from the vertex program (flat: the same for the whole node).
+// from the vertex program (flat: the same for the whole node). With NORMAL_MAP the normal comes from the
+// node's normal map (the surface below it, synthesis/NormalMap.h) blended with its parent's like the
+// colours; without, from the vertex program's morphed vertex normals.
 
 in vec3 vRelative;
+#ifndef NORMAL_MAP
 in vec3 vNormal;
+#endif
 in vec2 vNodeUv;
 in vec2 vLocal;
 in vec4 vMaterials;
@@ -15,6 +19,10 @@ flat in ivec2 vSlots;        // own, parent's layer of uColour
 uniform sampler2DArray uColour;   // per slot: the node's texture, corner texels centred on the corners (3.2.7)
 uniform float uTexels;            // texels per side of a node's texture
 uniform float uLayerTexels;       // texels per side of a layer (>= uTexels: DXT1 pads to a multiple of 4)
+#ifdef NORMAL_MAP
+uniform sampler2DArray uNormalMaps;  // per slot: unit normals (x, y) of the surface below, corner texels on corners
+uniform float uNormalTexels;         // texels per side of a normal map
+#endif
 uniform vec3 uSunDirection;       // unit, towards the sun
 uniform vec3 uSunColour;
 uniform vec3 uAmbient;
@@ -73,6 +81,16 @@ vec3 detailFactor()
 out vec4 fragColour;
 
 vec2 texelCentre(vec2 p) { return (p * (uTexels - 1.0) + 0.5) / uLayerTexels; }
+#ifdef NORMAL_MAP
+vec3 mappedNormal()
+{
+    vec2 own = texture(uNormalMaps, vec3((vNodeUv * (uNormalTexels - 1.0) + 0.5) / uNormalTexels, float(vSlots.x))).xy;
+    vec2 parent = texture(uNormalMaps, vec3(((vParentOffset + 0.5 * vNodeUv) * (uNormalTexels - 1.0) + 0.5) /
+                                                uNormalTexels, float(vSlots.y))).xy;
+    vec2 n = mix(parent, own, vMorph);
+    return vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
+}
+#endif
 
 void main()
 {
@@ -94,7 +112,11 @@ void main()
 #ifdef DETAIL
     albedo *= detailFactor();
 #endif
+#ifdef NORMAL_MAP
+    vec3 n = normalize(mappedNormal());
+#else
     vec3 n = normalize(vNormal);
+#endif
     vec3 light = uAmbient * (0.6 + 0.4 * n.z) + uSunColour * max(dot(n, uSunDirection), 0.0);
     vec3 colour = albedo * light;
     float haze = 1.0 - exp(-length(vRelative) / uHazeDistance);

@@ -22,13 +22,17 @@ uniform float uInverseCells;
 uniform float uHeightBase;
 uniform int uBlockQuads;
 uniform sampler2DArray uHeights;
+#ifndef NORMAL_MAP
 uniform sampler2DArray uParentNormals;
+#endif
 #ifdef DETAIL
 uniform sampler2DArray uWeights;
 #endif
 
 precise out vec3 vRelative;
-out vec3 vNormal;
+#ifndef NORMAL_MAP
+out vec3 vNormal;  // with normal maps the fragment program has its normals
+#endif
 out vec2 vNodeUv;
 out vec2 vLocal;
 out vec4 vMaterials;
@@ -40,7 +44,9 @@ precise gl_Position;
 int gSlot;
 float gLo, gRange;  // the slot's heights: lo + range * code / 65535 (render/NodeTextures.h, quantizeHeightsR16)
 float height(ivec2 p) { return gLo + gRange * texelFetch(uHeights, ivec3(p + 1, gSlot), 0).r; }
+#ifndef NORMAL_MAP
 vec2 parentNormalAt(ivec2 p) { return texelFetch(uParentNormals, ivec3(p / 2, gSlot), 0).xy; }
+#endif
 int snapToLattice(int c, int level) { int g = 1 << level; return (c + g / 2) / g * g; }
 
 void main()
@@ -83,12 +89,14 @@ void main()
     ivec2 d = p & 1;
     float own = height(p);
     float parent = 0.5 * (height(p - d) + height(p + d));
+#ifndef NORMAL_MAP
     vec3 ownN = vec3(-0.5 * vec2(height(p + ivec2(1, 0)) - height(p - ivec2(1, 0)),
                                  height(p + ivec2(0, 1)) - height(p - ivec2(0, 1))) / spacing, 1.0);
     vec2 ownNormal = ownN.xy / length(ownN);
     vec2 parentNormal = 0.5 * (parentNormalAt(p - d) + parentNormalAt(p + d));
     vec2 n = mix(parentNormal, ownNormal, morph);
     vNormal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
+#endif
     float z = uHeightBase + mix(parent, own, morph) - drop * eNode1.x;
     vRelative = vec3(eNode0.xy + vec2(p) * spacing, z);
     vNodeUv = vec2(p) * uInverseCells;

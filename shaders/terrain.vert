@@ -25,13 +25,17 @@ uniform mat4 uViewProjection;  // camera-relative world -> clip (rotation and pr
 uniform float uInverseCells;   // 1 / (N - 1)
 uniform float uHeightBase;     // the map's height offset minus the camera's height, metres
 uniform sampler2DArray uHeights;  // per slot: the (N + 2)^2 surface window, 16-bit codes over the node's range
+#ifndef NORMAL_MAP
 uniform sampler2DArray uParentNormals;  // per slot: ((N + 1) / 2)^2 unit normals (x, y) of the parent
+#endif
 #ifdef DETAIL
 uniform sampler2DArray uWeights;  // per slot: N x N material weights (3.4.5)
 #endif
 
 out vec3 vRelative;   // camera-relative position, metres
-out vec3 vNormal;
+#ifndef NORMAL_MAP
+out vec3 vNormal;  // with normal maps the fragment program has its normals
+#endif
 out vec2 vNodeUv;     // position in the node's square, 0 .. 1
 out vec2 vLocal;      // metres from the node's south-west corner
 out vec4 vMaterials;
@@ -45,8 +49,10 @@ flat out vec4 vLayerOrigin[(LAYER_COUNT + 1) / 2];
 int gSlot;
 float gLo, gRange;  // the slot's heights: lo + range * code / 65535 (render/NodeTextures.h, quantizeHeightsR16)
 float height(ivec2 p) { return gLo + gRange * texelFetch(uHeights, ivec3(p + 1, gSlot), 0).r; }
+#ifndef NORMAL_MAP
 // The parent's unit normal (x, y) at node sample p (both even).
 vec2 parentNormalAt(ivec2 p) { return texelFetch(uParentNormals, ivec3(p / 2, gSlot), 0).xy; }
+#endif
 
 void main()
 {
@@ -64,6 +70,7 @@ void main()
     ivec2 d = aGrid & 1;
     float own = height(aGrid);
     float parent = 0.5 * (height(aGrid - d) + height(aGrid + d));
+#ifndef NORMAL_MAP
     vec3 ownN = vec3(-0.5 * vec2(height(aGrid + ivec2(1, 0)) - height(aGrid - ivec2(1, 0)),
                                  height(aGrid + ivec2(0, 1)) - height(aGrid - ivec2(0, 1))) / spacing, 1.0);
     vec2 ownNormal = ownN.xy / length(ownN);
@@ -71,6 +78,7 @@ void main()
 
     vec2 n = mix(parentNormal, ownNormal, morph);
     vNormal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
+#endif
     float z = uHeightBase + mix(parent, own, morph) - float(aSkirt) * t1.x;
     vRelative = vec3(t0.xy + vec2(aGrid) * spacing, z);
     vNodeUv = vec2(aGrid) * uInverseCells;

@@ -17,6 +17,7 @@
 #include "render/GlWindow.h"
 #include "render/TerrainRenderer.h"
 #include "render/TextOverlay.h"
+#include "synthesis/NormalMap.h"
 
 #include <GLFW/glfw3.h>
 #include <glm/geometric.hpp>
@@ -214,6 +215,15 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
     }
     scene->map = std::move(map).value();
     const MapHeader& header = scene->header();
+    if (o.dynamicTextureSize > 0 && normalMapCells(o.dynamicTextureSize) > (static_cast<int>(header.chunkSize) - 1)
+                                                                               << kMaxNormalMapDepth) {
+        return fail("dynamic_texture_size " + std::to_string(o.dynamicTextureSize) + " is more than " +
+                    std::to_string(1 << kMaxNormalMapDepth) + "x the " + std::to_string(header.chunkSize - 1) +
+                    " cells of " + scene->map->name() +
+                    "'s nodes: normal maps sample the surface at most that many levels below a node, and more "
+                    "texels would only interpolate it (at most " +
+                    std::to_string((header.chunkSize - 1) << kMaxNormalMapDepth) + ")");
+    }
 
     // Detail synthesis (3.4): the synthesizer dynamic nodes are made with, null when it is off.
     std::vector<std::string> materialWarnings;
@@ -272,7 +282,9 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
     scene->blockPixels = scene->tessellation ? o.lodError * o.tessellationShare : 0.0;
     auto renderer = TerrainRenderer::create(
         shaders, header, o.vertexCacheSize,
-        {static_cast<std::size_t>(o.quadCacheSize), o.nodeTextureCompression, scene->tessellation}, materials);
+        {static_cast<std::size_t>(o.quadCacheSize), o.nodeTextureCompression, scene->tessellation,
+         o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0},
+        materials);
     if (!renderer.ok()) {
         return fail(renderer.error().message);
     }
@@ -282,7 +294,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
         log("node pools: " + std::to_string(scene->renderer->slots()) + " slots of " + std::to_string(b.total()) +
             " bytes (heights " + std::to_string(b.heights) + ", parent normals " + std::to_string(b.normals) +
             ", colour " + std::to_string(b.colour) + ", material weights " + std::to_string(b.weights) +
-            ", constants " + std::to_string(b.constants) + ")");
+            ", normal map " + std::to_string(b.normalMap) + ", constants " + std::to_string(b.constants) + ")");
     }
     auto overlay = TextOverlay::create(shaders);
     if (!overlay.ok()) {
@@ -291,8 +303,8 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
     scene->overlay = std::move(overlay).value();
 
     scene->source = std::make_unique<TerrainNodeSource>(
-        *scene->map,
-        DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing, scene->tessellation ? kTessellationBlockQuads : 0});
+        *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing,
+                                  scene->tessellation ? kTessellationBlockQuads : 0, o.dynamicTextureSize});
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);

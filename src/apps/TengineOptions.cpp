@@ -236,11 +236,6 @@ std::optional<std::vector<double>> parseNumberList(std::string_view text, std::s
     return values;
 }
 
-bool isPowerOfTwo(int n)
-{
-    return n > 0 && (n & (n - 1)) == 0;
-}
-
 std::vector<OptionSpec> makeOptionTable()
 {
     using O = TengineOptions;
@@ -259,13 +254,16 @@ std::vector<OptionSpec> makeOptionTable()
                            "No node is refined below this sample spacing; limits how far detail synthesis goes.",
                            &O::lodMinimumSpacing, atLeast(0), "metres"));
     t.push_back({"dynamic_texture_size", kGroupMap,
-                 "The paper's width and height of the texture that diffuse lighting is burnt into for each node. "
-                 "Accepted and checked, but not used yet: node textures have the map's texture size (prep "
-                 "--texture-size), and dynamic nodes upsample their parent's.",
-                 "a power of two or a power of two plus one, in [16, 4096] (texels)",
+                 "The paper's width and height of the texture that diffuse lighting is burnt into for each node: "
+                 "each node gets a normal map of this many texels a side (one more for a power of two, so "
+                 "corner texels sit on the corners), made on the worker threads from the surface one level "
+                 "below the node (up to 2x the node's samples a side) or two (up to 4x), as synthesis makes those "
+                 "levels, so the lighting shows detail finer than the triangles. Each level below costs about 4x "
+                 "the synthesis of a node (DynamicNodeBench). 0: no normal maps, lit by the vertex normals.",
+                 "0, or a power of two or a power of two plus one, in [16, 4096] (texels)",
                  [](std::string_view value, const SetContext&, O& o) {
-                     auto v = parseInt(value, 16, 4096);
-                     if (!v || !(isPowerOfTwo(*v) || isPowerOfTwoPlusOne(*v))) {
+                     auto v = parseInt(value, 0, 4096);
+                     if (!v || !(*v == 0 || (*v >= 16 && (isPowerOfTwo(*v) || isPowerOfTwoPlusOne(*v))))) {
                          return false;
                      }
                      o.dynamicTextureSize = *v;

@@ -29,12 +29,12 @@ namespace terrain {
 /// and in configs/tengine.cfg.
 struct TengineOptions {
     // ---- Map and level of detail ----
-    std::filesystem::path mapFile;                 ///< map_file; the command line's map argument wins
-    double lodError = 2.0;                         ///< lod_error: tau, pixels, > 0 (eq. 3.3)
-    double lodMinimumSpacing = 0.01;               ///< lod_minimum_spacing: metres, >= 0; no finer detail
-    int dynamicTextureSize = 128;                  ///< dynamic_texture_size: texels, 2^k or 2^k+1 in [16, 4096]
-    int vertexCacheSize = 16;                      ///< vertex_cache_size: entries, [4, 64] (3.2.10)
-    int quadCacheSize = 1024;                      ///< quad_cache_size: nodes, >= 5
+    std::filesystem::path mapFile;    ///< map_file; the command line's map argument wins
+    double lodError = 2.0;            ///< lod_error: tau, pixels, > 0 (eq. 3.3)
+    double lodMinimumSpacing = 0.01;  ///< lod_minimum_spacing: metres, >= 0; no finer detail
+    int dynamicTextureSize = 128;     ///< dynamic_texture_size: normal map texels, 0 or 2^k(+1) in [16, 4096]
+    int vertexCacheSize = 16;         ///< vertex_cache_size: entries, [4, 64] (3.2.10)
+    int quadCacheSize = 1024;         ///< quad_cache_size: nodes, >= 5
     ReaderKind reader = ReaderKind::MemoryMapped;  ///< reader: stream | memory_mapped
     int workerThreads = 1;                         ///< worker_threads: >= 0; 0 loads on the render thread
     int requestQueueSize = 8;                      ///< request_queue_size: node groups waiting, >= 1

@@ -29,6 +29,9 @@ struct NodeData {
     DualHeightMap heights;                      ///< base + displacement, (N + 4)^2, metres above the map's offset
     std::vector<std::uint8_t> materialWeights;  ///< N x N x 4 material weights (DetailSynthesizer), or empty
     std::vector<std::uint8_t> texture;          ///< T x T RGB, rows south to north
+    /// The normal map of the surface below the node (synthesis/NormalMap.h): normalMapTexels^2 pairs (x, y)
+    /// as GL_RG8_SNORM, rows south to north; empty when normal maps are off (DetailPolicy::normalMapSize 0).
+    std::vector<std::int8_t> normalMap;
     /// The tessellation render mode's block errors of the drawn surface (base plus displacement), made with
     /// the node when that mode is on (DetailPolicy::tessellationBlockQuads); null otherwise.
     std::shared_ptr<const TessellationErrors> tessellation;

@@ -2,6 +2,7 @@
 #include "lod/TerrainNodeSource.h"
 
 #include "core/Check.h"
+#include "synthesis/NormalMap.h"
 
 #include <algorithm>
 #include <cmath>
@@ -26,6 +27,23 @@ TerrainNodeSource::TerrainNodeSource(const MapFile& map, DetailPolicy policy) : 
     if (policy.synthesizer) {
         mErrorModel = std::make_unique<const DetailErrorModel>(*policy.synthesizer, map.header().spacingAt(0));
     }
+    TERRAIN_EXPECTS(
+        policy.normalMapSize == 0 || isPowerOfTwo(policy.normalMapSize) || isPowerOfTwoPlusOne(policy.normalMapSize),
+        "the normal map size must be 0, 2^k or 2^k + 1");
+    if (policy.normalMapSize > 0 && !policy.synthesizer) {
+        auto subdivision = DetailSynthesizer::create(static_cast<int>(map.header().chunkSize), DetailSettings{});
+        TERRAIN_ASSERT(subdivision.ok());
+        mSubdivisionOnly = std::move(subdivision).value();
+    }
+}
+
+void TerrainNodeSource::addNormalMap(NodeData& data, const WindowPlacement& where) const
+{
+    if (mPolicy.normalMapSize <= 0) {
+        return;
+    }
+    const DetailSynthesizer& below = mPolicy.synthesizer ? *mPolicy.synthesizer : *mSubdivisionOnly;
+    data.normalMap = makeNormalMap(below, data.heights, where, mPolicy.normalMapSize);
 }
 
 WindowPlacement TerrainNodeSource::placement(const NodeId& id) const
@@ -75,6 +93,7 @@ Expected<NodePtr> TerrainNodeSource::loadStatic(const NodeId& id, const NodeData
     }
     data->texture = std::move(node->texture);
     addTessellationErrors(*data);
+    addNormalMap(*data, placement(id));
     return NodePtr(std::move(data));
 }
 
@@ -132,6 +151,7 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     data->zMin = std::clamp(h.heightOffset + lo - mDisplacementBound, parent.zMin, parent.zMax);
     data->zMax = std::clamp(h.heightOffset + hi + mDisplacementBound, data->zMin, parent.zMax);
     addTessellationErrors(*data);
+    addNormalMap(*data, where);
     return data;
 }
 

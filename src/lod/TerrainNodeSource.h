@@ -24,6 +24,10 @@ struct DetailPolicy {
     /// > 0: every node gets its tessellation errors (NodeData::tessellation) for blocks of this many quads a
     /// side (render_mode = tessellation), made on the loading thread with the node.
     int tessellationBlockQuads = 0;
+    /// dynamic_texture_size: > 0, every node gets a normal map of the surface below it (NodeData::normalMap,
+    /// synthesis/NormalMap.h) of normalMapTexels(normalMapSize) texels a side, made on the loading thread
+    /// with the node; 0: none (the renderer lights by vertex normals).
+    int normalMapSize = 0;
 };
 
 class TerrainNodeSource final : public NodeSource {
@@ -48,11 +52,14 @@ private:
     NodePtr synthesize(const NodeData& parent, int quadrant) const;
     bool childrenAllowed(const NodeId& id, bool hasStaticChildren) const;
     void addTessellationErrors(NodeData& data) const;
+    void addNormalMap(NodeData& data, const WindowPlacement& where) const;
 
     const MapFile& mMap;
     DetailPolicy mPolicy;
     double mDisplacementBound = 0.0;
     std::unique_ptr<const DetailErrorModel> mErrorModel;
+    /// Makes the levels below for the normal maps without detail synthesis: subdivision alone.
+    std::unique_ptr<const DetailSynthesizer> mSubdivisionOnly;
 };
 
 }  // namespace terrain

@@ -21,6 +21,12 @@ inline constexpr int kMaxChunkSize = 1025;
 /// The largest node texture size T a map may have.
 inline constexpr int kMaxTextureSize = 4097;
 
+/// True when `n` is 2^k with k >= 0.
+constexpr bool isPowerOfTwo(std::int64_t n)
+{
+    return n > 0 && (n & (n - 1)) == 0;
+}
+
 /// True when `n` is 2^k + 1 with k >= 1 (3, 5, 9, 17, ...): the rule for chunk and texture sizes.
 constexpr bool isPowerOfTwoPlusOne(std::int64_t n)
 {

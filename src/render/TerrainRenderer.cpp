@@ -122,6 +122,11 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     if (padded) {
         defines.emplace_back("CLIP_TO_VALID");
     }
+    TERRAIN_EXPECTS(pools.normalMapTexels == 0 || pools.normalMapTexels >= 2, "a normal map has >= 2 texels a side");
+    r->mNormalTexels = pools.normalMapTexels;
+    if (r->mNormalTexels > 0) {
+        defines.emplace_back("NORMAL_MAP");
+    }
     if (!layers.empty()) {
         defines.emplace_back("DETAIL");
         defines.emplace_back("LAYER_COUNT " + std::to_string(layers.size()));
@@ -161,6 +166,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         glUniform1i(program.uniform("uWeights"), 3);
         glUniform1i(program.uniform("uParentNormals"), 4);
         glUniform1i(program.uniform("uLevels"), 5);
+        glUniform1i(program.uniform("uNormalMaps"), 6);
         glUniform1i(program.uniform("uBlocks"), r->mBlocks);
         glUniform1i(program.uniform("uBlockQuads"), kTessellationBlockQuads);
     }
@@ -288,8 +294,11 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     r->mHeights = createLayers(GL_R16, w, layersOf, GL_RED, GL_UNSIGNED_SHORT, GL_NEAREST);
     r->mSlotBytes.heights = static_cast<std::size_t>(w) * w * sizeof(std::uint16_t);
     r->mSlotHeights.assign(slots, {0.0f, 0.0f});
-    r->mParentNormals = createLayers(GL_RG8_SNORM, m, layersOf, GL_RG, GL_BYTE, GL_NEAREST);
-    r->mSlotBytes.normals = static_cast<std::size_t>(m) * m * 2;
+    if (r->mNormalTexels == 0) {
+        // The vertex normals' parent part; with normal maps the fragment program lights by those instead.
+        r->mParentNormals = createLayers(GL_RG8_SNORM, m, layersOf, GL_RG, GL_BYTE, GL_NEAREST);
+        r->mSlotBytes.normals = static_cast<std::size_t>(m) * m * 2;
+    }
     r->mDxt1 = pools.compressColour && epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
     r->mColourLayerSize = r->mDxt1 ? dxt1LayerSize(t) : t;
     const auto colourTexels = static_cast<std::size_t>(r->mColourLayerSize) * r->mColourLayerSize;
@@ -311,6 +320,13 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     if (!layers.empty()) {
         r->mWeights = createLayers(GL_RGBA4, n, layersOf, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4, GL_NEAREST);
         r->mSlotBytes.weights = static_cast<std::size_t>(n) * n * sizeof(std::uint16_t);
+    }
+    if (r->mNormalTexels > 0) {
+        const int texels = r->mNormalTexels;
+        r->mNormalMaps = createLayers(GL_RG8_SNORM, texels, layersOf, GL_RG, GL_BYTE, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        r->mSlotBytes.normalMap = static_cast<std::size_t>(texels) * texels * 2;
     }
     r->mSlotBytes.constants = static_cast<std::size_t>(r->mNodeTexels) * 4 * sizeof(float);
     r->mSlotData.resize(slots);
@@ -368,9 +384,11 @@ int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats)
     glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
     glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, n + 2, n + 2, 1, GL_RED, GL_UNSIGNED_SHORT,
                     heights.codes.data());
-    const std::vector<std::int8_t> normals = parentNormalsRg8(surface, n, node->spacing);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, mParentNormals.name());
-    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, m, m, 1, GL_RG, GL_BYTE, normals.data());
+    if (mParentNormals) {
+        const std::vector<std::int8_t> normals = parentNormalsRg8(surface, n, node->spacing);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mParentNormals.name());
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, m, m, 1, GL_RG, GL_BYTE, normals.data());
+    }
     glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
     if (mDxt1) {
         const std::vector<std::uint8_t> blocks = compressDxt1(node->texture, t);
@@ -387,6 +405,13 @@ int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats)
         glBindTexture(GL_TEXTURE_2D_ARRAY, mWeights.name());
         glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, n, n, 1, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4,
                         weights.data());
+    }
+    if (mNormalMaps) {
+        TERRAIN_EXPECTS(node->normalMap.size() == static_cast<std::size_t>(mNormalTexels) * mNormalTexels * 2,
+                        "with normal maps every node needs one of the pools' size (DetailPolicy::normalMapSize)");
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mNormalMaps.name());
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, mNormalTexels, mNormalTexels, 1, GL_RG, GL_BYTE,
+                        node->normalMap.data());
     }
     ++stats.uploads;
     return slot;
@@ -537,6 +562,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         glUniform1f(program.uniform("uInverseCells"), 1.0f / static_cast<float>(mHeader.chunkSize - 1));
         glUniform1f(program.uniform("uTexels"), static_cast<float>(mHeader.textureSize));
         glUniform1f(program.uniform("uLayerTexels"), static_cast<float>(mColourLayerSize));
+        glUniform1f(program.uniform("uNormalTexels"), static_cast<float>(mNormalTexels));
         const glm::vec3 sun = glm::normalize(style.sunDirection);
         glUniform3fv(program.uniform("uSunDirection"), 1, glm::value_ptr(sun));
         glUniform3fv(program.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
@@ -572,6 +598,10 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     if (mParentNormals) {
         glActiveTexture(GL_TEXTURE4);
         glBindTexture(GL_TEXTURE_2D_ARRAY, mParentNormals.name());
+    }
+    if (mNormalMaps) {
+        glActiveTexture(GL_TEXTURE6);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mNormalMaps.name());
     }
     glActiveTexture(GL_TEXTURE0);
 

@@ -57,8 +57,9 @@ struct SlotBytes {
     std::size_t normals = 0;    ///< the parent's normals at its samples, 2 bytes each
     std::size_t colour = 0;     ///< the colour texture (RGB8, or DXT1 with node_texture_compression)
     std::size_t weights = 0;    ///< material weights (RGBA4), 0 without materials
+    std::size_t normalMap = 0;  ///< the normal map of the surface below (RG8), 0 without normal maps
     std::size_t constants = 0;  ///< per drawn node, in the frame's constants buffer
-    std::size_t total() const { return heights + normals + colour + weights + constants; }
+    std::size_t total() const { return heights + normals + colour + weights + normalMap + constants; }
 };
 
 /// The node pools' size and formats.
@@ -69,6 +70,10 @@ struct PoolOptions {
     /// chooseBlockLevels picks (lod/TessellationLevels.h); needs GL 4.0 (tessellationSupported()) and nodes
     /// with tessellation errors.
     bool tessellation = false;
+    /// > 0: nodes carry normal maps of this many texels a side (NodeData::normalMap, synthesis/NormalMap.h;
+    /// dynamic_texture_size), and the fragment program lights by them, morphed between the node's and its
+    /// parent's like the colours; 0: lit by the vertex normals.
+    int normalMapTexels = 0;
 };
 
 class TerrainRenderer {
@@ -142,6 +147,8 @@ private:
     gl::Texture mParentNormals;                      ///< GL_RG8_SNORM, ((N + 1) / 2)^2 per layer
     gl::Texture mColour;                             ///< DXT1 (or GL_RGB8), mColourLayerSize^2 per layer
     gl::Texture mWeights;                            ///< GL_RGBA4, N^2 per layer; none without materials
+    gl::Texture mNormalMaps;                         ///< GL_RG8_SNORM, mNormalTexels^2 per layer; or none
+    int mNormalTexels = 0;
     bool mDxt1 = false;
     int mColourLayerSize = 0;
     SlotBytes mSlotBytes;

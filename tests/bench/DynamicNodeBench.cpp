@@ -7,6 +7,7 @@
 #include "lod/BlockErrors.h"
 #include "synthesis/DetailErrorModel.h"
 #include "synthesis/DetailSynthesizer.h"
+#include "synthesis/NormalMap.h"
 
 #include <benchmark/benchmark.h>
 
@@ -135,6 +136,34 @@ BENCHMARK_CAPTURE(dynamicNode, grass_and_rock_with_error_bound, shippedMaterials
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
 BENCHMARK_CAPTURE(dynamicNode, grass_and_rock_roughness_with_error_bound, shippedMaterials(), true, true)
+    ->Unit(benchmark::kMicrosecond)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+
+/// What a node's normal map adds to it (dynamic_texture_size = state.range(0), synthesis/NormalMap.h), apart
+/// from the node: a dynamic child of the real leaf as the viewer makes it (grass, rock, roughness), its map
+/// made from the surface 0 (64 texels), 1 (128) or 2 (256) levels below it.
+void normalMap(benchmark::State& state)
+{
+    auto synthesizer = DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, shippedMaterials(), roughness()}).value();
+    const Leaf leaf = makeLeaf(*synthesizer);
+    WindowPlacement where = leaf.where;
+    where.spacing *= 0.5;
+    where.gx0 = 2 * (leaf.where.gx0 + kBorder) - kBorder;
+    where.gy0 = 2 * (leaf.where.gy0 + kBorder) - kBorder;
+    const DualHeightMap child = synthesizer->synthesizeChild(leaf.map, 0, where);
+    const int size = static_cast<int>(state.range(0));
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(makeNormalMap(*synthesizer, child, where, size).data());
+    }
+    state.counters["nodes/s"] =
+        benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+BENCHMARK(normalMap)
+    ->Arg(64)
+    ->Arg(128)
+    ->Arg(256)
     ->Unit(benchmark::kMicrosecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);

@@ -363,6 +363,16 @@ TEST_F(TengineGLTest, MissingMapIsAClearError)
     EXPECT_NE(run.output.find("/nonexistent/terrain.map"), std::string::npos) << run.output;
 }
 
+TEST_F(TengineGLTest, NormalMapsFinerThanTheSurfaceBelowAreAClearError)
+{
+    // 65-sample nodes: normal maps sample at most 2 levels below, 256 cells; 512 is refused by name.
+    auto run = video(std::filesystem::path(*sDir / "unused"), {"dynamic_texture_size=512"});
+    EXPECT_NE(run.exitCode, 0);
+    EXPECT_NE(run.output.find("dynamic_texture_size 512 is more than 4x the 64 cells of"), std::string::npos)
+        << run.output;
+    EXPECT_NE(run.output.find("(at most 256)"), std::string::npos) << run.output;
+}
+
 TEST_F(TengineGLTest, BrokenShaderIsAClearError)
 {
     // Each render mode's own stage broken in turn.
@@ -557,6 +567,83 @@ TEST_F(TengineGLTest, DetailShowsUpCloseAndRunsRepeatIdentically)
     RecordProperty("difference_subdivision", std::to_string(subdivisionEffect));
     EXPECT_GT(materialEffect, 2.0) << "detail textures and displacement must show near the camera";
     EXPECT_GT(subdivisionEffect, 0.2) << "subdivision reshapes the near ground";
+}
+
+TEST_F(TengineGLTest, NormalMapsShowShadingDetailFinerThanTheTriangles)
+{
+    // dynamic_texture_size (issue 14): the same low view lit by normal maps of 32 texels a node (coarser than
+    // its 65 samples) and of 256 (the surface two levels below it). The larger maps add shading detail to the
+    // near ground: more luminance variation between neighbouring pixels. No holes either way, and the same
+    // frames run to run.
+    auto render = [&](const std::filesystem::path& frames, int size) {
+        auto run =
+            video(frames,
+                  lowDetailFlight({"video_frames=1", "draw_user_interface=false", "draw_sky=false", "clear_color=1,0,1",
+                                   "haze_distance=0", "camera_z_far=150000", "worker_threads=2", "window_width=480",
+                                   "window_height=270", "dynamic_texture_size=" + std::to_string(size)}),
+                  detailMap());
+        EXPECT_EQ(run.exitCode, 0) << run.output;
+        return frame(frames, 0);
+    };
+    test::ScratchDir coarse, fine, again;
+    const Image small = render(coarse.path(), 32);
+    const Image large = render(fine.path(), 256);
+    const Image repeat = render(again.path(), 256);
+    ASSERT_EQ(small.width, 480);
+    ASSERT_EQ(large.width, 480);
+    EXPECT_TRUE(large.pixels == repeat.pixels) << "normal maps must not depend on thread timing";
+    // Shading detail: the mean absolute difference of luminance between horizontal and vertical neighbours
+    // over the terrain (the clear colour left out).
+    auto detail = [](const Image& image) {
+        auto luminance = [&](int x, int y) {
+            const std::uint8_t* p = image.pixel(x, y);
+            return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+        };
+        double sum = 0.0;
+        std::size_t count = 0;
+        for (int y = 0; y + 1 < image.height; ++y) {
+            for (int x = 0; x + 1 < image.width; ++x) {
+                if (isHole(image.pixel(x, y)) || isHole(image.pixel(x + 1, y)) || isHole(image.pixel(x, y + 1))) {
+                    continue;
+                }
+                sum +=
+                    std::abs(luminance(x + 1, y) - luminance(x, y)) + std::abs(luminance(x, y + 1) - luminance(x, y));
+                count += 2;
+            }
+        }
+        return sum / static_cast<double>(count);
+    };
+    const double coarseDetail = detail(small), fineDetail = detail(large);
+    RecordProperty("shading_detail_32", std::to_string(coarseDetail));
+    RecordProperty("shading_detail_256", std::to_string(fineDetail));
+    std::printf("shading detail (mean |luminance step| of the terrain): 32 texels %.3f, 256 texels %.3f\n",
+                coarseDetail, fineDetail);
+    EXPECT_GT(fineDetail, 1.25 * coarseDetail);  // measured 1.62x
+    auto mapFile = MapFile::open(detailMap(), ReaderKind::Stream);
+    ASSERT_TRUE(mapFile.ok());
+    const MapHeader& header = (*mapFile)->header();
+    const double zMin = header.heightOf((*mapFile)->directory().front().minCode) - 10.0;
+    auto path = CameraPath::load(*sDir / "low.path");
+    ASSERT_TRUE(path.ok());
+    for (const Image* image : {&small, &large}) {
+        Camera camera;
+        camera.viewportWidth = image->width;
+        camera.viewportHeight = image->height;
+        camera.verticalFov = 60.0 * std::numbers::pi / 180;
+        camera.farPlane = 150000;
+        path->evaluate(0.0).applyTo(camera);
+        int holes = 0, checked = 0;
+        for (int y = 0; y < image->height; ++y) {
+            for (int x = 0; x < image->width; ++x) {
+                if (mustHitTerrain(camera, header, zMin, x, y)) {
+                    ++checked;
+                    holes += isHole(image->pixel(x, y)) ? 1 : 0;
+                }
+            }
+        }
+        EXPECT_GT(checked, image->width * image->height / 2);
+        EXPECT_EQ(holes, 0);
+    }
 }
 
 }  // namespace
