@@ -19,8 +19,14 @@ Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::fi
 {
     auto field = readHeightField(demoDataPath("trinidad_co_srtm3_crop_1025.png"));
     TERRAIN_TRY(field);
+    return buildDetailMap(std::move(field).value(), 90.0, path, materials);
+}
+
+Status buildDetailMap(HeightField field, double spacing, const std::filesystem::path& path,
+                      const std::vector<std::filesystem::path>& materials)
+{
     BuildOptions options;
-    options.spacing = 90.0;
+    options.spacing = spacing;
     options.threads = 2;
     std::unique_ptr<const DetailSynthesizer> synthesizer;
     if (!materials.empty()) {
@@ -39,7 +45,7 @@ Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::fi
         options.detailDisplacementRange = detailDisplacementRange(*synthesizer);
         options.detailRecipe = std::move(recipe).value();
     }
-    auto built = buildMap(std::move(field.value()), options, path);
+    auto built = buildMap(std::move(field), options, path);
     TERRAIN_TRY(built);
     return {};
 }

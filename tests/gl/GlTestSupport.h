@@ -4,6 +4,7 @@
 
 #include "core/Camera.h"
 #include "core/Expected.h"
+#include "heightfield/HeightField.h"
 #include "quadtree/MapFormat.h"
 
 #include <cstdint>
@@ -33,6 +34,9 @@ bool mustHitTerrain(const Camera& camera, const MapHeader& header, double zMin, 
 /// with `materials` (.mat files, the first the ground), the leaves' detail errors for them and the recipe
 /// saying so; without, no detail errors and no recipe. The shared fixture of the GL tests.
 Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::filesystem::path>& materials = {});
+/// The same for any height field `field` with `spacing` metres between its samples.
+Status buildDetailMap(HeightField field, double spacing, const std::filesystem::path& path,
+                      const std::vector<std::filesystem::path>& materials);
 
 /// Rows of a video's frames.csv as maps from column name to value.
 std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& file);
