@@ -40,11 +40,15 @@ const float kDetailContrast = 0.6;
 // LAYER_COUNT (1..kMaxLayers) is defined by the renderer: a loop of constant length, unrolled. With
 // DETAIL_TINT_ONLY (nodes beyond every layer's fade) the layers are left out and only the tint applies.
 #ifndef DETAIL_TINT_ONLY
-flat in vec4 vLayerOrigin[(LAYER_COUNT + 1) / 2];  // the node's corner in repeats, fractional part, 2 a vec4
+flat in vec4 vLayerOrigin[LAYER_COUNT];  // the node's corner in repeats (xy) and in turned repeats (zw), fractional
 #endif
 uniform sampler2DArray uDetail;
 uniform vec4 uLayerMaterialMask[kMaxLayers];  // which material a layer belongs to, as a one-hot vec4
 uniform float uLayerScale[kMaxLayers];   // 1 / metres per repeat
+// Each layer is sampled twice, the second time turned and scaled by this (TerrainRenderer.cpp, kDetailTurn:
+// an irrational angle and scale), and the two averaged: the sum of two lattices that share no period has none,
+// so the tile does not show as a regular pattern up close.
+uniform mat2 uDetailTurn;
 uniform vec4 uMaterialTintColumns[3];    // r, g, b of the 4 materials' tints, brightness-preserving and applied at
                                          // kTintStrength (TerrainRenderer.cpp): the map's colours stay the base
 
@@ -63,8 +67,10 @@ vec3 detailFactor()
         // rather than replacing it. Faded out between 10 and 40 repeats away: farther, the repetition of
         // the tile would show as a regular pattern, and the node's own texture carries what matters there.
         float scale = uLayerScale[k];
-        vec2 origin = (k & 1) == 0 ? vLayerOrigin[k / 2].xy : vLayerOrigin[k / 2].zw;
-        float g = 2.0 * texture(uDetail, vec3(origin + vLocal * scale, float(k))).r - 1.0;
+        vec2 p = vLocal * scale;
+        // The mean of the two samples, its contrast restored (sqrt 2: they are independent).
+        float g = 1.41421356 * (texture(uDetail, vec3(vLayerOrigin[k].xy + p, float(k))).r +
+                                texture(uDetail, vec3(vLayerOrigin[k].zw + uDetailTurn * p, float(k))).r - 1.0);
         float amount = kDetailContrast * (1.0 - smoothstep(10.0, 40.0, distance * scale));
         layers *= vec4(1.0) + uLayerMaterialMask[k] * (amount * g);
     }

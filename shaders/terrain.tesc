@@ -17,7 +17,11 @@ in vec4 cLayer0[];
 in vec4 cLayer1[];
 in vec4 cLayer2[];
 in vec4 cLayer3[];
-patch out vec4 eLayerOrigin[4];
+in vec4 cLayer4[];
+in vec4 cLayer5[];
+in vec4 cLayer6[];
+in vec4 cLayer7[];
+patch out vec4 eLayerOrigin[8];
 #endif
 
 uniform usamplerBuffer uLevels;  // per drawn node, B^2 block codes (BlockLevels::code)
@@ -57,6 +61,10 @@ void main()
     eLayerOrigin[1] = cLayer1[0];
     eLayerOrigin[2] = cLayer2[0];
     eLayerOrigin[3] = cLayer3[0];
+    eLayerOrigin[4] = cLayer4[0];
+    eLayerOrigin[5] = cLayer5[0];
+    eLayerOrigin[6] = cLayer6[0];
+    eLayerOrigin[7] = cLayer7[0];
 #endif
     float f = float(uBlockQuads >> t);
     if ((code & 1024) != 0) {

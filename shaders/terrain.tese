@@ -13,8 +13,8 @@ patch in vec4 eNode2;
 patch in ivec4 eBlock;  // bx, by, kind (0 surface, 1 + side: skirt of the south, east, north, west border), t
 patch in ivec4 eSnap;   // lattices of the south, east, north, west sides
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
-patch in vec4 eLayerOrigin[4];
-flat out vec4 vLayerOrigin[(LAYER_COUNT + 1) / 2];
+patch in vec4 eLayerOrigin[8];
+flat out vec4 vLayerOrigin[LAYER_COUNT];
 #endif
 
 uniform mat4 uViewProjection;
@@ -104,7 +104,7 @@ void main()
 #ifdef DETAIL
     vMaterials = texelFetch(uWeights, ivec3(p, gSlot), 0);
 #ifndef DETAIL_TINT_ONLY
-    for (int k = 0; k < (LAYER_COUNT + 1) / 2; ++k) {
+    for (int k = 0; k < LAYER_COUNT; ++k) {
         vLayerOrigin[k] = eLayerOrigin[k];
     }
 #endif

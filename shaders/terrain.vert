@@ -17,8 +17,9 @@ layout(location = 3) in vec4 aNode1;  // skirt depth (metres), slot, parent's sl
 layout(location = 4) in vec4 aNode2;  // the node's quadrant in the parent's square (0 or 0.5, 0 or 0.5),
                                       // height range (metres), 0
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
-// The node's corner in repeats of each detail layer, fractional part, two layers an attribute.
-layout(location = 5) in vec4 aLayerOrigin[(LAYER_COUNT + 1) / 2];
+// The node's corner in repeats of each detail layer, fractional part (xy), and in repeats of the layer's
+// turned copy (zw: terrain.frag, uDetailTurn), an attribute a layer.
+layout(location = 5) in vec4 aLayerOrigin[LAYER_COUNT];
 #endif
 
 uniform mat4 uViewProjection;  // camera-relative world -> clip (rotation and projection only)
@@ -43,7 +44,7 @@ flat out float vMorph;
 flat out vec2 vParentOffset;
 flat out ivec2 vSlots;  // own, parent's
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
-flat out vec4 vLayerOrigin[(LAYER_COUNT + 1) / 2];
+flat out vec4 vLayerOrigin[LAYER_COUNT];
 #endif
 
 int gSlot;
@@ -86,7 +87,7 @@ void main()
 #ifdef DETAIL
     vMaterials = texelFetch(uWeights, ivec3(aGrid, gSlot), 0);
 #ifndef DETAIL_TINT_ONLY
-    for (int k = 0; k < (LAYER_COUNT + 1) / 2; ++k) {
+    for (int k = 0; k < LAYER_COUNT; ++k) {
         vLayerOrigin[k] = aLayerOrigin[k];
     }
 #endif

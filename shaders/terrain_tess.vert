@@ -9,12 +9,16 @@ layout(location = 2) in vec4 aNode0;
 layout(location = 3) in vec4 aNode1;
 layout(location = 4) in vec4 aNode2;
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
-layout(location = 5) in vec4 aLayerOrigin[(LAYER_COUNT + 1) / 2];
-// Up to 4 (kMaxLayers / 2): arrays of arrays (one per patch vertex) need GLSL 4.30.
+layout(location = 5) in vec4 aLayerOrigin[LAYER_COUNT];
+// Up to 8 (kMaxLayers): arrays of arrays (one per patch vertex) need GLSL 4.30.
 out vec4 cLayer0;
 out vec4 cLayer1;
 out vec4 cLayer2;
 out vec4 cLayer3;
+out vec4 cLayer4;
+out vec4 cLayer5;
+out vec4 cLayer6;
+out vec4 cLayer7;
 #endif
 
 out float cPatch;
@@ -31,14 +35,18 @@ void main()
     cNode1 = aNode1;
     cNode2 = aNode2;
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
-    vec4 layers[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
-    for (int k = 0; k < (LAYER_COUNT + 1) / 2; ++k) {
+    vec4 layers[8] = vec4[8](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
+    for (int k = 0; k < LAYER_COUNT; ++k) {
         layers[k] = aLayerOrigin[k];
     }
     cLayer0 = layers[0];
     cLayer1 = layers[1];
     cLayer2 = layers[2];
     cLayer3 = layers[3];
+    cLayer4 = layers[4];
+    cLayer5 = layers[5];
+    cLayer6 = layers[6];
+    cLayer7 = layers[7];
 #endif
     gl_Position = vec4(0.0);
 }

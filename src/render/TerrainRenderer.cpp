@@ -10,6 +10,7 @@
 #include "render/ZigzagIndexBuffer.h"
 
 #include <glm/gtc/type_ptr.hpp>
+#include <glm/mat2x2.hpp>
 #include <glm/mat4x4.hpp>
 
 #include <algorithm>
@@ -19,6 +20,12 @@
 namespace terrain {
 
 namespace {
+
+/// The turn and scale of each detail layer's second sample (shaders/terrain.frag, uDetailTurn): 0.955 rad and
+/// 0.755, neither a rational multiple of the tile's period nor of a right angle, so the two lattices share no
+/// period and their sum does not tile.
+const glm::dmat2 kDetailTurn = 0.7548776662 * glm::dmat2(std::cos(0.9553166181), std::sin(0.9553166181),
+                                                         -std::sin(0.9553166181), std::cos(0.9553166181));
 
 struct DetailLayer {
     Image image;
@@ -116,7 +123,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         TERRAIN_TRY(loaded);
         layers = std::move(loaded).value();
     }
-    r->mNodeTexels = 3 + (static_cast<int>(layers.size()) + 1) / 2;
+    r->mNodeTexels = 3 + static_cast<int>(layers.size());
     const bool padded = header.validWidth < header.gridSize() || header.validHeight < header.gridSize();
     std::vector<std::string> defines;
     if (padded) {
@@ -216,6 +223,8 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
                 glUniform1f(program.uniform(("uLayerScale" + index).c_str()), static_cast<float>(1.0 / layers[k].size));
             }
             glUniform4fv(program.uniform("uMaterialTintColumns"), 3, glm::value_ptr(tintColumns[0]));
+            const glm::mat2 turn(kDetailTurn);
+            glUniformMatrix2fv(program.uniform("uDetailTurn"), 1, GL_FALSE, glm::value_ptr(turn));
         }
     }
     auto sky = ShaderProgram::load(shaderDirectory, "sky");
@@ -500,11 +509,16 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                 // The node's corner in repeats of each layer, reduced to [0, 1) in double: texture
                 // coordinates stay small and exact however far from the origin the node is.
                 const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(camera.position);
+                // The same for the layer's turned copy (kDetailTurn).
                 for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
                     const glm::dvec2 repeats = corner / mLayerSize[k];
                     const glm::dvec2 fraction = repeats - glm::floor(repeats);
-                    c[12 + 2 * k] = static_cast<float>(fraction.x);
-                    c[13 + 2 * k] = static_cast<float>(fraction.y);
+                    const glm::dvec2 turned = kDetailTurn * repeats;
+                    const glm::dvec2 turnedFraction = turned - glm::floor(turned);
+                    c[12 + 4 * k] = static_cast<float>(fraction.x);
+                    c[13 + 4 * k] = static_cast<float>(fraction.y);
+                    c[14 + 4 * k] = static_cast<float>(turnedFraction.x);
+                    c[15 + 4 * k] = static_cast<float>(turnedFraction.y);
                 }
             }
             if (mTessellation) {
