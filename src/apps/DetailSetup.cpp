@@ -31,10 +31,18 @@ Expected<std::unique_ptr<const DetailSynthesizer>> makeDetailSynthesizer(const T
         TERRAIN_TRY(materials);
         settings.materials = std::move(materials).value();
     }
-    if (options.detailRoughness) {
-        settings.roughness = makeRoughnessNoise(header, settings.materials.get());
+    if (settings.materials && settings.materials->hasRelative() && !header.roughness) {
+        for (const Material& m : settings.materials->materials()) {
+            if (m.relativeAmplitude > 0.0 && m.displacement) {
+                warnings.push_back(m.file + ": relative_amplitude needs the terrain's roughness laws, which the map " +
+                                   "does not have (made before map format 5): material " + m.name +
+                                   " uses its amplitude of " + formatNumber(m.fractal.amplitude) + " m instead");
+            }
+        }
     }
-    return DetailSynthesizer::create(static_cast<int>(header.chunkSize), std::move(settings));
+    // Relative materials follow the map's roughness laws; detail_roughness continues them below the leaves.
+    return DetailSynthesizer::create(static_cast<int>(header.chunkSize),
+                                     settingsForMap(std::move(settings), header, options.detailRoughness));
 }
 
 std::vector<std::filesystem::path> synthesizedMaterialFiles(const TengineOptions& options,

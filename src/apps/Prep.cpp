@@ -294,6 +294,7 @@ int main(int argc, char** argv)
     if (*synthesizer) {
         args->build.leafDetailError = leafDetailErrorFunction(**synthesizer, !args->noRoughness);
         args->build.detailDisplacementRange = detailDisplacementRange(**synthesizer);
+        args->build.detailDisplacementRangeFor = detailDisplacementRangeFunction(**synthesizer);
     }
     auto field = readHeightField(args->input, args->read);
     if (!field.ok()) {

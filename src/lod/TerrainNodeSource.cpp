@@ -14,12 +14,8 @@ TerrainNodeSource::TerrainNodeSource(const MapFile& map, DetailPolicy policy) : 
     TERRAIN_EXPECTS(!policy.synthesizer || policy.synthesizer->chunkSize() == static_cast<int>(map.header().chunkSize),
                     "the synthesizer's chunk size must be the map's");
     TERRAIN_EXPECTS(policy.minimumSpacing >= 0.0, "lod_minimum_spacing must be >= 0");
-    if (policy.synthesizer && policy.synthesizer->settings().materials) {
-        for (const Material& m : policy.synthesizer->settings().materials->materials()) {
-            if (m.displacement) {
-                mDisplacementBound = std::max(mDisplacementBound, m.fractal.amplitude);
-            }
-        }
+    if (policy.synthesizer) {
+        mDisplacementBound = policy.synthesizer->materialBound();
     }
     if (policy.synthesizer && policy.synthesizer->settings().roughness) {
         mDisplacementBound += policy.synthesizer->settings().roughness->bound(0);
@@ -133,9 +129,10 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     // The synthesis model's bound from the node's own data (DetailErrorModel.h), instead of 3.4.1's "half the
     // error of their parent"; at most the parent's / kErrorNesting, so errors nest with a geomorph range.
     // The roughness octaves still to come below it add at most roughnessBound (triangle inequality).
-    data->deltaC =
-        std::min(parent.deltaC / kErrorNesting, mErrorModel->bound(data->heights, data->materialWeights, id.level) +
-                                                    static_cast<float>(synthesizer.roughnessBound(where)));
+    data->deltaC = std::min(
+        parent.deltaC / kErrorNesting,
+        mErrorModel->bound(data->heights, data->materialWeights, id.level, synthesizer.nodeMaterialScales(where)) +
+            static_cast<float>(synthesizer.roughnessBound(where)));
     data->texture = upsampleTexture(parent.texture, static_cast<int>(h.textureSize), quadrant);
     // The box: the node's base samples plus whatever displacement its descendants may add, kept inside the
     // parent's so boxes stay nested (3.2.12).

@@ -530,7 +530,11 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
 
     std::atomic<std::uint64_t> done{0};
     std::atomic<std::int64_t> detailNanoseconds{0};
-    Builder builder(header, *grid, shape, *textureSource, filledMask, options, done, detailNanoseconds);
+    BuildOptions nodeOptions = options;
+    if (options.detailDisplacementRangeFor) {
+        nodeOptions.detailDisplacementRange = options.detailDisplacementRangeFor(header);
+    }
+    Builder builder(header, *grid, shape, *textureSource, filledMask, nodeOptions, done, detailNanoseconds);
     std::vector<DirectoryEntry> directory;
     directory.reserve(totalNodes);
     auto append = [&](EncodedBlock& block) {

@@ -37,6 +37,9 @@ struct BuildOptions {
     /// Metres: how far the displacement of a static node can differ from the displacement synthesized below
     /// the leaves (its placement follows its own slopes): 2 x the largest material amplitude. >= 0.
     double detailDisplacementRange = 0.0;
+    /// When set, replaces detailDisplacementRange with its value for the map's header (roughness laws
+    /// included), for displacements that follow the laws (relative materials). Called once, before the nodes.
+    std::function<double(const MapHeader&)> detailDisplacementRangeFor;
     /// What leafDetailError estimates for (the synthesis settings and materials), stored in the map so the
     /// viewer can tell whether its own settings match. Empty: the map says nothing about it.
     std::optional<DetailRecipe> detailRecipe;

@@ -213,13 +213,21 @@ double DetailErrorModel::worstDisplacementError(int level) const
     return worst;
 }
 
-std::vector<double> DetailErrorModel::sampleDisplacementErrors(std::span<const std::uint8_t> weights, int level) const
+std::vector<double> DetailErrorModel::sampleDisplacementErrors(std::span<const std::uint8_t> weights, int level,
+                                                               std::span<const std::vector<float>> scales) const
 {
     const int n = mSynthesizer.chunkSize();
     const std::size_t count = mMaterials.size();
     std::vector<double> sample(static_cast<std::size_t>(n) * n, 0.0);
+    TERRAIN_EXPECTS(scales.empty() || scales.size() == count, "one scale grid (or none) per material");
+    auto scale = [&](std::size_t m, std::size_t k) {
+        return scales.empty() || scales[m].empty() ? 1.0 : static_cast<double>(scales[m][k]);
+    };
     if (count == 1) {
-        std::fill(sample.begin(), sample.end(), displacementError(0, level));
+        const double error = displacementError(0, level);
+        for (std::size_t k = 0; k < sample.size(); ++k) {
+            sample[k] = error * scale(0, k);
+        }
     } else if (count > 1) {
         TERRAIN_EXPECTS(weights.size() == sample.size() * 4, "weights must hold N x N x 4 bytes");
         std::array<double, kMaxDetailMaterials> error{};
@@ -228,27 +236,30 @@ std::vector<double> DetailErrorModel::sampleDisplacementErrors(std::span<const s
         }
         for (std::size_t k = 0; k < sample.size(); ++k) {
             for (std::size_t m = 0; m < count; ++m) {
-                sample[k] += (weights[4 * k + m] + 0.5) * error[m];  // half a step: the weights are rounded
+                // Half a step: the weights are rounded.
+                sample[k] += (weights[4 * k + m] + 0.5) * error[m] * scale(m, k);
             }
         }
     }
     return sample;
 }
 
-double DetailErrorModel::displacementTerm(std::span<const std::uint8_t> weights, int level) const
+double DetailErrorModel::displacementTerm(std::span<const std::uint8_t> weights, int level,
+                                          std::span<const std::vector<float>> scales) const
 {
-    const std::vector<double> sample = sampleDisplacementErrors(weights, level);
+    const std::vector<double> sample = sampleDisplacementErrors(weights, level, scales);
     return *std::max_element(sample.begin(), sample.end());
 }
 
-float DetailErrorModel::bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level) const
+float DetailErrorModel::bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level,
+                              std::span<const std::vector<float>> scales) const
 {
     // Per cell of the node: the subdivision's change there and the displacement's error at its corners, so
     // the two terms add where they meet rather than each at its own worst place.
     std::vector<float> cells;
     nextSubdivisionChanges(heights, cells);
     const int n = mSynthesizer.chunkSize();
-    const std::vector<double> sample = sampleDisplacementErrors(weights, level);
+    const std::vector<double> sample = sampleDisplacementErrors(weights, level, scales);
     double worst = 0.0;
     for (int j = 0; j + 1 < n; ++j) {
         for (int i = 0; i + 1 < n; ++i) {
@@ -263,31 +274,39 @@ float DetailErrorModel::bound(const DualHeightMap& heights, std::span<const std:
 std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
     const DetailSynthesizer& synthesizer, bool roughness)
 {
+    // What the viewer synthesizes over this map (settingsForMap: relative materials follow its laws), made on
+    // the first call for the map's spacing and laws.
+    struct ForMap {
+        std::unique_ptr<const DetailSynthesizer> synthesizer;
+        std::unique_ptr<const DetailErrorModel> model;
+    };
     struct Shared {
         std::mutex mutex;
         double rootSpacing = 0.0;
-        std::shared_ptr<const DetailErrorModel> model;
-        const RoughnessGrid* grid = nullptr;  ///< the header's grid the noise was made for
-        std::shared_ptr<const RoughnessNoise> noise;
+        const RoughnessGrid* grid = nullptr;  ///< the header's grid the synthesizer was made for
+        std::shared_ptr<const ForMap> forMap;
     };
     auto shared = std::make_shared<Shared>();
     return [&synthesizer, shared, roughness](const MapHeader& h, const NodeId& id,
                                              std::span<const std::uint16_t> codes) {
-        std::shared_ptr<const DetailErrorModel> model;
-        std::shared_ptr<const RoughnessNoise> noise;
+        std::shared_ptr<const ForMap> forMap;
         {
             std::lock_guard lock(shared->mutex);
-            if (!shared->model || shared->rootSpacing != h.spacingAt(0)) {
-                shared->model = std::make_shared<const DetailErrorModel>(synthesizer, h.spacingAt(0));
+            const RoughnessGrid* grid = h.roughness ? &*h.roughness : nullptr;
+            if (!shared->forMap || shared->rootSpacing != h.spacingAt(0) || shared->grid != grid) {
+                auto made = DetailSynthesizer::create(synthesizer.chunkSize(),
+                                                      settingsForMap(synthesizer.settings(), h, roughness));
+                TERRAIN_ASSERT(made.ok());  // the same settings the given synthesizer was made with
+                auto next = std::make_shared<ForMap>();
+                next->synthesizer = std::move(made).value();
+                next->model = std::make_unique<const DetailErrorModel>(*next->synthesizer, h.spacingAt(0));
+                shared->forMap = std::move(next);
                 shared->rootSpacing = h.spacingAt(0);
+                shared->grid = grid;
             }
-            model = shared->model;
-            if (roughness && h.roughness && shared->grid != &*h.roughness) {
-                shared->noise = makeRoughnessNoise(h, synthesizer.settings().materials.get());
-                shared->grid = &*h.roughness;
-            }
-            noise = roughness && h.roughness ? shared->noise : nullptr;
+            forMap = shared->forMap;
         }
+        const DetailSynthesizer& s = *forMap->synthesizer;
         DualHeightMap leaf;
         leaf.size = h.windowSize();
         leaf.base.resize(codes.size());
@@ -295,30 +314,28 @@ std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16
             leaf.base[k] = static_cast<float>(h.heightStep * codes[k]);  // as TerrainNodeSource::loadStatic makes it
         }
         const WindowPlacement where = windowPlacement(h, id);
-        synthesizer.displace(where, nullptr, 0, leaf);
-        const float bound = model->bound(leaf, synthesizer.materialWeights(leaf, where), id.level);
-        if (!noise) {
-            return bound;
-        }
+        s.displace(where, nullptr, 0, leaf);
+        const float bound =
+            forMap->model->bound(leaf, s.materialWeights(leaf, where), id.level, s.nodeMaterialScales(where));
         // The roughness octaves below the leaf (all of them: none is present at its samples), added: the
         // triangle inequality over the subdivision and materials' surface and the roughness noise.
-        const double extra =
-            noise->nodeBound(where.spacing, where.gx0 + kBorder, where.gy0 + kBorder, synthesizer.chunkSize() - 1);
-        return static_cast<float>(bound + extra);
+        return static_cast<float>(bound + s.roughnessBound(where));
     };
 }
 
 double detailDisplacementRange(const DetailSynthesizer& synthesizer)
 {
-    double amplitude = 0.0;
-    if (synthesizer.settings().materials) {
-        for (const Material& m : synthesizer.settings().materials->materials()) {
-            if (m.displacement) {
-                amplitude = std::max(amplitude, m.fractal.amplitude);
-            }
-        }
-    }
-    return 2.0 * amplitude;
+    return 2.0 * synthesizer.materialBound();
+}
+
+std::function<double(const MapHeader&)> detailDisplacementRangeFunction(const DetailSynthesizer& synthesizer)
+{
+    return [&synthesizer](const MapHeader& h) {
+        auto made =
+            DetailSynthesizer::create(synthesizer.chunkSize(), settingsForMap(synthesizer.settings(), h, false));
+        TERRAIN_ASSERT(made.ok());
+        return detailDisplacementRange(**made);
+    };
 }
 
 }  // namespace terrain

@@ -59,19 +59,24 @@ public:
 
     /// max over samples of sum_m w_m E_m(level) for a node with `weights` (DetailSynthesizer::materialWeights:
     /// N x N x 4 bytes; empty when there are no materials).
-    double displacementTerm(std::span<const std::uint8_t> weights, int level) const;
+    /// With `scales` (DetailSynthesizer::nodeMaterialScales), material m's error at a sample is times
+    /// scales[m] there where that is not empty (relative materials).
+    double displacementTerm(std::span<const std::uint8_t> weights, int level,
+                            std::span<const std::vector<float>> scales = {}) const;
 
     /// The whole bound for a node at `level` with these heights and weights: the largest over the node's cells
     /// of kSubdivisionTail x the cell's next subdivision change + the largest displacement error at its
     /// corners (both terms where they meet, not each at its own worst place).
-    float bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level) const;
+    float bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level,
+                std::span<const std::vector<float>> scales = {}) const;
 
     /// The largest E_m(level) over the materials: the displacement term of a node whose weights are unknown.
     double worstDisplacementError(int level) const;
 
 private:
     /// Per sample of the node (N x N), sum_m w_m E_m(level).
-    std::vector<double> sampleDisplacementErrors(std::span<const std::uint8_t> weights, int level) const;
+    std::vector<double> sampleDisplacementErrors(std::span<const std::uint8_t> weights, int level,
+                                                 std::span<const std::vector<float>> scales) const;
 
     struct PerMaterial {
         std::vector<double> tail;           ///< per level: the one-level changes of it and every finer level
@@ -92,7 +97,11 @@ private:
 std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
     const DetailSynthesizer& synthesizer, bool roughness = false);
 
-/// QuadtreeBuilder's detailDisplacementRange: 2 x the largest amplitude of the synthesizer's materials.
+/// QuadtreeBuilder's detailDisplacementRange: 2 x the largest amplitude of the synthesizer's materials
+/// (DetailSynthesizer::materialBound).
 double detailDisplacementRange(const DetailSynthesizer& synthesizer);
+/// QuadtreeBuilder's detailDisplacementRangeFor: detailDisplacementRange of the synthesizer made for the map
+/// (settingsForMap: relative materials follow its roughness laws).
+std::function<double(const MapHeader&)> detailDisplacementRangeFunction(const DetailSynthesizer& synthesizer);
 
 }  // namespace terrain

@@ -23,10 +23,29 @@ Expected<std::unique_ptr<const DetailSynthesizer>> DetailSynthesizer::create(int
         return makeError("the roughness noise is for leaves of ", settings.roughness->leafCells() + 1,
                          " samples a side, the synthesizer for ", chunkSize);
     }
+    if (settings.laws && settings.laws->leafCells() != chunkSize - 1) {
+        return makeError("the roughness laws are for leaves of ", settings.laws->leafCells() + 1,
+                         " samples a side, the synthesizer for ", chunkSize);
+    }
     auto subdivider = makeSubdivider(settings.scheme, chunkSize, settings.omega);
     TERRAIN_TRY(subdivider);
     return std::unique_ptr<const DetailSynthesizer>(
         new DetailSynthesizer(std::move(subdivider.value()), std::move(settings)));
+}
+
+DetailSettings settingsForMap(DetailSettings settings, const MapHeader& header, bool roughness)
+{
+    settings.roughness = nullptr;
+    settings.laws = nullptr;
+    if (!header.roughness) {
+        return settings;
+    }
+    if (settings.materials) {
+        settings.materials = std::make_shared<const MaterialSet>(settings.materials->relativeTo(header.sampleSpacing));
+    }
+    settings.laws = makeRoughnessNoise(header, settings.materials.get());
+    settings.roughness = roughness ? settings.laws : nullptr;
+    return settings;
 }
 
 WindowPlacement windowPlacement(const MapHeader& h, const NodeId& id)
@@ -51,6 +70,60 @@ DetailSynthesizer::DetailSynthesizer(std::unique_ptr<Subdivider> subdivider, Det
             mNewSamples[static_cast<std::size_t>(j) * w + i] = (i % 2 != 0 || j % 2 != 0) ? 1 : 0;
         }
     }
+    if (mSettings.materials && mSettings.laws) {
+        for (const Material& m : mSettings.materials->materials()) {
+            const bool relative = m.relativeAmplitude > 0.0 && m.displacement && m.fractalDeviation > 0.0;
+            mRelativeFactor.push_back(relative ? m.relativeAmplitude / m.fractalDeviation : 0.0);
+        }
+    }
+}
+
+std::vector<std::vector<float>> DetailSynthesizer::materialScales(std::int64_t gx0, std::int64_t gy0, int width,
+                                                                  int height, double spacing) const
+{
+    std::vector<std::vector<float>> scales;
+    if (mRelativeFactor.empty()) {
+        return scales;
+    }
+    const auto& materials = mSettings.materials->materials();
+    scales.resize(materials.size());
+    for (std::size_t m = 0; m < materials.size(); ++m) {
+        if (!isRelative(m)) {
+            continue;
+        }
+        std::vector<float>& out = scales[m];
+        out.resize(static_cast<std::size_t>(width) * height);
+        mSettings.laws->deviationGrid(gx0, gy0, width, height, spacing, materials[m].fractal.wavelength, out);
+        const auto factor = static_cast<float>(mRelativeFactor[m]);
+        for (float& v : out) {
+            v *= factor;
+        }
+    }
+    return scales;
+}
+
+std::vector<std::vector<float>> DetailSynthesizer::nodeMaterialScales(const WindowPlacement& where) const
+{
+    return materialScales(where.gx0 + kBorder, where.gy0 + kBorder, chunkSize(), chunkSize(), where.spacing);
+}
+
+double DetailSynthesizer::materialBound() const
+{
+    double bound = 0.0;
+    if (!mSettings.materials) {
+        return bound;
+    }
+    const auto& materials = mSettings.materials->materials();
+    for (std::size_t m = 0; m < materials.size(); ++m) {
+        if (!materials[m].displacement) {
+            continue;
+        }
+        const double amplitude = materials[m].fractal.amplitude;
+        bound = std::max(bound, isRelative(m) ? amplitude * mRelativeFactor[m] *
+                                                    mSettings.laws->maxDeviation(materials[m].fractal.wavelength)
+                                              : amplitude);
+    }
+    return bound;
 }
 
 namespace {
@@ -177,8 +250,9 @@ void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const 
     if (!placed) {
         noSlope.assign(count, 0.0f);
     }
+    const std::vector<std::vector<float>> scales = materialScales(where.gx0, where.gy0, w, w, where.spacing);
     mSettings.materials->displacementGrid(where.grid(w), placed ? std::span<const float>(map.slope) : noSlope, height,
-                                          map.displacement, mask);
+                                          map.displacement, mask, scales);
 }
 
 DualHeightMap DetailSynthesizer::synthesizeChild(const DualHeightMap& parent, int quadrant,

@@ -43,6 +43,10 @@ struct DetailSettings {
     /// continued below the static leaves (RoughnessNoise.h), added to the displacement of dynamic nodes.
     /// Null: none (detail_roughness off, or a map without a roughness block).
     std::shared_ptr<const RoughnessNoise> roughness = nullptr;
+    /// The map's roughness laws (a RoughnessNoise made for the map: makeRoughnessNoise; only its laws are
+    /// used here), whatever detail_roughness says: materials with a relative_amplitude follow them
+    /// (materialScales). Null: every material has its absolute amplitude (a map without laws).
+    std::shared_ptr<const RoughnessNoise> laws = nullptr;
 };
 
 /// Most materials a set may hold: their weights travel to the GPU as one RGBA8 value per sample.
@@ -62,6 +66,12 @@ struct WindowPlacement {
     SampleGrid grid(int windowSize) const { return {originX, originY, gx0, gy0, spacing, windowSize, windowSize}; }
 };
 
+/// `settings` made for the map with `header` (the one rule shared by the viewer, height queries and prep's
+/// leaf errors): with the map's roughness laws, the materials relativeTo its spacing, the laws made for them
+/// (makeRoughnessNoise) set as `laws`, and as `roughness` too when `roughness` (detail_roughness); without
+/// laws (no roughness block) the settings as they are, roughness and laws null.
+DetailSettings settingsForMap(DetailSettings settings, const MapHeader& header, bool roughness);
+
 /// Where node `id`'s window lies in the world of the map with header `h`: the one placement rule shared by
 /// the viewer (lod/TerrainNodeSource.h), prep's detail error estimate (leafDetailErrorFunction) and height
 /// queries.
@@ -79,6 +89,20 @@ public:
     /// Whether nodes get a displacement field: materials, roughness or both.
     bool addsDisplacement() const { return mSettings.materials != nullptr || mSettings.roughness != nullptr; }
     bool addsMaterials() const { return mSettings.materials != nullptr; }
+
+    /// Whether material m's amplitude follows the roughness laws (a relative material with laws).
+    bool isRelative(std::size_t m) const { return m < mRelativeFactor.size() && mRelativeFactor[m] > 0.0; }
+    /// Per material, the factor of its displacement over a window of `width` x `height` samples from global
+    /// sample (gx0, gy0) of the level with spacing `spacing`: for a relative material relativeAmplitude x
+    /// the law's deviation at its wavelength (RoughnessNoise::deviationGrid) / its fractalDeviation; empty for
+    /// an absolute one (factor 1). Depends only on the position, like the displacement.
+    std::vector<std::vector<float>> materialScales(std::int64_t gx0, std::int64_t gy0, int width, int height,
+                                                   double spacing) const;
+    /// materialScales over the node's N x N samples (its window's inner part).
+    std::vector<std::vector<float>> nodeMaterialScales(const WindowPlacement& where) const;
+    /// The most any material's displacement can be anywhere, metres: its amplitude, times the largest
+    /// factor over the map for a relative one.
+    double materialBound() const;
 
     /// The most the roughness octaves not yet present in the node at `where` (RoughnessNoise::bound from
     /// the node's level below the leaves) can add to its surface anywhere below it, metres; 0 without.
@@ -118,6 +142,7 @@ private:
     std::unique_ptr<Subdivider> mSubdivider;
     DetailSettings mSettings;
     std::vector<std::uint8_t> mNewSamples;  ///< W x W: 1 where a child sample is not a parent sample
+    std::vector<double> mRelativeFactor;    ///< per material: relativeAmplitude / fractalDeviation, or 0
 };
 
 /// A dynamic node's colour texture (3.4.5, before detail textures): its parent's texture over quadrant

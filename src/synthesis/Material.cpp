@@ -162,6 +162,8 @@ const std::map<std::string, Setter, std::less<>>& setters()
         {"wavelength", [](const Reader& r) { return assign(r.positive(), r.material.fractal.wavelength); }},
         {"amplitude",
          [](const Reader& r) { return assign(r.number(0.0, 1e4, "[0, 10000] metres"), r.material.fractal.amplitude); }},
+        {"relative_amplitude",
+         [](const Reader& r) { return assign(r.number(1e-3, 100.0, "[0.001, 100]"), r.material.relativeAmplitude); }},
         {"seed",
          [](const Reader& r) -> Status {
              auto value = parseInteger(r.entry.value);
@@ -295,7 +297,70 @@ Expected<Material> parseMaterial(const ConfigFile& config, std::vector<std::stri
     }
     material.displacement =
         bitmap ? std::make_shared<Fractal>(material.fractal, table) : std::make_shared<Fractal>(material.fractal);
+    material.bitmapTable = table;
+    if (material.relativeAmplitude > 0.0) {
+        if (material.fractal.amplitude <= 0.0) {
+            return makeError(config.name(),
+                             ": relative_amplitude needs an amplitude > 0 (its shape, and what it "
+                             "falls back to over a map without roughness laws)");
+        }
+        material.fractalDeviation = fractalMidpointDeviation(*material.displacement);
+    }
     return material;
+}
+
+double fractalMidpointDeviation(const Fractal& fractal)
+{
+    const double r = fractal.params().wavelength;
+    std::uint64_t state = 0x9e3779b97f4a7c15ull ^ fractal.params().seed;
+    auto unit = [&] {
+        state += 0x9e3779b97f4a7c15ull;
+        std::uint64_t z = state;
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+        return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+    };
+    constexpr int kPlaces = 4096;
+    double sum = 0.0;
+    for (int k = 0; k < kPlaces; ++k) {
+        const double x = (unit() - 0.5) * 1e5, y = (unit() - 0.5) * 1e5;
+        const double h = fractal(x, y);
+        const double dx = h - 0.5 * (fractal(x - r, y) + fractal(x + r, y));
+        const double dy = h - 0.5 * (fractal(x, y - r) + fractal(x, y + r));
+        sum += dx * dx + dy * dy;
+    }
+    return std::sqrt(sum / (2.0 * kPlaces));
+}
+
+Material relativeTo(const Material& material, double dataSpacing)
+{
+    TERRAIN_EXPECTS(dataSpacing > 0.0, "a spacing must be > 0");
+    if (material.relativeAmplitude <= 0.0 || !material.displacement) {
+        return material;
+    }
+    Material out = material;
+    int drop = 0;
+    double wavelength = material.fractal.wavelength;
+    while (drop < material.fractal.octaves && wavelength >= dataSpacing) {
+        wavelength /= material.fractal.lacunarity;
+        ++drop;
+    }
+    if (drop == 0) {
+        return out;
+    }
+    if (drop == material.fractal.octaves) {
+        out.kind = DisplacementKind::None;
+        out.displacement = nullptr;
+        out.fractalDeviation = 0.0;
+        return out;
+    }
+    out.fractal.octaves -= drop;
+    out.fractal.wavelength = wavelength;
+    out.fractal.amplitude *= std::pow(material.fractal.gain, drop);
+    out.displacement = material.bitmapTable ? std::make_shared<Fractal>(out.fractal, material.bitmapTable)
+                                            : std::make_shared<Fractal>(out.fractal);
+    out.fractalDeviation = fractalMidpointDeviation(*out.displacement);
+    return out;
 }
 
 Expected<Material> loadMaterial(const std::filesystem::path& path, std::vector<std::string>& warnings)
@@ -327,6 +392,21 @@ Expected<MaterialSet> MaterialSet::load(const std::vector<std::filesystem::path>
         materials.push_back(std::move(material).value());
     }
     return MaterialSet(std::move(materials));
+}
+
+MaterialSet MaterialSet::relativeTo(double dataSpacing) const
+{
+    std::vector<Material> adapted;
+    for (const Material& m : mMaterials) {
+        adapted.push_back(terrain::relativeTo(m, dataSpacing));
+    }
+    return MaterialSet(std::move(adapted));
+}
+
+bool MaterialSet::hasRelative() const
+{
+    return std::any_of(mMaterials.begin(), mMaterials.end(),
+                       [](const Material& m) { return m.relativeAmplitude > 0.0 && m.displacement; });
 }
 
 void MaterialSet::weights(double slopeDegrees, double height, std::span<double> out) const
@@ -365,8 +445,9 @@ float MaterialSet::displacement(double x, double y, double slopeDegrees, double 
 
 void MaterialSet::displacementGrid(const SampleGrid& grid, std::span<const float> slopeDegrees,
                                    std::span<const float> heights, std::span<float> out,
-                                   std::span<const std::uint8_t> mask) const
+                                   std::span<const std::uint8_t> mask, std::span<const std::vector<float>> scales) const
 {
+    TERRAIN_EXPECTS(scales.empty() || scales.size() == mMaterials.size(), "one scale grid (or none) per material");
     TERRAIN_EXPECTS(grid.width >= 0 && grid.height >= 0 && grid.spacing > 0.0, "grid size >= 0 and spacing > 0");
     const std::size_t count = grid.count();
     TERRAIN_EXPECTS(slopeDegrees.size() >= count && heights.size() >= count && out.size() >= count,
@@ -396,9 +477,12 @@ void MaterialSet::displacementGrid(const SampleGrid& grid, std::span<const float
         }
         mMaterials[m].displacement->evaluateGrid(grid, values,
                                                  std::span<const std::uint8_t>(used.data() + m * count, count));
+        const bool scaled = !scales.empty() && !scales[m].empty();
+        TERRAIN_EXPECTS(!scaled || scales[m].size() >= count, "a scale grid holds width * height values");
         for (std::size_t k = 0; k < count; ++k) {
             if (used[m * count + k] != 0) {
-                sum[k] += w[k * n + m] * static_cast<double>(values[k]);
+                const double value = static_cast<double>(values[k]);
+                sum[k] += w[k * n + m] * (scaled ? value * static_cast<double>(scales[m][k]) : value);
             }
         }
     }

@@ -45,7 +45,17 @@ struct Material {
     double detailTextureSize = 4.0;                     ///< metres covered by one repeat of a detail texture, > 0
     std::array<float, 3> tint = {1.0f, 1.0f, 1.0f};     ///< linear RGB multiplier, each in [0, 1]
     MaterialPlacement placement;
-    std::shared_ptr<const Fractal> displacement;  ///< null for kind None (zero displacement)
+    std::shared_ptr<const Fractal> displacement;    ///< null for kind None (zero displacement)
+    std::shared_ptr<const BasisTable> bitmapTable;  ///< bitmap-* kinds: the basis (relativeTo rebuilds with it)
+    /// relative_amplitude (issue 14): > 0, over a map with roughness laws the displacement's size follows the
+    /// terrain's own roughness at each place: it is scaled so that its RMS midpoint deviation at a lag of
+    /// its wavelength is relativeAmplitude times the law's there (DetailSynthesizer::materialScales), and its
+    /// octaves as coarse as the data's spacing are left out (relativeTo). 0: absolute, `amplitude` metres
+    /// (also what a relative material falls back to over a map without laws).
+    double relativeAmplitude = 0.0;
+    /// The fractal's own RMS midpoint deviation at a lag of its wavelength, metres (measured when the
+    /// material is read, over 4096 places along x and y); 0 for kind None or absolute materials.
+    double fractalDeviation = 0.0;
 
     /// The material's displacement in metres at world (x, y) metres (0 for kind None).
     double displacementAt(double x, double y) const { return displacement ? (*displacement)(x, y) : 0.0; }
@@ -59,6 +69,17 @@ Expected<Material> parseMaterial(const ConfigFile& config, std::vector<std::stri
 /// loadMaterial(path) = ConfigFile::load(path) then parseMaterial.
 Expected<Material> loadMaterial(const std::filesystem::path& path, std::vector<std::string>& warnings);
 
+/// The RMS midpoint deviation of `fractal` at a lag of its wavelength: (f(p) - (f(p - r) + f(p + r)) / 2) at
+/// 4096 pseudo-random places, along x and along y (deterministic), metres.
+double fractalMidpointDeviation(const Fractal& fractal);
+
+/// `material` as synthesis uses it over data of spacing `dataSpacing` with roughness laws: a relative material
+/// without the octaves whose wavelength is at least the data's spacing (the data has that relief; the
+/// remaining ones start at octave 0 with the next wavelength, and the fallback amplitude shrinks by the
+/// gain per octave left out), its fractalDeviation measured again; with none left it has no displacement.
+/// Absolute materials are returned as they are.
+Material relativeTo(const Material& material, double dataSpacing);
+
 /// Several materials over the terrain. Material 0 is the ground everywhere; each later material is laid
 /// over the ones before it with its placement coverage c_m, so weight_m = c_m * prod_{k > m} (1 - c_k)
 /// (c_0 = 1). The weights are continuous, in [0, 1] and sum to 1 (up to rounding), whatever the rules.
@@ -71,6 +92,10 @@ public:
                                       std::vector<std::string>& warnings);
 
     const std::vector<Material>& materials() const { return mMaterials; }
+    /// relativeTo() of every material.
+    MaterialSet relativeTo(double dataSpacing) const;
+    /// Whether any material has a relative amplitude.
+    bool hasRelative() const;
 
     /// Blend weights at `slopeDegrees` and `height` metres into out[0 .. materials().size()).
     /// Precondition: out.size() >= materials().size().
@@ -84,9 +109,12 @@ public:
     /// The grid form: out[k] = displacement(grid.x(i), grid.y(j), slope[k], height[k]) with
     /// k = j * width + i, bit-identical to the point form; a material whose weight is zero over the whole
     /// window is not evaluated. With a non-empty `mask` only samples with mask[k] != 0 are computed and
-    /// written. Preconditions: as Fractal::evaluateGrid; slope and height hold grid.count() values.
+    /// written. With `scales`, material m's displacement is multiplied by scales[m][k] where that is not empty
+    /// (the relative materials' DetailSynthesizer::materialScales). Preconditions: as Fractal::evaluateGrid;
+    /// slope and height hold grid.count() values, scales is empty or has one entry per material.
     void displacementGrid(const SampleGrid& grid, std::span<const float> slopeDegrees, std::span<const float> heights,
-                          std::span<float> out, std::span<const std::uint8_t> mask = {}) const;
+                          std::span<float> out, std::span<const std::uint8_t> mask = {},
+                          std::span<const std::vector<float>> scales = {}) const;
 
 private:
     std::vector<Material> mMaterials;

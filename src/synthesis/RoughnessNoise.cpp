@@ -137,6 +137,71 @@ RoughnessLaw RoughnessNoise::lawAt(double u, double v) const
     return law;
 }
 
+double RoughnessNoise::deviationAt(double u, double v, double lag) const
+{
+    TERRAIN_EXPECTS(lag > 0.0, "a lag must be > 0");
+    const RoughnessLaw law = lawAt(u, v);
+    return law.amplitude * std::pow(lag / mDataSpacing, law.exponent);
+}
+
+void RoughnessNoise::deviationGrid(std::int64_t gx0, std::int64_t gy0, int width, int height, double spacing,
+                                   double lag, std::span<float> out) const
+{
+    TERRAIN_EXPECTS(width >= 0 && height >= 0 && out.size() >= static_cast<std::size_t>(width) * height,
+                    "out must hold width x height values");
+    const int below = levelsBelow(spacing);
+    const double toLeafLevel = std::ldexp(1.0, -below);  // exact: a power of two
+    if (below <= 0 || width == 0 || height == 0) {
+        for (int j = 0; j < height; ++j) {
+            const double v = static_cast<double>(gy0 + j) * toLeafLevel;
+            for (int i = 0; i < width; ++i) {
+                out[static_cast<std::size_t>(j) * width + i] =
+                    static_cast<float>(deviationAt(static_cast<double>(gx0 + i) * toLeafLevel, v, lag));
+            }
+        }
+        return;
+    }
+    // Below the leaves: D at the finest static samples (a lattice fixed in the world), interpolated bilinearly
+    // to the level's samples. The law varies over tens of those samples, so this is D to about 1e-4, and it
+    // depends only on the sample's position: the lattice values are D at integer (u, v), the fractions are
+    // exact (powers of two), so every node computes the same bits for a sample it shares.
+    const std::int64_t step = std::int64_t{1} << below;
+    auto floorDiv = [&](std::int64_t g) { return g >= 0 ? g / step : -((-g + step - 1) / step); };
+    const std::int64_t u0 = floorDiv(gx0), u1 = floorDiv(gx0 + width - 1) + 1;
+    const std::int64_t v0 = floorDiv(gy0), v1 = floorDiv(gy0 + height - 1) + 1;
+    const auto lw = static_cast<std::size_t>(u1 - u0 + 1);
+    std::vector<double> lattice(lw * static_cast<std::size_t>(v1 - v0 + 1));
+    for (std::int64_t v = v0; v <= v1; ++v) {
+        for (std::int64_t u = u0; u <= u1; ++u) {
+            lattice[static_cast<std::size_t>(v - v0) * lw + static_cast<std::size_t>(u - u0)] =
+                deviationAt(static_cast<double>(u), static_cast<double>(v), lag);
+        }
+    }
+    for (int j = 0; j < height; ++j) {
+        const std::int64_t gy = gy0 + j, v = floorDiv(gy);
+        const double fy = static_cast<double>(gy - v * step) * toLeafLevel;
+        const double* south = lattice.data() + static_cast<std::size_t>(v - v0) * lw;
+        const double* north = south + lw;
+        for (int i = 0; i < width; ++i) {
+            const std::int64_t gx = gx0 + i, u = floorDiv(gx);
+            const double fx = static_cast<double>(gx - u * step) * toLeafLevel;
+            const auto c = static_cast<std::size_t>(u - u0);
+            const double s0 = south[c] + fx * (south[c + 1] - south[c]);
+            const double n0 = north[c] + fx * (north[c + 1] - north[c]);
+            out[static_cast<std::size_t>(j) * width + i] = static_cast<float>(s0 + fy * (n0 - s0));
+        }
+    }
+}
+
+double RoughnessNoise::maxDeviation(double lag) const
+{
+    double largest = 0.0;
+    for (const RoughnessLaw& law : mGrid.laws) {
+        largest = std::max(largest, law.amplitude * std::pow(lag / mDataSpacing, law.exponent));
+    }
+    return largest * (1.0 + 1e-9);  // lawAt's exp(log A) rounds
+}
+
 void RoughnessNoise::amplitudes(double u, double v, int count, double* out) const
 {
     const RoughnessLaw law = lawAt(u, v);

@@ -64,6 +64,18 @@ public:
     RoughnessLaw lawAt(double u, double v) const;
     /// c(H), for exponents in [kMinRoughnessExponent, kMaxRoughnessExponent] (clamped).
     double calibration(double exponent) const;
+    /// The law's RMS midpoint deviation at `lag` metres at (u, v) (as lawAt): A (lag / s0)^H, metres, with log A
+    /// and H interpolated as lawAt does (so log D is bilinear between leaf centres too).
+    double deviationAt(double u, double v, double lag) const;
+    /// out[j * width + i] = deviationAt at global sample (gx0 + i, gy0 + j) of the level with sample spacing
+    /// `spacing` (s0 2^-k for any integer k), as float: exactly at and above the finest static level; below
+    /// it interpolated bilinearly from deviationAt at the finest static samples around (a function of the
+    /// position only; within (d log D)^2 / 8 of it relative, d log D its change from one finest sample to the
+    /// next: 1.3e-4 for a law 8x rougher one 64-sample leaf away). Precondition: out holds width * height values.
+    void deviationGrid(std::int64_t gx0, std::int64_t gy0, int width, int height, double spacing, double lag,
+                       std::span<float> out) const;
+    /// The largest deviationAt(., ., lag) anywhere: at a leaf centre, log D being bilinear between them.
+    double maxDeviation(double lag) const;
 
     /// The noise at global sample (gx, gy) of the level `below` levels below the static leaves (spacing s0
     /// 2^-below): sum over k < min(below, octaves()) of a_k P_k, in float; exactly 0 for below <= 0.

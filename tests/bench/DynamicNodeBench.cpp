@@ -91,10 +91,13 @@ std::shared_ptr<const RoughnessNoise> roughness()
 /// `withBound`: also the node's error bound (DetailErrorModel::bound, issue 12), as TerrainNodeSource makes
 /// every dynamic node: the cost the synthesis model adds per node. `rough`: with roughness().
 void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> materials, bool withBound,
-                 bool rough = false)
+                 bool rough = false, bool relative = false)
 {
+    // `relative`: the materials' amplitudes follow the roughness laws (relative_amplitude, issue 14), as the
+    // viewer makes them over a map with laws.
+    const auto noise = rough ? roughness() : nullptr;
     auto synthesizer =
-        DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, std::move(materials), rough ? roughness() : nullptr})
+        DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, std::move(materials), noise, relative ? noise : nullptr})
             .value();
     const Leaf leaf = makeLeaf(*synthesizer);
     const DetailErrorModel model(*synthesizer, kSpacing * 16);
@@ -108,7 +111,8 @@ void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> mat
         auto weights = synthesizer->materialWeights(child, where);
         auto texture = upsampleTexture(leaf.texture, kChunk, quadrant);
         if (withBound) {
-            benchmark::DoNotOptimize(model.bound(child, weights, 5) + synthesizer->roughnessBound(where));
+            benchmark::DoNotOptimize(model.bound(child, weights, 5, synthesizer->nodeMaterialScales(where)) +
+                                     synthesizer->roughnessBound(where));
         }
         benchmark::DoNotOptimize(child.base.data());
         benchmark::DoNotOptimize(weights.data());
@@ -139,13 +143,18 @@ BENCHMARK_CAPTURE(dynamicNode, grass_and_rock_roughness_with_error_bound, shippe
     ->Unit(benchmark::kMicrosecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
+BENCHMARK_CAPTURE(dynamicNode, grass_and_rock_relative_roughness_with_error_bound, shippedMaterials(), true, true, true)
+    ->Unit(benchmark::kMicrosecond)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
 
 /// What a node's normal map adds to it (dynamic_texture_size = state.range(0), synthesis/NormalMap.h), apart
 /// from the node: a dynamic child of the real leaf as the viewer makes it (grass, rock, roughness), its map
 /// made from the surface 0 (64 texels), 1 (128) or 2 (256) levels below it.
 void normalMap(benchmark::State& state)
 {
-    auto synthesizer = DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, shippedMaterials(), roughness()}).value();
+    const auto noise = roughness();
+    auto synthesizer = DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, shippedMaterials(), noise, noise}).value();
     const Leaf leaf = makeLeaf(*synthesizer);
     WindowPlacement where = leaf.where;
     where.spacing *= 0.5;

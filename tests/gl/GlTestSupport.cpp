@@ -43,6 +43,7 @@ Status buildDetailMap(HeightField field, double spacing, const std::filesystem::
         recipe->roughness = true;
         options.leafDetailError = leafDetailErrorFunction(*synthesizer, true);
         options.detailDisplacementRange = detailDisplacementRange(*synthesizer);
+        options.detailDisplacementRangeFor = detailDisplacementRangeFunction(*synthesizer);
         options.detailRecipe = std::move(recipe).value();
     }
     auto built = buildMap(std::move(field), options, path);

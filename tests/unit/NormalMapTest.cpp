@@ -103,9 +103,11 @@ protected:
         ASSERT_TRUE(report.ok()) << report.error().message;
         mMap = test::openMap(mDir / "hills.map", ReaderKind::MemoryMapped);
         ASSERT_TRUE(mMap);
-        auto roughness = makeRoughnessNoise(mMap->header(), materials.get());
-        ASSERT_TRUE(roughness) << "the map measured its roughness";
-        auto synthesizer = DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, materials, roughness});
+        // As the viewer synthesizes over the map: the roughness continued, the materials relative to it.
+        const DetailSettings settings = settingsForMap({"kobbelt", 1.0, materials}, mMap->header(), true);
+        ASSERT_TRUE(settings.roughness) << "the map measured its roughness";
+        ASSERT_TRUE(settings.materials->hasRelative());
+        auto synthesizer = DetailSynthesizer::create(kChunk, settings);
         ASSERT_TRUE(synthesizer.ok()) << synthesizer.error().message;
         mSynthesizer = std::move(synthesizer).value();
     }

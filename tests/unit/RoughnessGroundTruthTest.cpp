@@ -149,7 +149,8 @@ protected:
         DetailSettings settings;
         settings.materials = materials.value();
         if (roughness) {
-            settings.roughness = makeRoughnessNoise((*map)->header(), settings.materials.get());
+            // As the viewer synthesizes over the map: the roughness continued, the material relative to it.
+            settings = settingsForMap(settings, (*map)->header(), true);
             EXPECT_TRUE(settings.roughness);
             const double c = (region.size / 2.0) / factor;  // the region's centre in the copy's samples
             const RoughnessLaw law = settings.roughness->lawAt((region.x0 / factor) + c, (region.y0 / factor) + c);
