@@ -293,7 +293,6 @@ int main(int argc, char** argv)
     }
     if (*synthesizer) {
         args->build.leafDetailError = leafDetailErrorFunction(**synthesizer, !args->noRoughness);
-        args->build.detailDisplacementRange = detailDisplacementRange(**synthesizer);
         args->build.detailDisplacementRangeFor = detailDisplacementRangeFunction(**synthesizer);
     }
     auto field = readHeightField(args->input, args->read);

@@ -59,6 +59,18 @@ WindowPlacement windowPlacement(const MapHeader& h, const NodeId& id)
             static_cast<std::int64_t>(id.y) * cells - kBorder};
 }
 
+WindowPlacement childPlacement(const WindowPlacement& parent, int quadrant, int chunkSize)
+{
+    TERRAIN_EXPECTS(quadrant >= 0 && quadrant < 4, "quadrant must be 0..3");
+    // Window sample 0 of a node at position X is global sample X (N - 1) - border, at the node's level.
+    const std::int64_t cells = chunkSize - 1;
+    WindowPlacement child = parent;
+    child.spacing = parent.spacing * 0.5;
+    child.gx0 = 2 * (parent.gx0 + kBorder) + (quadrant & 1) * cells - kBorder;
+    child.gy0 = 2 * (parent.gy0 + kBorder) + (quadrant >> 1) * cells - kBorder;
+    return child;
+}
+
 DetailSynthesizer::DetailSynthesizer(std::unique_ptr<Subdivider> subdivider, DetailSettings settings)
     : mSubdivider(std::move(subdivider)), mSettings(std::move(settings))
 {

@@ -77,6 +77,10 @@ DetailSettings settingsForMap(DetailSettings settings, const MapHeader& header, 
 /// queries.
 WindowPlacement windowPlacement(const MapHeader& h, const NodeId& id);
 
+/// Where child `quadrant` (bit 0 east, bit 1 north) of the node placed at `parent` lies: half the spacing,
+/// global sample indices of the next level. `chunkSize` is N.
+WindowPlacement childPlacement(const WindowPlacement& parent, int quadrant, int chunkSize);
+
 class DetailSynthesizer {
 public:
     /// Chunk size N (2^k + 1); an unknown scheme, omega outside [0, 2] or more than kMaxDetailMaterials

@@ -60,8 +60,4 @@ struct LeafErrorSampling {
 float estimateLeafDetailError(DualHeightMap leaf, const WindowPlacement& where, const DetailSynthesizer& synthesizer,
                               std::uint64_t seed, const LeafErrorSampling& sampling = {});
 
-/// Where child `quadrant` (bit 0 east, bit 1 north) of the node placed at `parent` lies: half the spacing,
-/// global sample indices of the next level. `chunkSize` is N.
-WindowPlacement childPlacement(const WindowPlacement& parent, int quadrant, int chunkSize);
-
 }  // namespace terrain

@@ -3,6 +3,7 @@
 
 #include "core/Check.h"
 #include "core/Parse.h"
+#include "core/SplitMix64.h"
 #include "heightfield/Image.h"
 
 #include <algorithm>
@@ -312,14 +313,8 @@ Expected<Material> parseMaterial(const ConfigFile& config, std::vector<std::stri
 double fractalMidpointDeviation(const Fractal& fractal)
 {
     const double r = fractal.params().wavelength;
-    std::uint64_t state = 0x9e3779b97f4a7c15ull ^ fractal.params().seed;
-    auto unit = [&] {
-        state += 0x9e3779b97f4a7c15ull;
-        std::uint64_t z = state;
-        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-        return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
-    };
+    SplitMix64 random(0x9e3779b97f4a7c15ull ^ fractal.params().seed);
+    auto unit = [&] { return static_cast<double>(random.next() >> 11) * 0x1.0p-53; };
     constexpr int kPlaces = 4096;
     double sum = 0.0;
     for (int k = 0; k < kPlaces; ++k) {

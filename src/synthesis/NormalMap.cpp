@@ -45,10 +45,7 @@ std::vector<float> surfaceBelow(const DetailSynthesizer& synthesizer, const Dual
     std::vector<float> out(static_cast<std::size_t>(w) * w);
     for (int q = 0; q < 4; ++q) {
         const int qx = q & 1, qy = q >> 1;
-        WindowPlacement at = where;
-        at.spacing = where.spacing * 0.5;
-        at.gx0 = 2 * (where.gx0 + kBorder) + qx * (n - 1) - kBorder;
-        at.gy0 = 2 * (where.gy0 + kBorder) + qy * (n - 1) - kBorder;
+        const WindowPlacement at = childPlacement(where, q, n);
         const DualHeightMap child = synthesizer.synthesizeChild(node, q, at);
         const std::vector<float> sub = surfaceBelow(synthesizer, child, at, depth - 1);
         const int fx0 = qx == 0 ? 0 : half + kBorder + 1, fx1 = qx == 0 ? half + kBorder : w - 1;

@@ -103,10 +103,7 @@ void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> mat
     const DetailErrorModel model(*synthesizer, kSpacing * 16);
     int quadrant = 0;
     for (auto _ : state) {
-        WindowPlacement where = leaf.where;
-        where.spacing *= 0.5;
-        where.gx0 = 2 * (leaf.where.gx0 + kBorder) + (quadrant & 1) * (kChunk - 1) - kBorder;
-        where.gy0 = 2 * (leaf.where.gy0 + kBorder) + (quadrant >> 1) * (kChunk - 1) - kBorder;
+        const WindowPlacement where = childPlacement(leaf.where, quadrant, kChunk);
         DualHeightMap child = synthesizer->synthesizeChild(leaf.map, quadrant, where);
         auto weights = synthesizer->materialWeights(child, where);
         auto texture = upsampleTexture(leaf.texture, kChunk, quadrant);
@@ -156,10 +153,7 @@ void normalMap(benchmark::State& state)
     const auto noise = roughness();
     auto synthesizer = DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, shippedMaterials(), noise, noise}).value();
     const Leaf leaf = makeLeaf(*synthesizer);
-    WindowPlacement where = leaf.where;
-    where.spacing *= 0.5;
-    where.gx0 = 2 * (leaf.where.gx0 + kBorder) - kBorder;
-    where.gy0 = 2 * (leaf.where.gy0 + kBorder) - kBorder;
+    const WindowPlacement where = childPlacement(leaf.where, 0, kChunk);
     const DualHeightMap child = synthesizer->synthesizeChild(leaf.map, 0, where);
     const int size = static_cast<int>(state.range(0));
     for (auto _ : state) {
@@ -184,10 +178,7 @@ void tessellationErrors(benchmark::State& state)
 {
     auto synthesizer = DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, shippedMaterials()}).value();
     const Leaf leaf = makeLeaf(*synthesizer);
-    WindowPlacement where = leaf.where;
-    where.spacing *= 0.5;
-    where.gx0 = 2 * (leaf.where.gx0 + kBorder) - kBorder;
-    where.gy0 = 2 * (leaf.where.gy0 + kBorder) - kBorder;
+    const WindowPlacement where = childPlacement(leaf.where, 0, kChunk);
     const DualHeightMap child = synthesizer->synthesizeChild(leaf.map, 0, where);
     std::vector<float> surface(static_cast<std::size_t>(kChunk) * kChunk);
     for (int j = 0; j < kChunk; ++j) {

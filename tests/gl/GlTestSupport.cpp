@@ -42,7 +42,6 @@ Status buildDetailMap(HeightField field, double spacing, const std::filesystem::
         // As prep makes it: the errors include the roughness the viewer continues (detail_roughness).
         recipe->roughness = true;
         options.leafDetailError = leafDetailErrorFunction(*synthesizer, true);
-        options.detailDisplacementRange = detailDisplacementRange(*synthesizer);
         options.detailDisplacementRangeFor = detailDisplacementRangeFunction(*synthesizer);
         options.detailRecipe = std::move(recipe).value();
     }
