@@ -3,6 +3,7 @@
 #include "core/OutputGuard.h"
 #include "core/ParallelFor.h"
 #include "core/Parse.h"
+#include "heightfield/GdalRaster.h"
 #include "heightfield/HeightFieldIo.h"
 #include "quadtree/QuadtreeBuilder.h"
 #include "synthesis/DetailErrorModel.h"
@@ -25,11 +26,17 @@ namespace {
 
 using namespace terrain;
 
-constexpr const char* kUsage = R"(usage: prep <heightfield> [options]
+constexpr const char* kUsage = R"(usage: prep <heightfield>... [options]
 
-Builds a terrain map (.map) from a height field: PNG (8/16-bit gray), VTP .bt, Terragen .ter, or raw 16-bit.
+Builds a terrain map (.map) from elevation: any raster GDAL reads (GeoTIFF of any sample type, SRTM .hgt,
+ESRI .asc, USGS DEM, VRT, ...), PNG (8/16-bit gray), VTP .bt, Terragen .ter or raw 16-bit. Several files,
+or one directory, are tiles of one mosaic: they must share CRS, resolution and grid. Geographic
+(longitude/latitude) rasters are reprojected to the UTM zone of their centre, or to --srs.
 
-  -t FILE.png          texture stretched over the terrain (default: colours generated from height and slope)
+  -t FILE              imagery over the terrain: any RGB(A) raster GDAL reads with a CRS is aligned by its
+                       coordinates (the generated colours show where it does not cover); a PNG without
+                       one is stretched over the input (default: colours generated from height and slope)
+  --srs CRS            projected CRS to reproject the elevation to (EPSG:32613, WKT, PROJ string)
   -w FILE.png          weight map for pruning: white keeps the full resolution, black only the root (3.2.13)
   -h METRES            sample spacing, when the file gives none (default 1)
   -v SCALE             vertical scale (metres per file unit), when the file gives none (default 1)
@@ -62,7 +69,7 @@ when its own detail_* options differ. The defaults are the viewer's defaults.
 )";
 
 struct Arguments {
-    std::filesystem::path input;
+    std::vector<std::filesystem::path> inputs;
     std::optional<std::filesystem::path> output;
     BuildOptions build;
     HeightFieldReadOptions read;
@@ -109,6 +116,10 @@ Expected<Arguments> parseArguments(int argc, char** argv)
             auto path = value();
             TERRAIN_TRY(path);
             (arg == "-t" ? args.build.texture : arg == "-w" ? args.build.weights : args.output) = *path;
+        } else if (arg == "--srs") {
+            auto text = value();
+            TERRAIN_TRY(text);
+            args.read.targetSrs = *text;
         } else if (arg == "--material" || arg == "--detail-scheme") {
             auto text = value();
             TERRAIN_TRY(text);
@@ -182,11 +193,10 @@ Expected<Arguments> parseArguments(int argc, char** argv)
             positional.push_back(arg);
         }
     }
-    if (positional.size() != 1) {
-        return makeError(positional.empty() ? "no height field given" : "more than one height field given",
-                         " (see prep --help)");
+    if (positional.empty()) {
+        return makeError("no height field given (see prep --help)");
     }
-    args.input = positional.front();
+    args.inputs.assign(positional.begin(), positional.end());
     if (args.noMaterial && !args.materials.empty()) {
         return makeError("--no-material and --material exclude each other");
     }
@@ -270,13 +280,23 @@ int main(int argc, char** argv)
         std::fprintf(stderr, "prep: %s\n", args.error().message.c_str());
         return 2;
     }
-    const std::filesystem::path output =
-        args->output ? *args->output : std::filesystem::path(args->input).replace_extension(".map");
-    std::vector<InputFile> inputs = {{"height field", args->input},
-                                     {"texture (-t)", args->build.texture.value_or(std::filesystem::path())},
+    if (args->inputs.size() > 1 && !args->output) {
+        std::fprintf(stderr, "prep: a mosaic of several inputs needs -o FILE.map\n");
+        return 2;
+    }
+    std::filesystem::path output = args->output ? *args->output : args->inputs.front();
+    if (!args->output) {
+        // A directory of tiles becomes DIR.map beside it.
+        output = std::filesystem::path(output.string().substr(0, output.string().find_last_not_of('/') + 1));
+        output.replace_extension(".map");
+    }
+    std::vector<InputFile> inputs = {{"texture (-t)", args->build.texture.value_or(std::filesystem::path())},
                                      {"weight map (-w)", args->build.weights.value_or(std::filesystem::path())}};
     for (const auto& material : args->materials) {
         inputs.push_back({"material", material});
+    }
+    for (const auto& input : args->inputs) {
+        inputs.push_back({"height field", input});
     }
     if (auto refused = refuseInputAsOutput("map", output, inputs); !refused.ok()) {
         std::fprintf(stderr, "prep: %s\n", refused.error().message.c_str());
@@ -295,10 +315,13 @@ int main(int argc, char** argv)
         args->build.leafDetailError = leafDetailErrorFunction(**synthesizer, !args->noRoughness);
         args->build.detailDisplacementRangeFor = detailDisplacementRangeFunction(**synthesizer);
     }
-    auto field = readHeightField(args->input, args->read);
+    auto field = readHeightFields(args->inputs, args->read);
     if (!field.ok()) {
         std::fprintf(stderr, "prep: %s\n", field.error().message.c_str());
         return 1;
+    }
+    for (const auto& note : field->notes) {
+        std::fprintf(stderr, "prep: note: %s\n", note.c_str());
     }
 
     ProgressBar bar(::isatty(STDERR_FILENO) != 0);
@@ -311,7 +334,7 @@ int main(int argc, char** argv)
     auto report = buildMap(std::move(field.value()), args->build, output);
     bar.finish();
     if (!report.ok()) {
-        std::fprintf(stderr, "prep: %s: %s\n", args->input.c_str(), report.error().message.c_str());
+        std::fprintf(stderr, "prep: %s: %s\n", args->inputs.front().c_str(), report.error().message.c_str());
         return 1;
     }
     const MapHeader& h = report->header;
@@ -319,6 +342,13 @@ int main(int argc, char** argv)
     std::printf("prep: wrote %s\n", output.c_str());
     std::printf("  input     %s: %d x %d samples, spacing %g m\n", description.c_str(), report->inputWidth,
                 report->inputHeight, h.sampleSpacing);
+    if (!h.crsWkt.empty()) {
+        std::printf("            CRS %s, origin %.3f, %.3f m\n", describeCrs(h.crsWkt).c_str(), h.originX, h.originY);
+    }
+    if (report->imageryCoverage) {
+        std::printf("            imagery %s covers %.1f%% of the terrain\n", args->build.texture->c_str(),
+                    100.0 * *report->imageryCoverage);
+    }
     if (h.noDataFilled > 0) {
         std::printf("            %llu no-data samples filled from their neighbours\n",
                     static_cast<unsigned long long>(h.noDataFilled));

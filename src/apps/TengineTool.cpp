@@ -3,6 +3,7 @@
 #include "apps/ErrorCommand.h"
 #include "core/Memory.h"
 #include "core/Parse.h"
+#include "heightfield/GdalRaster.h"
 #include "heightfield/Image.h"
 #include "lod/CameraPath.h"
 #include "lod/HeightQuery.h"
@@ -37,6 +38,8 @@ constexpr const char* kUsage = R"(usage: tengine-tool COMMAND FILE.map [argument
                           Without --depth: the finest static level. With it: the rendered surface at
                           quadtree level D, synthesized below the static leaves exactly as tengine draws
                           it with its default detail options (or these materials, blended in order)
+  height FILE.map --lonlat LON LAT [same options]
+                          the same at WGS 84 longitude, latitude (degrees), for maps that record a CRS
   height FILE.map --points FILE|- [same options]
                           the same for many points: one "X Y" a line in (blank lines and # comments
                           skipped; - reads standard input), one height a line out, in order; exit 1 at
@@ -79,6 +82,18 @@ int info(const MapFile& map)
     std::printf("grid       %llu x %llu samples, spacing %g m, origin (%g, %g) m\n",
                 static_cast<unsigned long long>(h.gridSize()), static_cast<unsigned long long>(h.gridSize()),
                 h.sampleSpacing, h.originX, h.originY);
+    if (h.crsWkt.empty()) {
+        std::printf("crs        none recorded (world coordinates are the input's own metres)\n");
+    } else {
+        std::printf("crs        %s, %g m per unit\n", describeCrs(h.crsWkt).c_str(), h.crsUnitMetres);
+        if (auto geo = GeoConverter::create(h.crsWkt, h.crsUnitMetres); geo.ok()) {
+            const double cx = h.originX + (h.validX0 + (h.validWidth - 1) / 2.0) * h.sampleSpacing;
+            const double cy = h.originY + (h.validY0 + (h.validHeight - 1) / 2.0) * h.sampleSpacing;
+            if (auto ll = geo->toLonLat(cx, cy); ll.ok()) {
+                std::printf("           centre at longitude %.6f, latitude %.6f\n", ll->first, ll->second);
+            }
+        }
+    }
     std::printf("valid      %u x %u samples at (%u, %u); %llu no-data samples filled\n", h.validWidth, h.validHeight,
                 h.validX0, h.validY0, static_cast<unsigned long long>(h.noDataFilled));
     std::printf("chunks     %u x %u samples (+%d border), textures %u x %u\n", h.chunkSize, h.chunkSize, kBorder,
@@ -437,9 +452,30 @@ int main(int argc, char** argv)
     // height: X Y, or --points FILE.
     std::optional<std::string> pointsFile;
     double x = 0.0, y = 0.0;
-    const std::size_t first = 4;
+    std::size_t first = 4;
     if (args.size() >= 4 && args[2] == "--points") {
         pointsFile = args[3];
+    } else if (args.size() >= 3 && args[2] == "--lonlat") {
+        if (args.size() < 5) {
+            return fail("height --lonlat needs LON and LAT (degrees)");
+        }
+        auto lon = parseDouble(args[3]);
+        auto lat = parseDouble(args[4]);
+        if (!lon.ok() || !lat.ok()) {
+            return fail("height --lonlat: " + (lon.ok() ? lat : lon).error().message);
+        }
+        const MapHeader& h = (*map)->header();
+        auto geo = GeoConverter::create(h.crsWkt, h.crsUnitMetres);
+        if (!geo.ok()) {
+            return fail("height --lonlat: " + (*map)->name() + ": " + geo.error().message);
+        }
+        auto world = geo->toWorld(*lon, *lat);
+        if (!world.ok()) {
+            return fail("height --lonlat: " + world.error().message);
+        }
+        x = world->first;
+        y = world->second;
+        first = 5;
     } else {
         if (args.size() < 4) {
             return fail("height needs X and Y (metres), or --points FILE");

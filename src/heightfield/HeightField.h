@@ -31,6 +31,13 @@ struct HeightField {
     /// World position (metres) of sample (0, 0) when the file is georeferenced in a metric projection.
     double originX = 0.0;
     double originY = 0.0;
+    /// The coordinate reference system of originX/Y and spacing (WKT2), for georeferenced inputs read
+    /// through GDAL; empty when unknown.
+    std::string crsWkt;
+    /// Metres per unit of the CRS's horizontal axes: world metres = CRS coordinate x crsUnitMetres.
+    double crsUnitMetres = 1.0;
+    /// What the reader assumed or changed (reprojected, a unit assumed); prep prints them.
+    std::vector<std::string> notes;
     /// One line saying what was read, e.g. "PNG 16-bit gray 1025x1025"; for summaries and `tengine-tool info`.
     std::string description;
 

@@ -3,6 +3,7 @@
 #include "heightfield/HeightFieldIo.h"
 
 #include "core/Memory.h"
+#include "heightfield/GdalRaster.h"
 #include "heightfield/HeightFieldIoSupport.h"
 
 #include <cctype>
@@ -144,10 +145,17 @@ Expected<HeightField> readHeightField(const std::filesystem::path& path, const H
     if (extension == ".raw" || extension == ".r16" || extension == ".bin") {
         return readRawHeightField(path, options);
     }
-    const std::string found =
-        extension.empty() ? std::string("no extension") : "extension '" + path.extension().string() + "'";
-    return makeError(path.string(), ": unsupported height field file (", found,
-                     "); supported extensions: .png, .bt, .ter, .raw, .r16, .bin");
+    // Everything else (GeoTIFF, .hgt, .asc, VRT, a directory of tiles, ...) goes through GDAL.
+    return readGdalHeightField(std::span(&path, 1), {options.noData, options.targetSrs});
+}
+
+Expected<HeightField> readHeightFields(std::span<const std::filesystem::path> paths,
+                                       const HeightFieldReadOptions& options)
+{
+    if (paths.size() == 1) {
+        return readHeightField(paths.front(), options);
+    }
+    return readGdalHeightField(paths, {options.noData, options.targetSrs});
 }
 
 }  // namespace terrain

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 
 namespace terrain {
 
@@ -22,13 +23,20 @@ struct HeightFieldReadOptions {
     bool rawBigEndian = false;
     /// A native value to treat as no-data in addition to the format's own marker (e.g. -32768 for SRTM).
     std::optional<double> noData;
+    /// GDAL inputs: the projected CRS to reproject to (prep --srs; ElevationReadOptions::targetSrs).
+    std::string targetSrs;
 };
 
-/// Reads a height field, choosing the format by extension: .png, .bt, .ter, .raw/.r16/.bin (raw 16-bit).
-/// Fails with a message naming the file and what is wrong: missing, unknown extension, truncated,
-/// malformed header, unsupported variant, or too large for the memory available (checked before any
-/// large allocation).
+/// Reads a height field, choosing the reader by extension: .png, .bt, .ter, .raw/.r16/.bin (raw 16-bit) by
+/// our own readers, anything else (GeoTIFF, SRTM .hgt, ESRI .asc, USGS DEM, VRT, ...) and a directory of
+/// tiles through GDAL (heightfield/GdalRaster.h). Fails with a message naming the file and what is wrong: missing,
+/// unknown extension, truncated, malformed header, unsupported variant, or too large for the memory available (checked
+/// before any large allocation).
 Expected<HeightField> readHeightField(const std::filesystem::path& path, const HeightFieldReadOptions& options = {});
+
+/// Several files: one mosaic through GDAL (their tiles must agree, GdalRaster.h); one file: readHeightField.
+Expected<HeightField> readHeightFields(std::span<const std::filesystem::path> paths,
+                                       const HeightFieldReadOptions& options = {});
 
 /// Format readers (readHeightField picks one). Orientation and units as HeightField.h describes; each
 /// format's own no-data marker reads as NaN (.bt: -32768 in any sample type, VTP's INVALID_ELEVATION).

@@ -174,6 +174,14 @@ Expected<std::unique_ptr<MapFile>> MapFile::open(const std::filesystem::path& pa
         TERRAIN_TRY(preadAll(fd.get(), header->roughnessOffset(), roughnessBytes.size(), roughnessBytes.data(), name));
         TERRAIN_TRY(decodeRoughness(roughnessBytes, *header, name));
     }
+    if (header->georeferenceBytes > 0) {
+        if (fileSize < header->nodeAreaOffset()) {
+            return makeError(name, ": file is ", fileSize, " bytes, shorter than its header and georeference block");
+        }
+        std::vector<std::uint8_t> bytes(header->georeferenceBytes);
+        TERRAIN_TRY(preadAll(fd.get(), header->georeferenceOffset(), bytes.size(), bytes.data(), name));
+        TERRAIN_TRY(decodeGeoreference(bytes, *header, name));
+    }
     if (header->directoryOffset + header->directoryBytes != fileSize) {
         return makeError(name, ": file is ", fileSize, " bytes but its directory of ", header->nodeCount,
                          " nodes ends at byte ", header->directoryOffset + header->directoryBytes,

@@ -14,6 +14,8 @@ namespace terrain {
 
 namespace {
 constexpr std::size_t kSourceBytes = 96;
+/// Version 6 keeps 88 of them for the source; the last 8 give the georeference block.
+constexpr std::size_t kSourceBytesV6 = 88;
 }  // namespace
 
 std::uint32_t crc32Of(std::span<const std::uint8_t> bytes)
@@ -226,6 +228,47 @@ Status decodeRoughness(std::span<const std::uint8_t> bytes, MapHeader& header, c
     return {};
 }
 
+std::vector<std::uint8_t> encodeGeoreference(const std::string& crsWkt, double crsUnitMetres)
+{
+    std::vector<std::uint8_t> bytes;
+    ByteWriter w(bytes);
+    w.put(crsUnitMetres);
+    w.putBytes(reinterpret_cast<const std::uint8_t*>(crsWkt.data()), crsWkt.size());
+    return bytes;
+}
+
+void setGeoreference(MapHeader& header, std::string crsWkt, double crsUnitMetres)
+{
+    TERRAIN_EXPECTS(crsUnitMetres > 0 && std::isfinite(crsUnitMetres), "metres per CRS unit must be positive");
+    header.crsWkt = std::move(crsWkt);
+    header.crsUnitMetres = header.crsWkt.empty() ? 1.0 : crsUnitMetres;
+    header.georeferenceBytes = 0;
+    header.georeferenceCrc = 0;
+    if (!header.crsWkt.empty()) {
+        const auto bytes = encodeGeoreference(header.crsWkt, header.crsUnitMetres);
+        TERRAIN_EXPECTS(bytes.size() <= kMaxGeoreferenceBytes, "the CRS fits the georeference block");
+        header.georeferenceBytes = static_cast<std::uint32_t>(bytes.size());
+        header.georeferenceCrc = crc32Of(bytes);
+    }
+}
+
+Status decodeGeoreference(std::span<const std::uint8_t> bytes, MapHeader& header, const std::string& name)
+{
+    TERRAIN_TRY(checkBlock(bytes, header.georeferenceBytes, header.georeferenceCrc, name, "georeference block"));
+    ByteReader r(bytes);
+    const double unit = r.get<double>();
+    if (r.failed() || !(unit > 0) || !std::isfinite(unit)) {
+        return makeError(name, ": invalid georeference block: metres per CRS unit ", unit, " is not positive");
+    }
+    std::string wkt(bytes.begin() + 8, bytes.end());
+    if (wkt.find('\0') != std::string::npos) {
+        return makeError(name, ": invalid georeference block: the CRS text holds a zero byte");
+    }
+    header.crsWkt = std::move(wkt);
+    header.crsUnitMetres = unit;
+    return {};
+}
+
 std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& h)
 {
     std::vector<std::uint8_t> bytes;
@@ -256,8 +299,13 @@ std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& h)
     w.put(h.directoryOffset);
     w.put(h.directoryBytes);
     w.put(h.directoryCrc);
-    w.putFixedString(h.source, kSourceBytes - 1);
+    const std::size_t sourceBytes = h.version >= 6 ? kSourceBytesV6 : kSourceBytes;
+    w.putFixedString(h.source, sourceBytes - 1);
     w.put(std::uint8_t{0});
+    if (h.version >= 6) {
+        w.put(h.georeferenceBytes);
+        w.put(h.georeferenceCrc);
+    }
     if (h.version >= 3) {
         w.put(h.detailRecipeBytes);
         w.put(h.detailRecipeCrc);
@@ -318,7 +366,11 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
     h.directoryOffset = r.get<std::uint64_t>();
     h.directoryBytes = r.get<std::uint64_t>();
     h.directoryCrc = r.get<std::uint32_t>();
-    h.source = r.getFixedString(kSourceBytes);
+    h.source = r.getFixedString(h.version >= 6 ? kSourceBytesV6 : kSourceBytes);
+    if (h.version >= 6) {
+        h.georeferenceBytes = r.get<std::uint32_t>();
+        h.georeferenceCrc = r.get<std::uint32_t>();
+    }
     if (h.version >= 3) {
         h.detailRecipeBytes = r.get<std::uint32_t>();
         h.detailRecipeCrc = r.get<std::uint32_t>();
@@ -369,6 +421,9 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
     if (h.roughnessBytes != 0 && h.roughnessBytes != 4 + (std::uint64_t{1} << (2 * (h.levels - 1))) * 8) {
         return bad("roughness block of ", h.roughnessBytes, " bytes, expected 0 or ",
                    4 + (std::uint64_t{1} << (2 * (h.levels - 1))) * 8, " for ", h.levels, " levels");
+    }
+    if (h.georeferenceBytes > kMaxGeoreferenceBytes || (h.georeferenceBytes != 0 && h.georeferenceBytes < 9)) {
+        return bad("georeference block of ", h.georeferenceBytes, " bytes, expected 0 or 9 to ", kMaxGeoreferenceBytes);
     }
     if (h.nodeCount < 1 || h.directoryBytes != std::uint64_t{h.nodeCount} * kDirectoryEntryBytes ||
         h.directoryOffset < h.nodeAreaOffset() || h.directoryOffset > UINT64_MAX - h.directoryBytes) {

@@ -27,8 +27,9 @@ inline constexpr std::array<std::uint8_t, 8> kMapMagic = {0x89, 'T', 'M', 'A', '
 /// largest distance to the leaves below, nested with max, and the leaves' detail errors come from the
 /// synthesis model (issue 12); 5 the roughness block (each static leaf's RoughnessLaw, issue 14) and the
 /// recipe's roughness flag. Versions 1 to 4 are still read: they have no roughness (the synthesis below
-/// their leaves is subdivision and materials only, as they were made for).
-inline constexpr std::uint32_t kMapVersion = 5;
+/// their leaves is subdivision and materials only, as they were made for). 6 the georeference block (the
+/// CRS of the world coordinates, issue 15; the source description shrinks to 88 bytes to make room).
+inline constexpr std::uint32_t kMapVersion = 6;
 /// Version 4 errors nest as delta_c(node) = max(measured, kErrorNesting x the children's largest): a parent's
 /// error stays a quarter above its children's, so every split has a geomorph range (eq. 3.5 morphs a node
 /// in between its own distance and its parent's); with plain max they could coincide and the split pop.
@@ -121,6 +122,12 @@ struct MapHeader {
     std::optional<RoughnessGrid> roughness;
     std::uint32_t roughnessBytes = 0;  ///< size of the roughness block after the recipe block; 0 = none
     std::uint32_t roughnessCrc = 0;    ///< its CRC32
+    /// Version 6: the CRS of originX/Y (WKT2; empty: none recorded) and metres per CRS unit (world metres =
+    /// CRS coordinate x crsUnitMetres). Set them with setGeoreference(), which also sets the two fields below.
+    std::string crsWkt;
+    double crsUnitMetres = 1.0;
+    std::uint32_t georeferenceBytes = 0;  ///< size of the georeference block after the roughness block; 0 = none
+    std::uint32_t georeferenceCrc = 0;    ///< its CRC32
 
     /// Samples per side of the whole padded grid at the finest level: (N - 1) * 2^(levels-1) + 1.
     std::uint64_t gridSize() const { return std::uint64_t{chunkSize - 1} * (std::uint64_t{1} << (levels - 1)) + 1; }
@@ -140,8 +147,10 @@ struct MapHeader {
     bool hasDetailErrors() const { return version >= 2; }
     /// Where the roughness block starts: after the header and the recipe block.
     std::uint64_t roughnessOffset() const { return kHeaderBytes + detailRecipeBytes; }
-    /// Where node payloads may start: after the header, the recipe and the roughness blocks.
-    std::uint64_t nodeAreaOffset() const { return kHeaderBytes + detailRecipeBytes + std::uint64_t{roughnessBytes}; }
+    /// Where the georeference block starts: after the roughness block.
+    std::uint64_t georeferenceOffset() const { return roughnessOffset() + roughnessBytes; }
+    /// Where node payloads may start: after the header, the recipe, roughness and georeference blocks.
+    std::uint64_t nodeAreaOffset() const { return georeferenceOffset() + georeferenceBytes; }
 };
 
 /// One directory entry: where a node's payload is and what the LOD selection needs without loading it.
@@ -182,6 +191,16 @@ void setRoughness(MapHeader& header, std::optional<RoughnessGrid> grid);
 /// Parses the roughness block (header.roughnessBytes bytes read at header.roughnessOffset()) into
 /// header.roughness, checking its CRC, size and values; `name` is used in messages.
 Status decodeRoughness(std::span<const std::uint8_t> bytes, MapHeader& header, const std::string& name);
+
+/// Longest CRS a map stores (WKT2 of projected CRSs is a few kilobytes).
+inline constexpr std::size_t kMaxGeoreferenceBytes = 1 << 16;
+/// The georeference block's bytes: metres per CRS unit (f64), then the WKT (UTF-8, no terminator).
+std::vector<std::uint8_t> encodeGeoreference(const std::string& crsWkt, double crsUnitMetres);
+/// Sets header.crsWkt / crsUnitMetres and the block's size and CRC (an empty WKT: no block, unit 1).
+/// Precondition: crsUnitMetres > 0 and finite, the block within kMaxGeoreferenceBytes.
+void setGeoreference(MapHeader& header, std::string crsWkt, double crsUnitMetres);
+/// Parses the georeference block (header.georeferenceBytes read at header.georeferenceOffset()).
+Status decodeGeoreference(std::span<const std::uint8_t> bytes, MapHeader& header, const std::string& name);
 
 /// Serializes the header into kHeaderBytes bytes, including its CRC.
 std::array<std::uint8_t, kHeaderBytes> encodeHeader(const MapHeader& header);

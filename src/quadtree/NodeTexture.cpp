@@ -189,6 +189,56 @@ void ImageTexture::colour(double gx, double gy, double footprint, std::uint8_t* 
     toBytes(sum, rgb);
 }
 
+CoveredImageTexture::CoveredImageTexture(Image rgba, double pixelsPerSample, double x0, double y0,
+                                         const TextureSource& fallback)
+    : mImage(std::move(rgba)), mPixelsPerSample(pixelsPerSample), mX0(x0), mY0(y0), mFallback(fallback)
+{
+    TERRAIN_EXPECTS(mImage.channels == 4 && mImage.width >= 1 && mImage.height >= 1, "imagery must be RGBA");
+    TERRAIN_EXPECTS(pixelsPerSample > 0, "imagery needs a positive resolution");
+}
+
+void CoveredImageTexture::colour(double gx, double gy, double footprint, std::uint8_t* rgb) const
+{
+    const double px = (gx - mX0) * mPixelsPerSample;
+    const double py = (mImage.height - 1) - (gy - mY0) * mPixelsPerSample;
+    const auto x0 = static_cast<std::int64_t>(std::floor(px));
+    const auto y0 = static_cast<std::int64_t>(std::floor(py));
+    const double fx = px - static_cast<double>(x0), fy = py - static_cast<double>(y0);
+    const double weights[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+    double sum[3] = {0, 0, 0};
+    double covered = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        const std::int64_t x = x0 + (k & 1), y = y0 + (k >> 1);
+        if (weights[k] == 0.0 || x < 0 || y < 0 || x >= mImage.width || y >= mImage.height) {
+            continue;  // off the lattice (padding): not covered
+        }
+        const std::uint8_t* p = mImage.pixel(static_cast<int>(x), static_cast<int>(y));
+        const double w = weights[k] * p[3] / 255.0;
+        covered += w;
+        for (int i = 0; i < 3; ++i) {
+            sum[i] += w * p[i];
+        }
+    }
+    std::uint8_t under[3] = {0, 0, 0};
+    if (covered < 1.0 - 1e-9) {
+        mFallback.colour(gx, gy, footprint, under);
+    }
+    const double rest = std::max(0.0, 1.0 - covered);
+    for (int i = 0; i < 3; ++i) {
+        rgb[i] = static_cast<std::uint8_t>(std::clamp(std::lround(sum[i] + rest * under[i]), 0L, 255L));
+    }
+}
+
+double CoveredImageTexture::coverage() const
+{
+    std::size_t full = 0;
+    const std::size_t count = static_cast<std::size_t>(mImage.width) * mImage.height;
+    for (std::size_t k = 0; k < count; ++k) {
+        full += mImage.pixels[k * 4 + 3] == 255 ? 1 : 0;
+    }
+    return static_cast<double>(full) / static_cast<double>(count);
+}
+
 void sampleNodeTexture(const TextureSource& source, const MapHeader& header, const NodeId& id,
                        std::span<std::uint8_t> rgb)
 {

@@ -60,6 +60,24 @@ private:
     double mX0, mY0;          ///< the grid position of the image's south-west pixel centre
 };
 
+/// Georeferenced imagery (`prep -t` of a GDAL raster with a CRS), already resampled by GDAL onto the
+/// finest level's texel lattice (readGeoImagery): an RGBA image whose pixel (c, r), r = 0 the north row, is
+/// at grid position (x0 + c / pixelsPerSample, y0 + (height - 1 - r) / pixelsPerSample). Where its alpha is
+/// below 255 (the imagery does not cover) the fallback's colour shows through in proportion.
+class CoveredImageTexture final : public TextureSource {
+public:
+    CoveredImageTexture(Image rgba, double pixelsPerSample, double x0, double y0, const TextureSource& fallback);
+    void colour(double gx, double gy, double footprint, std::uint8_t* rgb) const override;
+    /// Share of the image's pixels with full coverage (alpha 255), for prep's summary.
+    double coverage() const;
+
+private:
+    Image mImage;
+    double mPixelsPerSample;
+    double mX0, mY0;
+    const TextureSource& mFallback;
+};
+
 /// Fills node `id`'s texture (size*size*3, rows south to north) directly from `source`.
 void sampleNodeTexture(const TextureSource& source, const MapHeader& header, const NodeId& id,
                        std::span<std::uint8_t> rgb);

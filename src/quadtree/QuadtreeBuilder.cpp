@@ -5,6 +5,7 @@
 #include "core/AtomicFile.h"
 #include "core/Check.h"
 #include "core/ParallelFor.h"
+#include "heightfield/GdalRaster.h"
 #include "heightfield/NoDataFill.h"
 #include "quadtree/HeightCodec.h"
 #include "quadtree/NodeTexture.h"
@@ -454,6 +455,7 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     header.validHeight = static_cast<std::uint32_t>(field.height);
     header.noDataFilled = filled;
     header.source = field.description;
+    setGeoreference(header, field.crsWkt, field.crsUnitMetres);
     setDetailRecipe(header, options.detailRecipe);
 
     if (options.measureRoughness && header.levels <= 15) {
@@ -498,16 +500,36 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
         grid->reconstructLossy(header, header.quantizerBin, options.threads);
     }
 
+    // -t: georeferenced imagery aligned by coordinates over the generated colours, or a PNG stretched over
+    // the input.
     std::unique_ptr<TextureSource> textureSource;
+    std::unique_ptr<TextureSource> generated =
+        std::make_unique<HeightColouring>(*grid, header, header.heightOf(lowest), header.heightOf(highest));
     Image textureImage;
-    if (options.texture) {
+    if (options.texture && isGeoreferencedRaster(*options.texture)) {
+        // The finest level's texel lattice over the valid region.
+        const double texelsPerSample = (header.textureSize - 1.0) / (header.chunkSize - 1.0);
+        RasterGrid lattice;
+        lattice.width = static_cast<int>(std::ceil((header.validWidth - 1.0) * texelsPerSample - 1e-9)) + 1;
+        lattice.height = static_cast<int>(std::ceil((header.validHeight - 1.0) * texelsPerSample - 1e-9)) + 1;
+        lattice.step = header.sampleSpacing / texelsPerSample;
+        lattice.x0 = header.originX + header.validX0 * header.sampleSpacing;
+        lattice.y0 = header.originY + header.validY0 * header.sampleSpacing;
+        lattice.crsWkt = header.crsWkt;
+        lattice.crsUnitMetres = header.crsUnitMetres;
+        auto imagery = readGeoImagery(*options.texture, lattice);
+        TERRAIN_TRY(imagery);
+        auto covered = std::make_unique<CoveredImageTexture>(std::move(imagery.value()), texelsPerSample,
+                                                             header.validX0, header.validY0, *generated);
+        report.imageryCoverage = covered->coverage();
+        textureSource = std::move(covered);
+    } else if (options.texture) {
         auto image = readPngImage(*options.texture, 3);
         TERRAIN_TRY(image);
         textureImage = std::move(image.value());
         textureSource = std::make_unique<ImageTexture>(textureImage, header);
     } else {
-        textureSource =
-            std::make_unique<HeightColouring>(*grid, header, header.heightOf(lowest), header.heightOf(highest));
+        textureSource = std::move(generated);
     }
     std::unique_ptr<WeightMap> weights;
     if (options.weights) {
@@ -526,6 +548,9 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     }
     if (header.roughness) {
         file->write(encodeRoughness(*header.roughness));
+    }
+    if (header.georeferenceBytes > 0) {
+        file->write(encodeGeoreference(header.crsWkt, header.crsUnitMetres));
     }
 
     std::atomic<std::uint64_t> done{0};

@@ -22,7 +22,9 @@ struct BuildOptions {
     double maxError = 0.0;                ///< --max-error: L-infinity bound in metres, 0 = lossless
     int textureSize = 0;                  ///< --texture-size: 2^k + 1 up to kMaxTextureSize; 0 = the chunk size
     int threads = 1;
-    std::optional<std::filesystem::path> texture;  ///< -t: RGB texture stretched over the input
+    /// -t: imagery with a CRS (any GDAL RGB(A) raster) aligned by coordinates, the generated colours where it
+    /// does not cover; otherwise a PNG stretched over the input.
+    std::optional<std::filesystem::path> texture;
     std::optional<std::filesystem::path> weights;  ///< -w: gray weight map for pruning (3.2.13)
     int zlibLevel = 6;
     /// The error of the detail synthesized below static leaf `id` (3.4.1), in metres: finite and >= 0. Gets
@@ -78,6 +80,8 @@ struct BuildReport {
     float maxLeafDetailError = 0.0f;   ///< metres, over the leaves (0 without leafDetailError)
     double meanLeafDetailError = 0.0;  ///< metres
     double leafDetailSeconds = 0.0;    ///< time spent in leafDetailError, summed over the threads
+    /// -t with georeferenced imagery: the share of the finest texel lattice it covers fully; empty otherwise.
+    std::optional<double> imageryCoverage;
 };
 
 /// Builds the map of `field` into `output` (written to a temporary name and renamed). The field is

@@ -179,7 +179,7 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     auto f32 = [&](std::size_t offset) { return std::bit_cast<float>(u32(offset)); };
     const Bytes magic = {0x89, 'T', 'M', 'A', 'P', 0x0d, 0x0a, 0x1a};
     EXPECT_TRUE(std::equal(magic.begin(), magic.end(), bytes.begin()));
-    EXPECT_EQ(u32(8), 5u);
+    EXPECT_EQ(u32(8), 6u);
     EXPECT_EQ(u32(12), 256u);
     EXPECT_EQ(u32(16), 17u);
     EXPECT_EQ(u32(20), 2u);
@@ -200,6 +200,8 @@ TEST(MapFileTest, RawBytesFollowTheFormatDescription)
     EXPECT_EQ(directoryOffset + u64(128), bytes.size());
     EXPECT_EQ(u32(136), zlibCrc(std::span(bytes).subspan(directoryOffset)));
     EXPECT_EQ(std::string(reinterpret_cast<const char*>(&bytes[140])), "generated 65x65");
+    EXPECT_EQ(u32(228), 0u) << "version 6: no CRS, no georeference block";
+    EXPECT_EQ(u32(232), 0u);
     EXPECT_EQ(u32(236), 0u) << "built without a detail recipe: no block";
     EXPECT_EQ(u32(240), 0u);
     // The roughness block right after the header (no recipe): 4 x 4 leaves, amplitude and exponent each.
@@ -575,7 +577,8 @@ TEST(MapFileTest, BadHeaderFieldsAreErrors)
     const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
     const Case cases[] = {
         {"magic", 1, 1, 'X', false, "not a terrain map"},
-        {"version 6", 8, 4, 6, true, "version 6"},
+        {"version 7", 8, 4, 7, true, "version 7"},
+        {"georeference block too short", 228, 4, 5, true, "georeference block"},
         {"roughness block of the wrong size", 244, 4, 140, true, "roughness block of 140 bytes"},
         {"roughness block checksum", 248, 4, 0x12345678, true, "roughness block checksum"},
         {"detail recipe over 64 KiB", 236, 4, 70000, true, "detail recipe of 70000 bytes"},
