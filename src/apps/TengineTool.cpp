@@ -13,11 +13,13 @@
 #include "quadtree/MapVerifier.h"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -44,6 +46,11 @@ constexpr const char* kUsage = R"(usage: tengine-tool COMMAND FILE.map [argument
                           the same for many points: one "X Y" a line in (blank lines and # comments
                           skipped; - reads standard input), one height a line out, in order; exit 1 at
                           the first bad line or point outside, naming its line
+  export FILE.map OUT.tif --region X0,Y0,X1,Y1 --spacing S [--depth D] [--material M.mat]... [--no-material]
+                          write the surface tengine draws (exactly what height --depth returns) on a grid
+                          of S metres from X0,Y0 (world metres, the south-west sample) to X1,Y1 as a
+                          float32 GeoTIFF in the map's CRS (no-data -9999 outside the terrain). The depth
+                          defaults to the coarsest level at least as fine as S
   texture FILE.map LEVEL/X/Y OUT.png
                           write a static node's texture as a PNG (north up)
   select FILE.map --camera X,Y,Z,YAW,PITCH [--tau 2] [--size 1280x720] [--fov 60]
@@ -415,7 +422,7 @@ int main(int argc, char** argv)
     }
     const std::string& command = args[0];
     if (command != "info" && command != "verify" && command != "height" && command != "texture" &&
-        command != "select" && command != "stream" && command != "error") {
+        command != "export" && command != "select" && command != "stream" && command != "error") {
         std::fprintf(stderr, "tengine-tool: unknown command '%s'\n%s", command.c_str(), kUsage);
         return 2;
     }
@@ -449,6 +456,59 @@ int main(int argc, char** argv)
         }
         return texture(**map, args[2], args[3]);
     }
+    // export: OUT.tif --region ... --spacing S, then the same options as height.
+    std::optional<std::string> exportPath;
+    std::optional<std::array<double, 4>> region;
+    std::optional<double> exportSpacing;
+    std::vector<std::string> heightArgs = args;
+    if (command == "export") {
+        if (args.size() < 3) {
+            return fail("export needs an output .tif");
+        }
+        exportPath = args[2];
+        heightArgs = {args[0], args[1], "0", "0"};
+        for (std::size_t i = 3; i < args.size(); ++i) {
+            if (args[i] == "--region" && i + 1 < args.size()) {
+                std::array<double, 4> r{};
+                std::size_t at = 0;
+                const std::string& text = args[++i];
+                for (int k = 0; k < 4; ++k) {
+                    const std::size_t comma = k < 3 ? text.find(',', at) : text.size();
+                    auto v = parseDouble(comma == std::string::npos ? std::string() : text.substr(at, comma - at));
+                    if (!v.ok() || comma == std::string::npos) {
+                        return fail("export: --region '" + text + "' is not X0,Y0,X1,Y1 (metres)");
+                    }
+                    r[static_cast<std::size_t>(k)] = *v;
+                    at = comma + 1;
+                }
+                if (!(r[2] > r[0] && r[3] > r[1])) {
+                    return fail("export: --region '" + text + "' needs X1 > X0 and Y1 > Y0");
+                }
+                region = r;
+            } else if (args[i] == "--spacing" && i + 1 < args.size()) {
+                auto v = parseDouble(args[++i]);
+                if (!v.ok() || !(*v > 0)) {
+                    return fail("export: --spacing must be a positive number of metres");
+                }
+                exportSpacing = *v;
+            } else {
+                heightArgs.push_back(args[i]);
+            }
+        }
+        if (!region || !exportSpacing) {
+            return fail("export needs --region X0,Y0,X1,Y1 and --spacing S");
+        }
+        const MapHeader& h = (*map)->header();
+        if (std::find(heightArgs.begin(), heightArgs.end(), "--depth") == heightArgs.end()) {
+            int level = 0;
+            while (level < NodeId::kMaxLevel && h.spacingAt(level) > *exportSpacing * (1 + 1e-9)) {
+                ++level;
+            }
+            heightArgs.push_back("--depth");
+            heightArgs.push_back(std::to_string(level));
+        }
+    }
+    args = heightArgs;
     // height: X Y, or --points FILE.
     std::optional<std::string> pointsFile;
     double x = 0.0, y = 0.0;
@@ -541,6 +601,44 @@ int main(int argc, char** argv)
         }
         return sample->height;
     };
+    if (exportPath) {
+        const auto& r = *region;
+        const double s = *exportSpacing;
+        const double nx = std::floor((r[2] - r[0]) / s + 1e-9) + 1, ny = std::floor((r[3] - r[1]) / s + 1e-9) + 1;
+        if (nx * ny > 1e9) {
+            return fail("export: " + std::to_string(nx) + " x " + std::to_string(ny) + " samples is too many");
+        }
+        RasterGrid grid;
+        grid.width = static_cast<int>(nx);
+        grid.height = static_cast<int>(ny);
+        grid.x0 = r[0];
+        grid.y0 = r[1];
+        grid.step = s;
+        grid.crsWkt = (*map)->header().crsWkt;
+        grid.crsUnitMetres = (*map)->header().crsUnitMetres;
+        auto bytes = static_cast<std::uint64_t>(nx * ny * sizeof(float));
+        if (auto room = checkAllocation(bytes, "the exported grid"); !room.ok()) {
+            return fail("export: " + room.error().message);
+        }
+        std::vector<float> heights(static_cast<std::size_t>(nx * ny));
+        std::uint64_t outside = 0;
+        for (int j = 0; j < grid.height; ++j) {
+            for (int i = 0; i < grid.width; ++i) {
+                auto h = sampler->at(grid.x0 + i * s, grid.y0 + j * s);
+                heights[static_cast<std::size_t>(j) * grid.width + i] =
+                    h.ok() ? static_cast<float>(h->height) : std::numeric_limits<float>::quiet_NaN();
+                outside += h.ok() ? 0 : 1;
+            }
+        }
+        if (auto written = writeFloat32GeoTiff(*exportPath, grid, heights); !written.ok()) {
+            return fail("export: " + written.error().message);
+        }
+        std::printf("exported %s: %d x %d samples of %g m at depth %d (%s), %llu outside the terrain (no-data)\n",
+                    exportPath->c_str(), grid.width, grid.height, s, *depth,
+                    grid.crsWkt.empty() ? "no CRS" : describeCrs(grid.crsWkt).c_str(),
+                    static_cast<unsigned long long>(outside));
+        return 0;
+    }
     if (!pointsFile) {
         auto h = heightAt(x, y);
         if (!h.ok()) {

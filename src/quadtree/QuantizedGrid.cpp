@@ -7,6 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <utility>
+#include <vector>
 
 namespace terrain {
 
@@ -14,6 +17,59 @@ namespace {
 constexpr double kMaxCodes = 65535.0;
 /// Codes spanned by non-integer data, leaving room for the lossy margin below 65535.
 constexpr double kFloatCodes = 65000.0;
+
+/// Float samples that all lie on a regular lattice lo + k g (k < 65535) up to float rounding: heights
+/// exported from a map (its codes times its step), or decimetres stored as float. Returns g and the largest
+/// distance of a sample from its lattice point; empty when the samples are not on one. The step is first
+/// estimated from the smallest gap between distinct values of a subsample, then refined on values ever
+/// farther from lo (each k known exactly from the estimate before), then checked on every sample.
+std::optional<std::pair<double, double>> latticeOf(const std::vector<float>& samples, double lo, double hi)
+{
+    const double range = hi - lo;
+    // Float32 rounding of the samples: a few units in the last place of the largest magnitude.
+    const double tolerance = 4.0 * std::ldexp(std::max({std::abs(lo), std::abs(hi), 1.0}), -23);
+    if (!(range > 64 * tolerance) || samples.size() < 16) {
+        return std::nullopt;
+    }
+    const std::size_t stride = std::max<std::size_t>(1, samples.size() / 65536);
+    std::vector<double> values;
+    for (std::size_t k = 0; k < samples.size(); k += stride) {
+        values.push_back(samples[k]);
+    }
+    values.push_back(hi);
+    std::sort(values.begin(), values.end());
+    double gap = range;
+    for (std::size_t k = 1; k < values.size(); ++k) {
+        const double d = values[k] - values[k - 1];
+        if (d > 8 * tolerance) {
+            gap = std::min(gap, d);
+        }
+    }
+    double g = gap;
+    if (range / g + 1 > kMaxCodes) {
+        return std::nullopt;
+    }
+    for (double span : {8.0, 64.0, 512.0, 4096.0, 32768.0, 1e9}) {
+        // The value whose lattice index is nearest `span` (the largest for the last round).
+        const double target = std::min(lo + span * g, hi);
+        const auto it = std::lower_bound(values.begin(), values.end(), target);
+        const double v = it == values.end() ? hi : *it;
+        const double k = std::round((v - lo) / g);
+        if (k >= 1) {
+            g = (v - lo) / k;
+        }
+    }
+    double worst = 0.0;
+    for (float sample : samples) {
+        const double d = sample - lo;
+        const double deviation = std::abs(d - std::round(d / g) * g);
+        if (deviation > tolerance + 1e-6 * g) {
+            return std::nullopt;
+        }
+        worst = std::max(worst, deviation);
+    }
+    return std::pair{g, worst};
+}
 }  // namespace
 
 Expected<Quantization> chooseQuantization(const HeightField& field, double scale, double baseOffset, double maxError)
@@ -44,6 +100,13 @@ Expected<Quantization> chooseQuantization(const HeightField& field, double scale
         q.margin = e;
         q.bin = 2 * e + 1;
         q.errorBound = e * q.step;
+    } else if (auto lattice = maxError == 0 ? latticeOf(field.samples, lo, hi) : std::nullopt) {
+        // Float samples on a lattice: one code per lattice step, no error beyond the samples' own rounding.
+        q.nativePerCode = lattice->first;
+        q.step = q.nativePerCode * scale;
+        q.margin = 0;
+        q.bin = 1;
+        q.errorBound = lattice->second * scale;
     } else {
         // Non-integer data: the finest step that fits 16 bits, rounding adds half a step of error.
         q.nativePerCode = std::max(range, 1e-9) / kFloatCodes;

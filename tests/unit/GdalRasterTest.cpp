@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <sstream>
 
 namespace terrain {
 namespace {
@@ -144,6 +145,9 @@ TEST(GdalRasterTest, Float32InFeetWithScaleAndOffsetBecomesMetres)
     auto opened = MapFile::open(map, ReaderKind::Stream);
     ASSERT_TRUE(opened.ok()) << opened.error().message;
     EXPECT_EQ(describeCrs((*opened)->header().crsWkt), "WGS 84 / UTM zone 13N (EPSG:32613)");
+    // Float32 samples holding whole numbers lie on a lattice: stored losslessly, one code per native unit.
+    EXPECT_EQ((*opened)->header().maxErrorBound, 0.0);
+    EXPECT_DOUBLE_EQ((*opened)->header().heightStep, 0.5 * 0.3048);
     for (const auto& [col, line] : std::vector<std::pair<int, int>>{{0, 0}, {17, 33}, {119, 89}, {60, 45}}) {
         const double x = gdal.gt[0] + (col + 0.5) * gdal.gt[1], y = gdal.gt[3] + (line + 0.5) * gdal.gt[5];
         auto h = staticHeightAt(**opened, x, y);
@@ -328,6 +332,65 @@ TEST(GdalRasterTest, ImageryIsAlignedByCoordinatesOverTheGeneratedColours)
             EXPECT_FALSE(std::abs(centre[0] - 220) <= 3 && std::abs(centre[1] - 20) <= 3) << node << ": generated";
         }
     }
+}
+
+TEST(GdalRasterTest, AnExportPreparedAgainGivesTheSurfaceItWasExportedFrom)
+{
+    test::ScratchDir dir;
+    const auto png = writeSourcePng(dir.path(), 200, 150);
+    const auto dem = dir / "dem.tif";
+    gdalTool("gdal_translate", {"-q", "-ot", "Int16", "-a_srs", "EPSG:32613", "-a_ullr", "500000", "4100000", "506000",
+                                "4095500", png.string(), dem.string()});
+    const auto map = dir / "dem.map";
+    ASSERT_EQ(test::runProgram(TERRAIN_PREP_EXE, {dem.string(), "-o", map.string()}).exitCode, 0);
+    auto original = MapFile::open(map, ReaderKind::Stream);
+    ASSERT_TRUE(original.ok());
+    const int finest = static_cast<int>((*original)->header().levels) - 1;
+    // A region on the static lattice (sample centres 500015 + 30 k), at the static spacing.
+    const auto tif = dir / "export.tif";
+    const test::RunResult exported = test::runProgram(
+        TERRAIN_TENGINE_TOOL_EXE,
+        {"export", map.string(), tif.string(), "--region", "501215,4096415,504815,4099115", "--spacing", "30"});
+    ASSERT_EQ(exported.exitCode, 0) << exported.output;
+    const GdalReading gdal = readWithGdal(tif);
+    EXPECT_EQ(gdal.width, 121);
+    EXPECT_EQ(gdal.height, 91);
+    EXPECT_DOUBLE_EQ(gdal.gt[0], 501200.0);
+    EXPECT_DOUBLE_EQ(gdal.gt[3], 4099130.0);
+    const auto again = dir / "again.map";
+    const test::RunResult prep = test::runProgram(TERRAIN_PREP_EXE, {tif.string(), "-o", again.string()});
+    ASSERT_EQ(prep.exitCode, 0) << prep.output;
+    auto copy = MapFile::open(again, ReaderKind::Stream);
+    ASSERT_TRUE(copy.ok());
+    // 100 random points of the region: the copy's static surface against height --depth of the original.
+    std::mt19937 random(15);
+    std::uniform_real_distribution<double> ux(501215.0, 504815.0), uy(4096415.0, 4099115.0);
+    std::string points;
+    std::vector<double> expected;
+    for (int k = 0; k < 100; ++k) {
+        const double x = ux(random), y = uy(random);
+        auto h = staticHeightAt(**copy, x, y);
+        ASSERT_TRUE(h.ok()) << h.error().message;
+        expected.push_back(h->height);
+        points += std::to_string(x) + " " + std::to_string(y) + "\n";
+    }
+    const auto pointsFile = dir / "points.txt";
+    test::runProgram("sh", {"-c", "printf '" + points + "' > " + pointsFile.string()});
+    const test::RunResult query =
+        test::runProgram(TERRAIN_TENGINE_TOOL_EXE,
+                         {"height", map.string(), "--points", pointsFile.string(), "--depth", std::to_string(finest)});
+    ASSERT_EQ(query.exitCode, 0) << query.output;
+    std::istringstream lines(query.output);
+    double worst = 0.0;
+    for (double e : expected) {
+        double h = 0.0;
+        ASSERT_TRUE(lines >> h);
+        worst = std::max(worst, std::abs(h - e));
+    }
+    std::printf("export round trip: worst %.6f m over 100 points, the copy's stored max error %.6f m\n", worst,
+                (*copy)->header().maxErrorBound);
+    // Within the copy's own stored error (its float heights quantized to 16-bit codes: half a step).
+    EXPECT_LE(worst, (*copy)->header().maxErrorBound + 1e-4) << "worst " << worst;
 }
 
 TEST(GdalRasterTest, BadInputIsAClearErrorNamingTheFile)
