@@ -466,7 +466,7 @@ int main(int argc, char** argv)
             return fail("export needs an output .tif");
         }
         exportPath = args[2];
-        heightArgs = {args[0], args[1], "0", "0"};
+        heightArgs = {args[0], args[1]};  // then height's options (--depth, --material, --no-material)
         for (std::size_t i = 3; i < args.size(); ++i) {
             if (args[i] == "--region" && i + 1 < args.size()) {
                 std::array<double, 4> r{};
@@ -513,7 +513,9 @@ int main(int argc, char** argv)
     std::optional<std::string> pointsFile;
     double x = 0.0, y = 0.0;
     std::size_t first = 4;
-    if (args.size() >= 4 && args[2] == "--points") {
+    if (exportPath) {
+        first = 2;  // no position: the grid of the region
+    } else if (args.size() >= 4 && args[2] == "--points") {
         pointsFile = args[3];
     } else if (args.size() >= 3 && args[2] == "--lonlat") {
         if (args.size() < 5) {

@@ -182,6 +182,7 @@ struct TileFacts {
     double noData = 0.0;
     double scale = 1.0;
     double offset = 0.0;
+    bool hasScaleOrOffset = false;  ///< the band sets either (else -v applies when no unit is known either)
     std::string unit;
 };
 
@@ -198,8 +199,10 @@ TileFacts factsOf(GDALDataset& dataset, const std::filesystem::path& path)
         int has = 0;
         facts.noData = band->GetNoDataValue(&has);
         facts.hasNoData = has != 0;
-        facts.scale = band->GetScale();
-        facts.offset = band->GetOffset();
+        int hasScale = 0, hasOffset = 0;
+        facts.scale = band->GetScale(&hasScale);
+        facts.offset = band->GetOffset(&hasOffset);
+        facts.hasScaleOrOffset = hasScale != 0 || hasOffset != 0;
         facts.unit = band->GetUnitType() != nullptr ? band->GetUnitType() : "";
     }
     return facts;
@@ -552,18 +555,12 @@ Expected<ElevationRaster> ElevationRaster::open(std::span<const std::filesystem:
         return makeError(first.path.string(), ": vertical unit '", first.unit,
                          "' is not one prep knows (m, ft, US survey ft, cm, mm); set it with gdal_edit.py -units");
     }
-    {
-        GDALRasterBand* band = state->sources.front()->GetRasterBand(1);
-        int hasScale = 0, hasOffset = 0;
-        band->GetScale(&hasScale);
-        band->GetOffset(&hasOffset);
-        if (hasScale || hasOffset || unit > 0) {
-            state->verticalScale = first.scale * (unit > 0 ? unit : 1.0);
-            state->verticalOffset = first.offset * (unit > 0 ? unit : 1.0);
-        }
-        if (unit < 0) {
-            state->notes.push_back("the raster gives no vertical unit: heights taken as metres (-v to scale them)");
-        }
+    if (first.hasScaleOrOffset || unit > 0) {
+        state->verticalScale = first.scale * (unit > 0 ? unit : 1.0);
+        state->verticalOffset = first.offset * (unit > 0 ? unit : 1.0);
+    }
+    if (unit < 0) {
+        state->notes.push_back("the raster gives no vertical unit: heights taken as metres (-v to scale them)");
     }
 
     // Georeferencing and whether to warp.

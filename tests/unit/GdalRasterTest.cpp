@@ -1,5 +1,6 @@
 // Elevation through GDAL (issue 15): files made at test time with GDAL's own tools, read by
 // readHeightField, compared with GDAL's own reading of the same file (the independent reference).
+#include "MapTestSupport.h"
 #include "TestSupport.h"
 #include "heightfield/GdalRaster.h"
 #include "heightfield/HeightFieldIo.h"
@@ -28,16 +29,9 @@ void gdalTool(const std::string& tool, const std::vector<std::string>& args)
 /// A smooth 16-bit test surface (values 100 .. ~3000) written as PNG, the source of the GDAL files.
 std::filesystem::path writeSourcePng(const std::filesystem::path& dir, int width, int height)
 {
-    HeightField field;
-    field.width = width;
-    field.height = height;
-    field.samples.resize(static_cast<std::size_t>(width) * height);
-    for (int j = 0; j < height; ++j) {
-        for (int i = 0; i < width; ++i) {
-            field.at(i, j) =
-                static_cast<float>(std::round(1500.0 + 700.0 * std::sin(0.05 * i) * std::cos(0.07 * j) + 3.0 * i - j));
-        }
-    }
+    const HeightField field = test::makeHeightField(width, height, [](int i, int j) {
+        return static_cast<float>(std::round(1500.0 + 700.0 * std::sin(0.05 * i) * std::cos(0.07 * j) + 3.0 * i - j));
+    });
     const auto path = dir / "source.png";
     EXPECT_TRUE(writePngHeightField(path, field).ok());
     return path;
@@ -209,15 +203,8 @@ TEST(GdalRasterTest, GeographicInputIsReprojectedWithinTheResamplingError)
 {
     test::ScratchDir dir;
     // A plane in longitude and latitude: bilinear resampling reproduces it up to the projection's curvature.
-    HeightField plane;
-    plane.width = 201;
-    plane.height = 201;
-    plane.samples.resize(201 * 201);
-    for (int j = 0; j < 201; ++j) {
-        for (int i = 0; i < 201; ++i) {
-            plane.at(i, j) = static_cast<float>(1000 + 5 * i + 3 * j);
-        }
-    }
+    const HeightField plane =
+        test::makeHeightField(201, 201, [](int i, int j) { return static_cast<float>(1000 + 5 * i + 3 * j); });
     ASSERT_TRUE(writePngHeightField(dir / "plane.png", plane).ok());
     const auto geo = dir / "plane_geo.tif";
     gdalTool("gdal_translate", {"-q", "-ot", "UInt16", "-a_srs", "EPSG:4326", "-a_ullr", "-105.1005", "37.6005",
