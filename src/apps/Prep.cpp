@@ -46,6 +46,10 @@ or one directory, are tiles of one mosaic: they must share CRS, resolution and g
   --max-error METRES   L-infinity bound on stored heights; 0 = lossless (default 0)
   --texture-size T     texels per node side, 2^k+1 (default: the chunk size)
   --threads N          worker threads (default: all cores)
+  --memory SIZE        memory prep may use, e.g. 256M, 2G (suffixes K, M, G); inputs larger than that are
+                       built out of core, streamed in bands with the height grid in a scratch file next to
+                       the output, giving the same map (default: half the memory available)
+  --out-of-core        build out of core even when the input fits --memory
   --raw-size WxH       size of a raw 16-bit input (required for .raw/.r16/.bin)
   --raw-signed         raw samples are signed 16-bit (default unsigned)
   --raw-big-endian     raw samples are big-endian (default little-endian)
@@ -168,6 +172,14 @@ Expected<Arguments> parseArguments(int argc, char** argv)
             (arg == "--chunk"          ? args.build.chunkSize
              : arg == "--texture-size" ? args.build.textureSize
                                        : args.build.threads) = *v;
+        } else if (arg == "--memory") {
+            auto text = value();
+            TERRAIN_TRY(text);
+            auto bytes = parseByteSize(*text);
+            if (!bytes.ok()) {
+                return makeError("--memory: ", bytes.error().message);
+            }
+            args.build.memoryBudget = *bytes;
         } else if (arg == "--raw-size") {
             auto text = value();
             TERRAIN_TRY(text);
@@ -179,6 +191,8 @@ Expected<Arguments> parseArguments(int argc, char** argv)
             }
             args.read.rawWidth = static_cast<int>(*w);
             args.read.rawHeight = static_cast<int>(*h);
+        } else if (arg == "--out-of-core") {
+            args.build.forceOutOfCore = true;
         } else if (arg == "--no-material") {
             args.noMaterial = true;
         } else if (arg == "--no-roughness") {
@@ -315,12 +329,13 @@ int main(int argc, char** argv)
         args->build.leafDetailError = leafDetailErrorFunction(**synthesizer, !args->noRoughness);
         args->build.detailDisplacementRangeFor = detailDisplacementRangeFunction(**synthesizer);
     }
-    auto field = readHeightFields(args->inputs, args->read);
-    if (!field.ok()) {
-        std::fprintf(stderr, "prep: %s\n", field.error().message.c_str());
+    auto source = openHeightRows(args->inputs, args->read);
+    if (!source.ok()) {
+        std::fprintf(stderr, "prep: %s\n", source.error().message.c_str());
         return 1;
     }
-    for (const auto& note : field->notes) {
+    const HeightField& field = (*source)->info();
+    for (const auto& note : field.notes) {
         std::fprintf(stderr, "prep: note: %s\n", note.c_str());
     }
 
@@ -330,8 +345,8 @@ int main(int argc, char** argv)
         bar.finish();
         std::fprintf(stderr, "prep: warning: %.*s\n", static_cast<int>(message.size()), message.data());
     };
-    const std::string description = field->description;
-    auto report = buildMap(std::move(field.value()), args->build, output);
+    const std::string description = field.description;
+    auto report = buildMap(**source, args->build, output);
     bar.finish();
     if (!report.ok()) {
         std::fprintf(stderr, "prep: %s: %s\n", args->inputs.front().c_str(), report.error().message.c_str());
@@ -374,5 +389,7 @@ int main(int argc, char** argv)
                 h.detailRecipe ? h.detailRecipe->describe().c_str() : "no recipe", report->leafDetailSeconds);
     std::printf("  time      %.2f s, %.1f million input samples per second (%d threads)\n", report->seconds,
                 inputSamples / report->seconds / 1e6, args->build.threads);
+    std::printf("  memory    peak %s, %s (budget %s)\n", formatBytes(peakResidentBytes()).c_str(),
+                report->outOfCore ? "out of core" : "in memory", formatBytes(report->memoryBudget).c_str());
     return 0;
 }

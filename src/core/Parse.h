@@ -6,6 +6,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <string_view>
 
@@ -42,6 +43,40 @@ inline Expected<double> parseNumberIn(std::string_view option, std::string_view 
         return makeError(option, ": '", text, "' is not a number in [", lo, ", ", hi, "]");
     }
     return v;
+}
+
+/// A byte count: a decimal number with an optional suffix K, M or G (powers of 1024, either case), e.g.
+/// "256M", "1.5G", "4096". Fails on anything else, on 0 and on more than 2^62 bytes.
+inline Expected<std::uint64_t> parseByteSize(std::string_view text)
+{
+    double unit = 1.0;
+    std::string_view number = text;
+    if (!text.empty()) {
+        switch (text.back()) {
+            case 'k':
+            case 'K':
+                unit = 1024.0;
+                break;
+            case 'm':
+            case 'M':
+                unit = 1024.0 * 1024.0;
+                break;
+            case 'g':
+            case 'G':
+                unit = 1024.0 * 1024.0 * 1024.0;
+                break;
+            default:
+                break;
+        }
+        if (unit > 1.0) {
+            number.remove_suffix(1);
+        }
+    }
+    auto value = parseDouble(number);
+    if (!value.ok() || !(*value * unit >= 1.0) || !(*value * unit <= std::ldexp(1.0, 62))) {
+        return makeError("'", text, "' is not a size in bytes (a number with an optional K, M or G, e.g. 256M)");
+    }
+    return static_cast<std::uint64_t>(*value * unit);
 }
 
 /// The shortest text that parses back to exactly `value`; plain decimals ("200000", not "2e+05") for

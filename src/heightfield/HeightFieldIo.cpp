@@ -127,6 +127,31 @@ std::string printableBytes(const std::uint8_t* bytes, std::size_t size)
 
 }  // namespace detail
 
+namespace {
+bool hasOwnReader(const std::filesystem::path& path)
+{
+    std::string extension = path.extension().string();
+    for (char& c : extension) {
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    }
+    return extension == ".png" || extension == ".bt" || extension == ".ter" || extension == ".raw" ||
+           extension == ".r16" || extension == ".bin";
+}
+}  // namespace
+
+Expected<std::unique_ptr<HeightRows>> openHeightRows(std::span<const std::filesystem::path> paths,
+                                                     const HeightFieldReadOptions& options)
+{
+    if (paths.size() == 1 && hasOwnReader(paths.front())) {
+        auto field = readHeightField(paths.front(), options);
+        TERRAIN_TRY(field);
+        return std::unique_ptr<HeightRows>(std::make_unique<FieldRows>(std::move(field.value())));
+    }
+    auto raster = ElevationRaster::open(paths, {options.noData, options.targetSrs});
+    TERRAIN_TRY(raster);
+    return std::unique_ptr<HeightRows>(std::make_unique<RasterRows>(std::move(raster.value())));
+}
+
 Expected<HeightField> readHeightField(const std::filesystem::path& path, const HeightFieldReadOptions& options)
 {
     std::string extension = path.extension().string();

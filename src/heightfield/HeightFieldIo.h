@@ -4,9 +4,11 @@
 
 #include "core/Expected.h"
 #include "heightfield/HeightField.h"
+#include "heightfield/HeightRows.h"
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <span>
 
@@ -37,6 +39,11 @@ Expected<HeightField> readHeightField(const std::filesystem::path& path, const H
 /// Several files: one mosaic through GDAL (their tiles must agree, GdalRaster.h); one file: readHeightField.
 Expected<HeightField> readHeightFields(std::span<const std::filesystem::path> paths,
                                        const HeightFieldReadOptions& options = {});
+
+/// The same as a source of rows (prep's input): GDAL inputs stay on disk and are read in bands as the build
+/// asks for them; the formats read by our own readers are read whole.
+Expected<std::unique_ptr<HeightRows>> openHeightRows(std::span<const std::filesystem::path> paths,
+                                                     const HeightFieldReadOptions& options = {});
 
 /// Format readers (readHeightField picks one). Orientation and units as HeightField.h describes; each
 /// format's own no-data marker reads as NaN (.bt: -32768 in any sample type, VTP's INVALID_ELEVATION).

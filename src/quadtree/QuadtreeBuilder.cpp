@@ -4,6 +4,7 @@
 
 #include "core/AtomicFile.h"
 #include "core/Check.h"
+#include "core/Memory.h"
 #include "core/ParallelFor.h"
 #include "heightfield/GdalRaster.h"
 #include "heightfield/NoDataFill.h"
@@ -121,16 +122,32 @@ struct EncodedBlock {
     std::uint64_t textureBytes = 0;
 };
 
+/// The measured errors (directErrorCodesWithin) of the nodes above the split level, gathered per subtree
+/// at the split level while its region of the grid is at hand: codes[i][level] for subtree i and its
+/// ancestor at `level`.
+struct SplitPartials {
+    int split = 0;
+    std::vector<NodeId> subtrees;
+    std::vector<std::vector<double>> codes;
+
+    const std::vector<double>* of(const NodeId& id) const
+    {
+        auto it = std::find(subtrees.begin(), subtrees.end(), id);
+        return it == subtrees.end() ? nullptr : &codes[static_cast<std::size_t>(it - subtrees.begin())];
+    }
+};
+
 class Builder {
 public:
     Builder(const MapHeader& header, const QuantizedGrid& grid, const TreeShape& shape, const TextureSource& texture,
-            const std::vector<std::uint8_t>& filledMask, const BuildOptions& options, std::atomic<std::uint64_t>& done,
-            std::atomic<std::int64_t>& detailNanoseconds)
+            const std::vector<std::uint8_t>& filledSquares, const SplitPartials& partials, const BuildOptions& options,
+            std::atomic<std::uint64_t>& done, std::atomic<std::int64_t>& detailNanoseconds)
         : mHeader(header),
           mGrid(grid),
           mShape(shape),
           mTexture(texture),
-          mFilledMask(filledMask),
+          mFilledSquares(filledSquares),
+          mPartials(partials),
           mOptions(options),
           mWindow(header),
           mDone(done),
@@ -194,9 +211,7 @@ public:
         // The measured distance to the finest data, nested with max and a margin for the geomorph
         // (kErrorNesting; issue 12: eq. 3.1 summed delta_m over the levels, an upper bound of this that grows
         // with every level).
-        const float direct = static_cast<float>(
-            directErrorCodes(mGrid, mHeader, id, [this](const NodeId& n) { return mShape.hasChildren(n); }) *
-            mHeader.heightStep);
+        const float direct = static_cast<float>(directError(id) * mHeader.heightStep);
         summary.deltaC = std::max(kErrorNesting * worstChild, direct);
         summary.detailDeltaC =
             mOptions.leafDetailError
@@ -207,7 +222,23 @@ public:
         downsampleChildTextures({children[0].texture, children[1].texture, children[2].texture, children[3].texture},
                                 static_cast<int>(mHeader.textureSize), summary.texture);
         ++mDone;
+        if (id.level < mPartials.split) {
+            mGrid.releaseAll();  // a node above the split touched its square at its children's stride
+        }
         return summary;
+    }
+
+    /// The measured errors of `subtree`'s ancestors within it (SplitPartials), indexed by their level.
+    std::vector<double> partialsOf(const NodeId& subtree) const
+    {
+        std::vector<double> codes(static_cast<std::size_t>(subtree.level));
+        NodeId ancestor = subtree;
+        for (int level = subtree.level - 1; level >= 0; --level) {
+            ancestor = ancestor.parent();
+            codes[static_cast<std::size_t>(level)] = directErrorCodesWithin(
+                mGrid, mHeader, ancestor, subtree, [this](const NodeId& n) { return mShape.hasChildren(n); });
+        }
+        return codes;
     }
 
     /// Emits the root, which has no parent to be emitted by.
@@ -252,24 +283,48 @@ private:
         return texture;
     }
 
-    /// Whether the node's square (edges included) holds an input sample that was no-data.
+    /// Whether the node's square (edges included) holds an input sample that was no-data: whether one of
+    /// the finest-level squares it is made of does.
     bool containsFilledSample(const NodeId& id) const
     {
-        if (mFilledMask.empty()) {
-            return false;
-        }
-        const std::uint64_t size = std::uint64_t{mHeader.chunkSize - 1}
-                                   << (mHeader.levels - 1 - static_cast<std::uint32_t>(id.level));
-        const std::uint64_t x1 = std::min<std::uint64_t>(id.x * size + size, mHeader.validWidth - 1);
-        const std::uint64_t y1 = std::min<std::uint64_t>(id.y * size + size, mHeader.validHeight - 1);
-        for (std::uint64_t y = id.y * size; y <= y1; ++y) {
-            for (std::uint64_t x = id.x * size; x <= x1; ++x) {
-                if (mFilledMask[y * mHeader.validWidth + x]) {
+        const int shift = static_cast<int>(mHeader.levels) - 1 - id.level;
+        const std::uint64_t side = std::uint64_t{1} << (mHeader.levels - 1);
+        for (std::uint64_t y = std::uint64_t{id.y} << shift; y < (std::uint64_t{id.y} + 1) << shift; ++y) {
+            for (std::uint64_t x = std::uint64_t{id.x} << shift; x < (std::uint64_t{id.x} + 1) << shift; ++x) {
+                if (mFilledSquares[y * side + x]) {
                     return true;
                 }
             }
         }
         return false;
+    }
+
+    /// The measured error of `id` in codes: directly below the split, from the subtrees' partials above it
+    /// (and any leaf above the split directly).
+    double directError(const NodeId& id) const
+    {
+        auto hasChildren = [this](const NodeId& n) { return mShape.hasChildren(n); };
+        if (id.level >= mPartials.split) {
+            return directErrorCodes(mGrid, mHeader, id, hasChildren);
+        }
+        double worst = 0.0;
+        std::vector<NodeId> stack{id};
+        while (!stack.empty()) {
+            const NodeId at = stack.back();
+            stack.pop_back();
+            if (at.level == mPartials.split) {
+                const std::vector<double>* partial = mPartials.of(at);
+                TERRAIN_EXPECTS(partial != nullptr, "every subtree at the split has its partials");
+                worst = std::max(worst, (*partial)[static_cast<std::size_t>(id.level)]);
+            } else if (hasChildren(at)) {
+                for (int q = 0; q < 4; ++q) {
+                    stack.push_back(at.child(q));
+                }
+            } else {
+                worst = std::max(worst, directErrorCodesWithin(mGrid, mHeader, id, at, hasChildren));
+            }
+        }
+        return worst;
     }
 
     void emit(const NodeId& id, std::vector<std::uint8_t> heights, const NodeSummary& summary, EncodedBlock& out) const
@@ -300,7 +355,8 @@ private:
     const QuantizedGrid& mGrid;
     const TreeShape& mShape;
     const TextureSource& mTexture;
-    const std::vector<std::uint8_t>& mFilledMask;  ///< validWidth x validHeight, empty when nothing was filled
+    const std::vector<std::uint8_t>& mFilledSquares;  ///< per finest-level node: its square held a no-data sample
+    const SplitPartials& mPartials;
     const BuildOptions& mOptions;
     NodeWindow mWindow;
     std::atomic<std::uint64_t>& mDone;
@@ -309,70 +365,61 @@ private:
 
 }  // namespace
 
-RoughnessGrid measureLeafRoughness(const HeightField& field, double metresPerUnit, const MapHeader& header, int threads)
+namespace {
+
+/// Rows a band of the out-of-core passes reads beyond the rows it produces: the no-data fill's reach, then
+/// the roughness lags measured on the filled samples.
+constexpr int kBandMargin = kFillRings + kRoughnessMargin;
+
+/// How the input passes through memory: whole (one band, the field held) or in bands of whole leaf rows.
+struct InputPlan {
+    bool inMemory = true;
+    int coreRows = 0;  ///< rows a band produces (a multiple of the leaf rows), out of core
+};
+
+/// Calls fn(window, windowRow0, windowRows, core0, core1) for bands whose cores [core0, core1) cover the
+/// field's rows in order, each window holding its core and `margin` rows beyond it on each side (as far as
+/// the field goes): the held field at once, or bands read from the source.
+Status forEachBand(HeightRows& source, HeightField* field, const InputPlan& plan, int margin,
+                   const std::function<Status(std::span<float>, int, int, int, int)>& fn)
 {
-    TERRAIN_EXPECTS(header.levels >= 1 && header.levels <= 15, "roughness grids are for maps of 1 to 15 levels");
-    TERRAIN_EXPECTS(field.samples.size() == static_cast<std::size_t>(field.width) * field.height,
-                    "the field must hold width x height samples");
-    const int side = 1 << (header.levels - 1);
-    const int cells = static_cast<int>(header.chunkSize) - 1;
-    RoughnessGrid grid;
-    grid.leavesPerSide = side;
-    grid.laws.assign(static_cast<std::size_t>(side) * side, RoughnessLaw{});
-    std::vector<std::uint8_t> measured(grid.laws.size(), 0);
-    auto measure = [&](int x0, int y0, int x1, int y1, bool& enough) {
-        std::array<double, kRoughnessLags.size()> rms{};
-        enough = true;
-        for (std::size_t k = 0; k < kRoughnessLags.size(); ++k) {
-            const MidpointSums sums = midpointDeviation(field.samples, field.width, field.height, kRoughnessLags[k], x0,
-                                                        y0, x1, y1, metresPerUnit);
-            enough = enough && sums.count >= kMinRoughnessSamples;
-            rms[k] = sums.rms();
-        }
-        return fitRoughnessLaw(rms);
-    };
-    parallelFor(grid.laws.size(), std::max(threads, 1), [&](std::size_t k) {
-        const int lx = static_cast<int>(k % side), ly = static_cast<int>(k / side);
-        const int x0 = std::min(lx * cells, field.width), y0 = std::min(ly * cells, field.height);
-        const int x1 = lx == side - 1 ? field.width : std::min((lx + 1) * cells, field.width);
-        const int y1 = ly == side - 1 ? field.height : std::min((ly + 1) * cells, field.height);
-        bool enough = false;
-        grid.laws[k] = measure(x0, y0, x1, y1, enough);
-        measured[k] = enough ? 1 : 0;
-    });
-    if (std::find(measured.begin(), measured.end(), 1) == measured.end()) {
-        bool enough = false;
-        const RoughnessLaw whole = measure(0, 0, field.width, field.height, enough);
-        std::fill(grid.laws.begin(), grid.laws.end(), whole);
-        return grid;
+    const int width = source.info().width, height = source.info().height;
+    if (field) {
+        return fn(field->samples, 0, height, 0, height);
     }
-    // The others: the nearest measured leaf (squared leaf distance; ties to the lowest index).
-    std::vector<int> sources;
-    for (std::size_t k = 0; k < measured.size(); ++k) {
-        if (measured[k]) {
-            sources.push_back(static_cast<int>(k));
-        }
+    std::vector<float> buffer;
+    for (int core0 = 0; core0 < height; core0 += plan.coreRows) {
+        const int core1 = std::min(height, core0 + plan.coreRows);
+        const int w0 = std::max(0, core0 - margin), w1 = std::min(height, core1 + margin);
+        buffer.resize(static_cast<std::size_t>(w1 - w0) * width);
+        TERRAIN_TRY(source.readRows(w0, w1 - w0, buffer));
+        TERRAIN_TRY(fn(buffer, w0, w1 - w0, core0, core1));
     }
-    for (std::size_t k = 0; k < measured.size(); ++k) {
-        if (measured[k]) {
-            continue;
-        }
-        const int lx = static_cast<int>(k % side), ly = static_cast<int>(k / side);
-        long best = -1;
-        int from = sources.front();
-        for (int source : sources) {
-            const long dx = source % side - lx, dy = source / side - ly;
-            if (best < 0 || dx * dx + dy * dy < best) {
-                best = dx * dx + dy * dy;
-                from = source;
-            }
-        }
-        grid.laws[k] = grid.laws[static_cast<std::size_t>(from)];
-    }
-    return grid;
+    return {};
 }
 
+/// The split level the parallel subtrees start at: deep enough for every core to be busy (64 subtrees) and
+/// for a subtree's square to stay within 4096 samples (what the out-of-core build holds per thread). The
+/// tree alone decides it, so the file does not depend on the thread count or on the memory budget.
+int splitLevel(const MapHeader& header)
+{
+    const int levels = static_cast<int>(header.levels);
+    int split = std::min(3, levels - 1);
+    while (split < levels - 1 && (std::uint64_t{header.chunkSize - 1} << (levels - 1 - split)) > 4096) {
+        ++split;
+    }
+    return split;
+}
+
+}  // namespace
+
 Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, const std::filesystem::path& output)
+{
+    FieldRows rows(std::move(field));
+    return buildMap(rows, options, output);
+}
+
+Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, const std::filesystem::path& output)
 {
     const auto start = std::chrono::steady_clock::now();
     auto warn = [&](const std::string& message) {
@@ -397,14 +444,15 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     if (options.threads < 1) {
         return makeError("thread count ", options.threads, " must be at least 1");
     }
-    if (field.width < 2 || field.height < 2) {
-        return makeError("height field is ", field.width, "x", field.height, "; at least 2x2 samples are needed");
+    const HeightField& info = source.info();
+    if (info.width < 2 || info.height < 2) {
+        return makeError("height field is ", info.width, "x", info.height, "; at least 2x2 samples are needed");
     }
 
     // Spacing and vertical scale: the file's own win (paper 4.4.1), the options fill in what it lacks.
     double spacing = 1.0;
-    if (field.spacing) {
-        spacing = *field.spacing;
+    if (info.spacing) {
+        spacing = *info.spacing;
         if (options.spacing && *options.spacing != spacing) {
             warn("-h " + std::to_string(*options.spacing) + " has no effect: the file gives a spacing of " +
                  std::to_string(spacing) + " m");
@@ -418,8 +466,8 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
         return makeError("sample spacing ", spacing, " m must be a positive finite number");
     }
     double scale = 1.0;
-    if (field.verticalScale) {
-        scale = *field.verticalScale;
+    if (info.verticalScale) {
+        scale = *info.verticalScale;
         if (options.verticalScale && *options.verticalScale != scale) {
             warn("-v " + std::to_string(*options.verticalScale) +
                  " has no effect: the file gives a vertical scale of " + std::to_string(scale));
@@ -431,43 +479,109 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
         return makeError("offset ", options.offset, " must be a finite number");
     }
 
-    // No-data samples: filled from valid neighbours and counted.
-    if (countValid(field) == 0) {
-        return makeError("height field has no valid sample (every sample is no-data)");
-    }
-    std::vector<std::uint8_t> filledMask;
-    const std::uint64_t filled = fillNoData(field, &filledMask);
-
+    const int width = info.width, height = info.height;
     MapHeader header;
     header.chunkSize = static_cast<std::uint32_t>(options.chunkSize);
     header.textureSize = static_cast<std::uint32_t>(textureSize);
     header.levels = 1;
-    while (header.gridSize() < static_cast<std::uint64_t>(std::max(field.width, field.height))) {
+    while (header.gridSize() < static_cast<std::uint64_t>(std::max(width, height))) {
         ++header.levels;
     }
     if (header.levels > 24) {
-        return makeError("height field of ", field.width, "x", field.height, " needs more than 24 levels");
+        return makeError("height field of ", width, "x", height, " needs more than 24 levels");
     }
     header.sampleSpacing = spacing;
-    header.originX = field.originX;
-    header.originY = field.originY;
-    header.validWidth = static_cast<std::uint32_t>(field.width);
-    header.validHeight = static_cast<std::uint32_t>(field.height);
-    header.noDataFilled = filled;
-    header.source = field.description;
-    setGeoreference(header, field.crsWkt, field.crsUnitMetres);
+    header.originX = info.originX;
+    header.originY = info.originY;
+    header.validWidth = static_cast<std::uint32_t>(width);
+    header.validHeight = static_cast<std::uint32_t>(height);
+    header.source = info.description;
+    setGeoreference(header, info.crsWkt, info.crsUnitMetres);
     setDetailRecipe(header, options.detailRecipe);
-
-    if (options.measureRoughness && header.levels <= 15) {
-        progress(0.0, "measuring roughness");
-        setRoughness(header, measureLeafRoughness(field, scale, header, options.threads));
-    } else if (options.measureRoughness) {
+    const auto gridSize = static_cast<std::uint32_t>(header.gridSize());
+    const int cells = options.chunkSize - 1;
+    const std::uint64_t leavesPerSide = std::uint64_t{1} << (header.levels - 1);
+    const bool roughness = options.measureRoughness && header.levels <= 15;
+    if (options.measureRoughness && !roughness) {
         warn("a map of " + std::to_string(header.levels) +
              " levels is too large for a roughness grid: the detail below its leaves will not continue the "
              "terrain's roughness");
     }
 
-    auto quantization = chooseQuantization(field, scale, field.verticalOffset + options.offset, options.maxError);
+    // Memory: the whole input and grid when they fit the budget, else bands of rows and the grid in a
+    // scratch file next to the output, released region by region (docs/design.md, "Out-of-core prep").
+    const std::uint64_t budget = options.memoryBudget ? options.memoryBudget : availableMemoryBytes() / 2;
+    const std::uint64_t samples = std::uint64_t{static_cast<std::uint32_t>(width)} * static_cast<std::uint32_t>(height);
+    const std::uint64_t fixedBytes = leavesPerSide * leavesPerSide * (1 + (roughness ? 80 : 0));
+    const std::uint64_t inMemoryBytes =
+        (source.held() ? 0 : samples * 4) + samples * 2 + QuantizedGrid::storageBytes(gridSize) + fixedBytes;
+    InputPlan plan;
+    plan.inMemory = inMemoryBytes <= budget && !options.forceOutOfCore;
+    if (!plan.inMemory) {
+        // Bands: a quarter of the budget for the band (samples, fill and mask bytes), at least a leaf row and
+        // 256 rows; per thread a subtree's square of codes and its encoded nodes.
+        const std::uint64_t rowBytes = std::uint64_t{static_cast<std::uint32_t>(width)} * 6;
+        const std::uint64_t bandRows = std::max<std::uint64_t>(budget / 4 / rowBytes, 1);
+        const int leafRowsPerBand = static_cast<int>(
+            std::max<std::uint64_t>({bandRows > 2 * kBandMargin ? (bandRows - 2 * kBandMargin) / cells : 0,
+                                     static_cast<std::uint64_t>(256 / cells), std::uint64_t{1}}));
+        plan.coreRows = leafRowsPerBand * cells;
+        const std::uint64_t square = std::min<std::uint64_t>(gridSize, 4096 + 2 * cells);
+        const std::uint64_t perThread = square * square * 6;  // its codes, encoded nodes and textures
+        const std::uint64_t needed = (static_cast<std::uint64_t>(plan.coreRows) + 2 * kBandMargin) * rowBytes +
+                                     static_cast<std::uint64_t>(options.threads) * perThread + fixedBytes +
+                                     samples / (kFillBlock * kFillBlock) * 16 + (std::uint64_t{4} << 20);
+        if (needed > budget) {
+            return makeError("the memory budget of ", formatBytes(budget), " is too small for a ", width, "x", height,
+                             " input on ", options.threads, " thread(s) even out of core: it needs about ",
+                             formatBytes(needed), " (--memory, fewer --threads)");
+        }
+    }
+    HeightField whole;
+    HeightField* field = nullptr;
+    if (plan.inMemory) {
+        if (HeightField* held = source.held()) {
+            whole = std::move(*held);
+        } else {
+            TERRAIN_TRY(checkAllocation(samples * 4,
+                                        "a " + std::to_string(width) + "x" + std::to_string(height) + " height field"));
+            whole = info;
+            whole.samples.resize(samples);
+            TERRAIN_TRY(source.readRows(0, height, whole.samples));
+        }
+        field = &whole;
+    }
+
+    // Pass 1: the valid samples' statistics and the far fill's block means.
+    progress(0.0, "reading");
+    SampleStatistics statistics(width, height);
+    FarFillBuilder farBuilder(width, height);
+    TERRAIN_TRY(
+        forEachBand(source, field, plan, 0, [&](std::span<float> rows, int, int, int core0, int core1) -> Status {
+            statistics.addRows(core0, core1 - core0, rows);
+            farBuilder.addRows(core0, core1 - core0, rows);
+            return {};
+        }));
+    if (statistics.valid() == 0) {
+        return makeError("height field has no valid sample (every sample is no-data)");
+    }
+    const FarFillGrid far = statistics.valid() < samples ? farBuilder.finish() : FarFillGrid{};
+
+    auto quantization = chooseQuantization(
+        statistics, info.integerSamples, scale, info.verticalOffset + options.offset, options.maxError,
+        [&](double g) -> Expected<std::optional<double>> {
+            // Pass 1b, for float input that may lie on a lattice: every valid sample's distance from it.
+            std::optional<double> worst = 0.0;
+            TERRAIN_TRY(forEachBand(source, field, plan, 0, [&](std::span<float> rows, int, int, int core0, int core1) {
+                if (worst) {
+                    auto band = latticeDeviation(rows.first(static_cast<std::size_t>(core1 - core0) * width),
+                                                 statistics.lo(), statistics.hi(), g);
+                    worst = band ? std::optional(std::max(*worst, *band)) : std::nullopt;
+                }
+                return Status{};
+            }));
+            return worst;
+        });
     TERRAIN_TRY(quantization);
     header.heightOffset = quantization->offset;
     header.heightStep = quantization->step;
@@ -478,22 +592,93 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
              std::to_string(quantization->step) + " m): storing losslessly");
     }
 
+    // Pass 2: fill, roughness, codes (the padding replicating the last column and row), filled squares.
     progress(0.0, "quantizing");
-    auto grid = QuantizedGrid::build(field, *quantization, static_cast<std::uint32_t>(header.gridSize()));
+    auto grid = plan.inMemory
+                    ? QuantizedGrid::create(gridSize)
+                    : QuantizedGrid::createMapped(
+                          gridSize, output.has_parent_path() ? output.parent_path() : std::filesystem::path("."));
     TERRAIN_TRY(grid);
-    BuildReport report;
-    report.inputWidth = field.width;
-    report.inputHeight = field.height;
-    field.samples = {};  // the grid holds everything from here on
-
-    // Height range of the input (valid region), for the generated texture's bands.
+    std::optional<LeafRoughnessMeter> meter;
+    if (roughness) {
+        meter.emplace(width, height, scale, header);
+    }
+    std::vector<std::uint8_t> filledSquares(leavesPerSide * leavesPerSide, 0);
+    std::uint64_t filled = 0;
     std::uint16_t lowest = 65535, highest = 0;
-    for (std::uint32_t y = 0; y < header.validHeight; ++y) {
-        for (std::uint32_t x = 0; x < header.validWidth; ++x) {
-            lowest = std::min(lowest, grid->at(x, y));
-            highest = std::max(highest, grid->at(x, y));
+    std::vector<std::uint8_t> mask;
+    TERRAIN_TRY(forEachBand(
+        source, field, plan, kBandMargin, [&](std::span<float> rows, int w0, int wrows, int core0, int core1) {
+            if (statistics.valid() < samples) {
+                fillNoDataRows(rows, width, wrows, w0, far, &mask);
+            }
+            for (int y = core0; y < core1 && !mask.empty(); ++y) {
+                const std::uint8_t* row = mask.data() + static_cast<std::size_t>(y - w0) * width;
+                for (int x = 0; x < width; ++x) {
+                    if (!row[x]) {
+                        continue;
+                    }
+                    ++filled;
+                    // The finest squares whose closed square holds (x, y): up to four at a corner.
+                    for (int sy = y / cells - (y % cells == 0 ? 1 : 0); sy <= y / cells; ++sy) {
+                        for (int sx = x / cells - (x % cells == 0 ? 1 : 0); sx <= x / cells; ++sx) {
+                            if (sx >= 0 && sy >= 0 && std::uint64_t(sx) < leavesPerSide &&
+                                std::uint64_t(sy) < leavesPerSide) {
+                                filledSquares[std::uint64_t(sy) * leavesPerSide + std::uint64_t(sx)] = 1;
+                            }
+                        }
+                    }
+                }
+            }
+            if (meter) {
+                const int ly0 = core0 / cells;
+                const int ly1 = core1 == height ? meter->leafRows() : core1 / cells;
+                meter->addLeafRows(ly0, ly1, rows, w0, wrows, options.threads);
+            }
+            parallelFor(static_cast<std::size_t>(core1 - core0), options.threads, [&](std::size_t k) {
+                const int y = core0 + static_cast<int>(k);
+                const float* row = rows.data() + static_cast<std::size_t>(y - w0) * width;
+                for (int x = 0; x < width; ++x) {
+                    grid->at(static_cast<std::uint64_t>(x), static_cast<std::uint64_t>(y)) =
+                        quantizeNative(row[x], *quantization);
+                }
+                const std::uint16_t last =
+                    grid->at(static_cast<std::uint64_t>(width - 1), static_cast<std::uint64_t>(y));
+                for (std::uint32_t x = static_cast<std::uint32_t>(width); x < gridSize; ++x) {
+                    grid->at(x, static_cast<std::uint64_t>(y)) = last;
+                }
+            });
+            for (int y = core0; y < core1; ++y) {
+                for (int x = 0; x < width; ++x) {
+                    const std::uint16_t code = grid->at(static_cast<std::uint64_t>(x), static_cast<std::uint64_t>(y));
+                    lowest = std::min(lowest, code);
+                    highest = std::max(highest, code);
+                }
+            }
+            grid->release(0, static_cast<std::uint64_t>(core0) & ~std::uint64_t{63}, gridSize,
+                          static_cast<std::uint64_t>(core1));
+            return Status{};
+        }));
+    for (std::uint32_t y = static_cast<std::uint32_t>(height); y < gridSize; ++y) {
+        for (std::uint32_t x = 0; x < gridSize; ++x) {
+            grid->at(x, y) = grid->at(x, static_cast<std::uint64_t>(height - 1));
+        }
+        if (y % 256 == 255) {
+            grid->release(0, (y - 255) & ~std::uint32_t{63}, gridSize, y + 1);
         }
     }
+    grid->releaseAll();
+    header.noDataFilled = filled;
+    if (meter) {
+        setRoughness(header, meter->finish());
+    }
+    BuildReport report;
+    report.inputWidth = width;
+    report.inputHeight = height;
+    report.outOfCore = !plan.inMemory;
+    report.memoryBudget = budget;
+    whole = {};  // the grid holds everything from here on
+    mask = {};
 
     if (header.quantizerBin > 1) {
         progress(0.02, "reconstructing");
@@ -517,6 +702,15 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
         lattice.y0 = header.originY + header.validY0 * header.sampleSpacing;
         lattice.crsWkt = header.crsWkt;
         lattice.crsUnitMetres = header.crsUnitMetres;
+        const std::uint64_t latticeBytes =
+            std::uint64_t{static_cast<std::uint32_t>(lattice.width)} * static_cast<std::uint32_t>(lattice.height) * 4;
+        if (!plan.inMemory && latticeBytes > budget / 2) {
+            return makeError(options.texture->string(), ": imagery resampled onto the map's ", lattice.width, "x",
+                             lattice.height, " texel lattice takes ", formatBytes(latticeBytes),
+                             ", more than half the memory budget of ", formatBytes(budget),
+                             " (the out-of-core build holds imagery whole; use a smaller --texture-size or more "
+                             "--memory)");
+        }
         auto imagery = readGeoImagery(*options.texture, lattice);
         TERRAIN_TRY(imagery);
         auto covered = std::make_unique<CoveredImageTexture>(std::move(imagery.value()), texelsPerSample,
@@ -559,7 +753,16 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     if (options.detailDisplacementRangeFor) {
         nodeOptions.detailDisplacementRange = options.detailDisplacementRangeFor(header);
     }
-    Builder builder(header, *grid, shape, *textureSource, filledMask, nodeOptions, done, detailNanoseconds);
+    // Subtrees below the split are independent: workers build them in parallel, each into its own block,
+    // and blocks are appended in subtree order.
+    SplitPartials partials;
+    partials.split = splitLevel(header);
+    partials.subtrees = shape.nodesAt(partials.split);
+    partials.codes.resize(partials.subtrees.size());
+    const int split = partials.split;
+    const std::vector<NodeId>& subtrees = partials.subtrees;
+    Builder builder(header, *grid, shape, *textureSource, filledSquares, partials, nodeOptions, done,
+                    detailNanoseconds);
     std::vector<DirectoryEntry> directory;
     directory.reserve(totalNodes);
     auto append = [&](EncodedBlock& block) {
@@ -575,12 +778,6 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
         block = {};
     };
 
-    // Subtrees below `split` are independent: workers build them in parallel, each into its own block,
-    // and blocks are appended in subtree order. The split depends on the tree only, so the file does not
-    // depend on the thread count.
-    constexpr int kSplitLevel = 3;  ///< up to 64 subtrees: enough to keep any likely core count busy
-    const int split = std::min(kSplitLevel, static_cast<int>(header.levels) - 1);
-    const std::vector<NodeId> subtrees = shape.nodesAt(split);
     std::vector<NodeSummary> subtreeSummaries(subtrees.size());
     std::vector<std::unique_ptr<EncodedBlock>> pending(subtrees.size());
     std::mutex writeMutex;
@@ -599,6 +796,13 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
     parallelFor(subtrees.size(), options.threads, [&](std::size_t i) {
         auto block = std::make_unique<EncodedBlock>();
         subtreeSummaries[i] = builder.process(subtrees[i], *block, none);
+        partials.codes[i] = builder.partialsOf(subtrees[i]);
+        // Done with the subtree's square (and the tiles around it that its borders touched).
+        const std::uint64_t side = std::uint64_t{header.chunkSize - 1} << (header.levels - 1 - split);
+        const std::uint64_t margin = 2 * 64;
+        const std::uint64_t x0 = subtrees[i].x * side, y0 = subtrees[i].y * side;
+        grid->release(x0 > margin ? x0 - margin : 0, y0 > margin ? y0 - margin : 0, x0 + side + margin,
+                      y0 + side + margin);
         std::lock_guard lock(writeMutex);
         pending[i] = std::move(block);
         while (nextToWrite < pending.size() && pending[nextToWrite]) {

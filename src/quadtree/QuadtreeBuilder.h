@@ -3,6 +3,8 @@
 
 #include "core/Expected.h"
 #include "heightfield/HeightField.h"
+#include "heightfield/HeightRows.h"
+#include "quadtree/LeafRoughness.h"
 #include "quadtree/MapFormat.h"
 
 #include <filesystem>
@@ -22,6 +24,12 @@ struct BuildOptions {
     double maxError = 0.0;                ///< --max-error: L-infinity bound in metres, 0 = lossless
     int textureSize = 0;                  ///< --texture-size: 2^k + 1 up to kMaxTextureSize; 0 = the chunk size
     int threads = 1;
+    /// --memory: bytes prep may hold. The input and the code grid are held whole when they fit, otherwise
+    /// the input is streamed in bands of rows and the grid lives in a scratch file next to the output (the
+    /// same map bytes either way); an error when even that does not fit. 0: half the memory available.
+    std::uint64_t memoryBudget = 0;
+    /// --out-of-core: build out of core even when the input fits the budget (tests, benchmarks).
+    bool forceOutOfCore = false;
     /// -t: imagery with a CRS (any GDAL RGB(A) raster) aligned by coordinates, the generated colours where it
     /// does not cover; otherwise a PNG stretched over the input.
     std::optional<std::filesystem::path> texture;
@@ -54,17 +62,6 @@ struct BuildOptions {
     std::function<void(std::string_view)> warn;
 };
 
-/// The roughness law of each leaf of a map with `header`'s geometry (chunk size, levels, valid region) over
-/// `field` (heights in metres = native x metresPerUnit + any offset, which changes nothing here): the midpoint
-/// deviation at kRoughnessLags over the leaf's input samples (lags reaching into the neighbouring leaves),
-/// fitted by fitRoughnessLaw. A leaf with fewer than kMinRoughnessSamples deviations at some lag (padding, a
-/// narrow strip of input) takes the law of the nearest measured leaf (ties: the lowest index), and with none
-/// measured every leaf gets the whole input's law. Deterministic; `threads` >= 1 share the leaves.
-RoughnessGrid measureLeafRoughness(const HeightField& field, double metresPerUnit, const MapHeader& header,
-                                   int threads = 1);
-/// Fewer deviations than this at a lag and a leaf's law is not its own (measureLeafRoughness).
-inline constexpr std::uint64_t kMinRoughnessSamples = 256;
-
 /// What a build produced, for prep's summary and for benchmarks.
 struct BuildReport {
     MapHeader header;
@@ -76,6 +73,8 @@ struct BuildReport {
     std::uint64_t textureBytes = 0;   ///< node texture streams
     std::uint64_t storedSamples = 0;  ///< node window samples, borders included
     double seconds = 0.0;
+    bool outOfCore = false;          ///< streamed in bands with the grid in a scratch file (BuildOptions::memoryBudget)
+    std::uint64_t memoryBudget = 0;  ///< the budget it was built within, bytes
     std::uint64_t leaves = 0;
     float maxLeafDetailError = 0.0f;   ///< metres, over the leaves (0 without leafDetailError)
     double meanLeafDetailError = 0.0;  ///< metres
@@ -84,9 +83,11 @@ struct BuildReport {
     std::optional<double> imageryCoverage;
 };
 
-/// Builds the map of `field` into `output` (written to a temporary name and renamed). The field is
-/// consumed: its samples are released once quantized, to keep peak memory low. Errors name the file or
-/// option at fault.
+/// Builds the map of the heights `source` gives into `output` (written to a temporary name and renamed),
+/// within options.memoryBudget. A source holding its field gives it up (its samples are released once
+/// quantized). Errors name the file or option at fault.
+Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, const std::filesystem::path& output);
+/// The same for a field in memory.
 Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, const std::filesystem::path& output);
 
 }  // namespace terrain

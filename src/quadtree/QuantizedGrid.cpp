@@ -6,8 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <optional>
+#include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -18,24 +21,55 @@ constexpr double kMaxCodes = 65535.0;
 /// Codes spanned by non-integer data, leaving room for the lossy margin below 65535.
 constexpr double kFloatCodes = 65000.0;
 
-/// Float samples that all lie on a regular lattice lo + k g (k < 65535) up to float rounding: heights
-/// exported from a map (its codes times its step), or decimetres stored as float. Returns g and the largest
-/// distance of a sample from its lattice point; empty when the samples are not on one. The step is first
-/// estimated from the smallest gap between distinct values of a subsample, then refined on values ever
-/// farther from lo (each k known exactly from the estimate before), then checked on every sample.
-std::optional<std::pair<double, double>> latticeOf(const std::vector<float>& samples, double lo, double hi)
+}  // namespace
+
+SampleStatistics::SampleStatistics(int width, int height)
+    : mWidth(width),
+      mStride(
+          std::max<std::uint64_t>(1, std::uint64_t(std::max(width, 0)) * std::uint64_t(std::max(height, 0)) / 65536)),
+      mLo(std::numeric_limits<double>::infinity()),
+      mHi(-std::numeric_limits<double>::infinity())
 {
-    const double range = hi - lo;
+}
+
+void SampleStatistics::addRows(int j0, int rows, std::span<const float> samples)
+{
+    TERRAIN_EXPECTS(samples.size() >= static_cast<std::size_t>(rows) * mWidth, "width samples per row");
+    for (int r = 0; r < rows; ++r) {
+        const std::uint64_t rowStart = static_cast<std::uint64_t>(j0 + r) * mWidth;
+        const float* row = samples.data() + static_cast<std::size_t>(r) * mWidth;
+        for (int x = 0; x < mWidth; ++x) {
+            const float v = row[x];
+            if (std::isnan(v)) {
+                continue;
+            }
+            mLo = std::min<double>(mLo, v);
+            mHi = std::max<double>(mHi, v);
+            ++mValid;
+            if ((rowStart + x) % mStride == 0) {
+                mSubsample.push_back(v);
+            }
+        }
+    }
+}
+
+double latticeTolerance(double lo, double hi)
+{
     // Float32 rounding of the samples: a few units in the last place of the largest magnitude.
-    const double tolerance = 4.0 * std::ldexp(std::max({std::abs(lo), std::abs(hi), 1.0}), -23);
-    if (!(range > 64 * tolerance) || samples.size() < 16) {
+    return 4.0 * std::ldexp(std::max({std::abs(lo), std::abs(hi), 1.0}), -23);
+}
+
+std::optional<double> estimateLattice(const SampleStatistics& statistics)
+{
+    const double lo = statistics.lo(), hi = statistics.hi();
+    const double range = hi - lo;
+    const double tolerance = latticeTolerance(lo, hi);
+    if (!(range > 64 * tolerance) || statistics.valid() < 16) {
         return std::nullopt;
     }
-    const std::size_t stride = std::max<std::size_t>(1, samples.size() / 65536);
-    std::vector<double> values;
-    for (std::size_t k = 0; k < samples.size(); k += stride) {
-        values.push_back(samples[k]);
-    }
+    // The step is first estimated from the smallest gap between distinct values of the subsample, then
+    // refined on values ever farther from lo (each k known exactly from the estimate before).
+    std::vector<double> values = statistics.subsample();
     values.push_back(hi);
     std::sort(values.begin(), values.end());
     double gap = range;
@@ -59,8 +93,17 @@ std::optional<std::pair<double, double>> latticeOf(const std::vector<float>& sam
             g = (v - lo) / k;
         }
     }
+    return g;
+}
+
+std::optional<double> latticeDeviation(std::span<const float> samples, double lo, double hi, double g)
+{
+    const double tolerance = latticeTolerance(lo, hi);
     double worst = 0.0;
     for (float sample : samples) {
+        if (std::isnan(sample)) {
+            continue;
+        }
         const double d = sample - lo;
         const double deviation = std::abs(d - std::round(d / g) * g);
         if (deviation > tolerance + 1e-6 * g) {
@@ -68,11 +111,12 @@ std::optional<std::pair<double, double>> latticeOf(const std::vector<float>& sam
         }
         worst = std::max(worst, deviation);
     }
-    return std::pair{g, worst};
+    return worst;
 }
-}  // namespace
 
-Expected<Quantization> chooseQuantization(const HeightField& field, double scale, double baseOffset, double maxError)
+Expected<Quantization> chooseQuantization(const SampleStatistics& statistics, bool integerSamples, double scale,
+                                          double baseOffset, double maxError,
+                                          const std::function<Expected<std::optional<double>>(double)>& latticeWorst)
 {
     if (!(scale > 0) || !std::isfinite(scale)) {
         return makeError("vertical scale ", scale, " must be a positive finite number");
@@ -80,18 +124,23 @@ Expected<Quantization> chooseQuantization(const HeightField& field, double scale
     if (!(maxError >= 0) || !std::isfinite(maxError)) {
         return makeError("maximum error ", maxError, " must be a finite number >= 0");
     }
-    double lo = std::numeric_limits<double>::infinity();
-    double hi = -lo;
-    for (float v : field.samples) {
-        lo = std::min<double>(lo, v);
-        hi = std::max<double>(hi, v);
-    }
-    TERRAIN_EXPECTS(std::isfinite(lo) && std::isfinite(hi), "fill no-data samples before quantizing");
-    double range = hi - lo;
+    TERRAIN_EXPECTS(statistics.valid() > 0, "some sample must be valid");
+    const double lo = statistics.lo(), hi = statistics.hi();
+    const double range = hi - lo;
 
     Quantization q;
     q.nativeMin = lo;
-    if (field.integerSamples && range + 1 <= kMaxCodes) {
+    std::optional<double> lattice;
+    std::optional<double> latticeError;
+    if (!(integerSamples && range + 1 <= kMaxCodes) && maxError == 0) {
+        lattice = estimateLattice(statistics);
+        if (lattice) {
+            auto worst = latticeWorst(*lattice);
+            TERRAIN_TRY(worst);
+            latticeError = *worst;
+        }
+    }
+    if (integerSamples && range + 1 <= kMaxCodes) {
         // Lossless: one code per native unit; the lossy margin must still fit.
         q.nativePerCode = 1.0;
         q.step = scale;
@@ -100,13 +149,13 @@ Expected<Quantization> chooseQuantization(const HeightField& field, double scale
         q.margin = e;
         q.bin = 2 * e + 1;
         q.errorBound = e * q.step;
-    } else if (auto lattice = maxError == 0 ? latticeOf(field.samples, lo, hi) : std::nullopt) {
+    } else if (lattice && latticeError) {
         // Float samples on a lattice: one code per lattice step, no error beyond the samples' own rounding.
-        q.nativePerCode = lattice->first;
+        q.nativePerCode = *lattice;
         q.step = q.nativePerCode * scale;
         q.margin = 0;
         q.bin = 1;
-        q.errorBound = lattice->second * scale;
+        q.errorBound = *latticeError * scale;
     } else {
         // Non-integer data: the finest step that fits 16 bits, rounding adds half a step of error.
         q.nativePerCode = std::max(range, 1e-9) / kFloatCodes;
@@ -127,21 +176,81 @@ Expected<Quantization> chooseQuantization(const HeightField& field, double scale
     return q;
 }
 
-QuantizedGrid::QuantizedGrid(std::uint32_t size) : mSize(size), mCodes(static_cast<std::size_t>(size) * size) {}
+Expected<Quantization> chooseQuantization(const HeightField& field, double scale, double baseOffset, double maxError)
+{
+    SampleStatistics statistics(field.width, field.height);
+    statistics.addRows(0, field.height, field.samples);
+    if (statistics.valid() == 0) {
+        return makeError("height field has no valid sample (every sample is no-data)");
+    }
+    return chooseQuantization(statistics, field.integerSamples, scale, baseOffset, maxError,
+                              [&](double g) -> Expected<std::optional<double>> {
+                                  return latticeDeviation(field.samples, statistics.lo(), statistics.hi(), g);
+                              });
+}
+
+std::uint16_t quantizeNative(double native, const Quantization& q)
+{
+    const double code = std::round((native - q.nativeMin) / q.nativePerCode) + q.margin;
+    return static_cast<std::uint16_t>(std::clamp(code, 0.0, kMaxCodes));
+}
+
+std::uint64_t QuantizedGrid::storageBytes(std::uint32_t size)
+{
+    const std::uint64_t tiles = (std::uint64_t{size} + kTileMask) >> kTileShift;
+    return (tiles * tiles << (2 * kTileShift)) * sizeof(std::uint16_t);
+}
+
+QuantizedGrid::QuantizedGrid(std::uint32_t size) : mSize(size), mTilesX((std::uint64_t{size} + kTileMask) >> kTileShift)
+{
+}
+
+Expected<QuantizedGrid> QuantizedGrid::create(std::uint32_t size)
+{
+    TERRAIN_TRY(checkAllocation(storageBytes(size),
+                                "the " + std::to_string(size) + "x" + std::to_string(size) + " quantized height grid"));
+    QuantizedGrid grid(size);
+    grid.mHeap.assign(storageBytes(size) / sizeof(std::uint16_t), 0);
+    grid.mData = grid.mHeap.data();
+    return grid;
+}
+
+Expected<QuantizedGrid> QuantizedGrid::createMapped(std::uint32_t size, const std::filesystem::path& directory)
+{
+    auto mapping = ScratchMapping::create(directory, storageBytes(size));
+    TERRAIN_TRY(mapping);
+    QuantizedGrid grid(size);
+    grid.mMapping.emplace(std::move(mapping.value()));
+    grid.mData = static_cast<std::uint16_t*>(grid.mMapping->data());
+    return grid;
+}
+
+void QuantizedGrid::release(std::uint64_t x0, std::uint64_t y0, std::uint64_t x1, std::uint64_t y1) const
+{
+    if (!mMapping) {
+        return;
+    }
+    auto firstTile = [](std::uint64_t v) { return (v + kTileMask) >> kTileShift; };
+    auto endTile = [&](std::uint64_t v) { return v >= mSize ? mTilesX : v >> kTileShift; };
+    const std::uint64_t tx0 = firstTile(x0), tx1 = endTile(x1);
+    const std::uint64_t ty0 = firstTile(y0), ty1 = endTile(y1);
+    constexpr std::uint64_t tileBytes = (std::uint64_t{1} << (2 * kTileShift)) * sizeof(std::uint16_t);
+    for (std::uint64_t ty = ty0; ty < ty1 && tx0 < tx1; ++ty) {
+        mMapping->release((ty * mTilesX + tx0) * tileBytes, (tx1 - tx0) * tileBytes);
+    }
+}
 
 Expected<QuantizedGrid> QuantizedGrid::build(const HeightField& field, const Quantization& q, std::uint32_t size)
 {
     TERRAIN_EXPECTS(size >= static_cast<std::uint32_t>(std::max(field.width, field.height)),
                     "grid must be at least as large as the field");
-    TERRAIN_TRY(checkAllocation(std::uint64_t{size} * size * 2,
-                                "the " + std::to_string(size) + "x" + std::to_string(size) + " quantized height grid"));
-    QuantizedGrid grid(size);
+    auto grid = create(size);
+    TERRAIN_TRY(grid);
     for (std::uint32_t y = 0; y < size; ++y) {
         int sy = std::min<int>(static_cast<int>(y), field.height - 1);
         for (std::uint32_t x = 0; x < size; ++x) {
             int sx = std::min<int>(static_cast<int>(x), field.width - 1);
-            double code = std::round((field.at(sx, sy) - q.nativeMin) / q.nativePerCode) + q.margin;
-            grid.at(x, y) = static_cast<std::uint16_t>(std::clamp(code, 0.0, kMaxCodes));
+            grid->at(x, y) = quantizeNative(field.at(sx, sy), q);
         }
     }
     return grid;
@@ -193,31 +302,45 @@ void QuantizedGrid::reconstructLossy(const MapHeader& header, std::uint32_t bin,
     for (int level = 0; level + 1 < levels; ++level) {
         const std::uint32_t side = 1u << level;
         const std::uint64_t childStride = std::uint64_t{1} << (levels - 2 - level);
+        const std::uint64_t parentRows = std::uint64_t(n - 1) * 2 * childStride;  // grid rows per row of nodes
         const std::uint32_t childSide = side * 2;
-        parallelFor(std::size_t{side} * side, threads, [&](std::size_t index) {
-            NodeId id{level, static_cast<std::uint32_t>(index % side), static_cast<std::uint32_t>(index / side)};
-            std::vector<std::uint16_t> parent(geometry.sampleCount());
-            std::vector<std::int32_t> prediction(geometry.sampleCount());
-            extractWindow(header, id, parent);
-            for (int quadrant = 0; quadrant < 4; ++quadrant) {
-                NodeId child = id.child(quadrant);
-                predictChildWindow(parent, w, n, quadrant, prediction);
-                int lastU = child.x + 1 == childSide ? n - 1 : n - 2;
-                int lastV = child.y + 1 == childSide ? n - 1 : n - 2;
-                for (int v = 0; v <= lastV; ++v) {
-                    for (int u = 0; u <= lastU; ++u) {
-                        if ((u & 1) == 0 && (v & 1) == 0) {
-                            continue;
+        std::uint64_t releasedTo = 0;
+        for (std::uint32_t row = 0; row < side; ++row) {
+            parallelFor(side, threads, [&](std::size_t column) {
+                NodeId id{level, static_cast<std::uint32_t>(column), row};
+                std::vector<std::uint16_t> parent(geometry.sampleCount());
+                std::vector<std::int32_t> prediction(geometry.sampleCount());
+                extractWindow(header, id, parent);
+                for (int quadrant = 0; quadrant < 4; ++quadrant) {
+                    NodeId child = id.child(quadrant);
+                    predictChildWindow(parent, w, n, quadrant, prediction);
+                    int lastU = child.x + 1 == childSide ? n - 1 : n - 2;
+                    int lastV = child.y + 1 == childSide ? n - 1 : n - 2;
+                    for (int v = 0; v <= lastV; ++v) {
+                        for (int u = 0; u <= lastU; ++u) {
+                            if ((u & 1) == 0 && (v & 1) == 0) {
+                                continue;
+                            }
+                            auto gx = (std::uint64_t{child.x} * (n - 1) + u) * childStride;
+                            auto gy = (std::uint64_t{child.y} * (n - 1) + v) * childStride;
+                            std::int32_t predicted =
+                                prediction[static_cast<std::size_t>(v + kBorder) * w + u + kBorder];
+                            auto& code = at(gx, gy);
+                            code = static_cast<std::uint16_t>(predicted + quantizeResidual(code - predicted, bin));
                         }
-                        auto gx = (std::uint64_t{child.x} * (n - 1) + u) * childStride;
-                        auto gy = (std::uint64_t{child.y} * (n - 1) + v) * childStride;
-                        std::int32_t predicted = prediction[static_cast<std::size_t>(v + kBorder) * w + u + kBorder];
-                        auto& code = at(gx, gy);
-                        code = static_cast<std::uint16_t>(predicted + quantizeResidual(code - predicted, bin));
                     }
                 }
+            });
+            // The next row of nodes reads from kBorder parent samples below its square.
+            const std::uint64_t nextRead = (row + 1) * parentRows;
+            const std::uint64_t keepFrom =
+                nextRead > kBorder * 2 * childStride ? nextRead - kBorder * 2 * childStride : 0;
+            if (keepFrom > releasedTo) {
+                release(0, releasedTo & ~kTileMask, mSize, keepFrom);
+                releasedTo = keepFrom;
             }
-        });
+        }
+        releaseAll();
     }
 }
 

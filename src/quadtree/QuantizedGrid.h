@@ -4,11 +4,15 @@
 #pragma once
 
 #include "core/Expected.h"
+#include "core/ScratchMapping.h"
 #include "heightfield/HeightField.h"
 #include "quadtree/HeightCodec.h"
 #include "quadtree/MapFormat.h"
 
 #include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -25,23 +29,76 @@ struct Quantization {
     double nativePerCode = 1.0;  ///< native units per code
 };
 
-/// Chooses the quantization of `field` (no NaN left) with metres = baseOffset + scale * native. Integer
-/// input whose range fits 16 bits is stored losslessly with one code per native unit; otherwise (float
-/// samples or a range over 65535 units) the step is the finest that fits. `maxError` (metres, >= 0) is the
-/// L-infinity bound the map may add on top. Fails if scale is not positive and finite.
+/// What the quantization is chosen from, gathered from a field's rows in order (a whole field or bands of
+/// rows streamed from disk give the same): the range of the valid samples, their count and a subsample of
+/// them (every sample whose row-major index is a multiple of a stride, for the lattice test).
+class SampleStatistics {
+public:
+    SampleStatistics(int width, int height);
+    /// Rows [j0, j0 + rows), width samples each, rows fed in increasing order. NaN samples are skipped.
+    void addRows(int j0, int rows, std::span<const float> samples);
+    double lo() const { return mLo; }
+    double hi() const { return mHi; }
+    std::uint64_t valid() const { return mValid; }
+    const std::vector<double>& subsample() const { return mSubsample; }
+
+private:
+    int mWidth;
+    std::uint64_t mStride;
+    double mLo, mHi;
+    std::uint64_t mValid = 0;
+    std::vector<double> mSubsample;
+};
+
+/// The lattice step g of float samples that may all lie on lo + k g (k < 65535) up to float rounding:
+/// estimated from the subsample (its smallest gap, refined on values ever farther from lo); empty when the
+/// subsample shows they cannot. Every sample must then pass latticeDeviation.
+std::optional<double> estimateLattice(const SampleStatistics& statistics);
+/// The float rounding the lattice test allows for samples in [lo, hi].
+double latticeTolerance(double lo, double hi);
+/// The largest distance of the valid `samples` from the lattice lo + k g, or empty when one is farther
+/// than the tolerance (they are not on it).
+std::optional<double> latticeDeviation(std::span<const float> samples, double lo, double hi, double g);
+
+/// Chooses the quantization with metres = baseOffset + scale * native from the valid samples' statistics.
+/// Integer input whose range fits 16 bits is stored losslessly with one code per native unit; float samples
+/// on a lattice (estimateLattice, then `latticeWorst(g)`: every sample's latticeDeviation, empty if one is
+/// off) losslessly with one code per lattice step; otherwise the step is the finest that fits. `maxError`
+/// (metres, >= 0) is the L-infinity bound the map may add on top. Fails if scale is not positive and finite.
+Expected<Quantization> chooseQuantization(const SampleStatistics& statistics, bool integerSamples, double scale,
+                                          double baseOffset, double maxError,
+                                          const std::function<Expected<std::optional<double>>(double)>& latticeWorst);
+/// The same for a whole field (NaN samples skipped).
 Expected<Quantization> chooseQuantization(const HeightField& field, double scale, double baseOffset, double maxError);
 
+/// The code of native value `native` (not NaN).
+std::uint16_t quantizeNative(double native, const Quantization& quantization);
+
+/// The codes of the size x size grid, stored in 64 x 64 tiles (a tile's 8 KiB are contiguous), in memory or,
+/// for prep's out-of-core build, in a ScratchMapping whose pages the builder releases when it is done with
+/// a region (release): resident memory is then the working set, not the grid.
 class QuantizedGrid {
 public:
-    /// Quantizes `field` into a size x size grid (size >= field's sides), replicating the last column and row
-    /// into the padding. Checks the allocation against available memory first.
+    /// Quantizes `field` into a size x size grid in memory (size >= field's sides), replicating the last
+    /// column and row into the padding. Checks the allocation against available memory first.
     static Expected<QuantizedGrid> build(const HeightField& field, const Quantization& quantization,
                                          std::uint32_t size);
+    /// An all-zero grid in memory (checked against available memory).
+    static Expected<QuantizedGrid> create(std::uint32_t size);
+    /// An all-zero grid in a temporary file in `directory` (see ScratchMapping).
+    static Expected<QuantizedGrid> createMapped(std::uint32_t size, const std::filesystem::path& directory);
 
     std::uint32_t size() const { return mSize; }
-    std::uint16_t at(std::uint64_t x, std::uint64_t y) const { return mCodes[y * mSize + x]; }
-    std::uint16_t& at(std::uint64_t x, std::uint64_t y) { return mCodes[y * mSize + x]; }
-    std::span<const std::uint16_t> codes() const { return mCodes; }
+    bool mapped() const { return mMapping.has_value(); }
+    std::uint16_t at(std::uint64_t x, std::uint64_t y) const { return mData[index(x, y)]; }
+    std::uint16_t& at(std::uint64_t x, std::uint64_t y) { return mData[index(x, y)]; }
+    /// Bytes the grid's storage takes for a side of `size`.
+    static std::uint64_t storageBytes(std::uint32_t size);
+
+    /// Drops the resident pages of the tiles wholly inside [x0, x1) x [y0, y1) of a mapped grid (their codes
+    /// stay); nothing for a grid in memory. Safe while other threads use those tiles.
+    void release(std::uint64_t x0, std::uint64_t y0, std::uint64_t x1, std::uint64_t y1) const;
+    void releaseAll() const { release(0, 0, mSize, mSize); }
 
     /// Copies node `id`'s window (static levels) out of the grid and fills its outside samples.
     void extractWindow(const MapHeader& header, const NodeId& id, std::span<std::uint16_t> window) const;
@@ -49,14 +106,25 @@ public:
     /// Replaces the codes by what the decoder will reconstruct with residuals quantized to `bin`
     /// (odd, > 1): top-down, each level predicted from the reconstructed level above, so every stored
     /// sample ends within (bin - 1) / 2 codes of its original and every node's residuals are multiples of
-    /// `bin`. Runs on `threads` threads; the result does not depend on their number.
+    /// `bin`. Runs on `threads` threads; the result does not depend on their number. A mapped grid is
+    /// released row of nodes by row of nodes.
     void reconstructLossy(const MapHeader& header, std::uint32_t bin, int threads);
 
 private:
+    static constexpr int kTileShift = 6;
+    static constexpr std::uint64_t kTileMask = (1u << kTileShift) - 1;
     explicit QuantizedGrid(std::uint32_t size);
+    std::size_t index(std::uint64_t x, std::uint64_t y) const
+    {
+        return static_cast<std::size_t>((((y >> kTileShift) * mTilesX + (x >> kTileShift)) << (2 * kTileShift)) |
+                                        ((y & kTileMask) << kTileShift) | (x & kTileMask));
+    }
 
     std::uint32_t mSize = 0;
-    std::vector<std::uint16_t> mCodes;
+    std::uint64_t mTilesX = 0;
+    std::vector<std::uint16_t> mHeap;
+    std::optional<ScratchMapping> mMapping;
+    std::uint16_t* mData = nullptr;
 };
 
 }  // namespace terrain

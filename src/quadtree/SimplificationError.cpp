@@ -23,6 +23,15 @@ double simplificationErrorCodes(const QuantizedGrid& grid, const MapHeader& head
 double directErrorCodes(const QuantizedGrid& grid, const MapHeader& header, const NodeId& id,
                         const std::function<bool(const NodeId&)>& hasChildren)
 {
+    return hasChildren(id) ? directErrorCodesWithin(grid, header, id, id, hasChildren) : 0.0;
+}
+
+double directErrorCodesWithin(const QuantizedGrid& grid, const MapHeader& header, const NodeId& id,
+                              const NodeId& within, const std::function<bool(const NodeId&)>& hasChildren)
+{
+    TERRAIN_EXPECTS(within.level >= id.level && (within.x >> (within.level - id.level)) == id.x &&
+                        (within.y >> (within.level - id.level)) == id.y,
+                    "`within` must be `id` or below it");
     const std::uint64_t cells = header.chunkSize - 1;
     auto strideOf = [&](int level) {
         return std::uint64_t{1} << (header.levels - 1 - static_cast<std::uint32_t>(level));
@@ -41,12 +50,7 @@ double directErrorCodes(const QuantizedGrid& grid, const MapHeader& header, cons
         return interpolateQuad(code(ix, iy), code(ix + 1, iy), code(ix, iy + 1), code(ix + 1, iy + 1), fx, fy);
     };
     double worst = 0.0;
-    std::vector<NodeId> stack;
-    if (hasChildren(id)) {
-        for (int q = 0; q < 4; ++q) {
-            stack.push_back(id.child(q));
-        }
-    }
+    std::vector<NodeId> stack{within};
     while (!stack.empty()) {
         const NodeId at = stack.back();
         stack.pop_back();

@@ -47,5 +47,10 @@ double simplificationErrorCodes(const QuantizedGrid& grid, const MapHeader& head
 /// at a leaf sample: every sample of every leaf below is compared. 0 for a leaf.
 double directErrorCodes(const QuantizedGrid& grid, const MapHeader& header, const NodeId& id,
                         const std::function<bool(const NodeId&)>& hasChildren);
+/// The same over the stored leaves in the subtree of `within` only (`within` is `id` or below it; a leaf
+/// itself counts): the build takes the largest over the subtrees below a level, each measured while its
+/// region of the grid is at hand.
+double directErrorCodesWithin(const QuantizedGrid& grid, const MapHeader& header, const NodeId& id,
+                              const NodeId& within, const std::function<bool(const NodeId&)>& hasChildren);
 
 }  // namespace terrain

@@ -1,0 +1,81 @@
+#include "core/ScratchMapping.h"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <string>
+#include <utility>
+
+namespace terrain {
+
+Expected<ScratchMapping> ScratchMapping::create(const std::filesystem::path& directory, std::uint64_t bytes)
+{
+    const std::filesystem::path dir = directory.empty() ? std::filesystem::path(".") : directory;
+    int fd = ::open(dir.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+    if (fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL)) {
+        // A file system without O_TMPFILE: a named file, unlinked before it is used.
+        std::string pattern = (dir / ".prep-scratch-XXXXXX").string();
+        fd = ::mkstemp(pattern.data());
+        if (fd >= 0) {
+            ::unlink(pattern.c_str());
+        }
+    }
+    if (fd < 0) {
+        return makeError(dir.string(), ": cannot create a scratch file there: ", std::strerror(errno));
+    }
+    if (bytes == 0) {
+        bytes = 1;
+    }
+    if (::ftruncate(fd, static_cast<off_t>(bytes)) != 0) {
+        const int error = errno;
+        ::close(fd);
+        return makeError(dir.string(), ": cannot size a scratch file of ", bytes, " bytes: ", std::strerror(error));
+    }
+    void* data = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+    const int error = errno;
+    ::close(fd);  // the mapping keeps the file
+    if (data == MAP_FAILED) {
+        return makeError(dir.string(), ": cannot map a scratch file of ", bytes, " bytes: ", std::strerror(error));
+    }
+    return ScratchMapping(data, bytes);
+}
+
+ScratchMapping::ScratchMapping(ScratchMapping&& other) noexcept
+    : mData(std::exchange(other.mData, nullptr)), mSize(std::exchange(other.mSize, 0))
+{
+}
+
+ScratchMapping& ScratchMapping::operator=(ScratchMapping&& other) noexcept
+{
+    if (this != &other) {
+        if (mData) {
+            ::munmap(mData, mSize);
+        }
+        mData = std::exchange(other.mData, nullptr);
+        mSize = std::exchange(other.mSize, 0);
+    }
+    return *this;
+}
+
+ScratchMapping::~ScratchMapping()
+{
+    if (mData) {
+        ::munmap(mData, mSize);
+    }
+}
+
+void ScratchMapping::release(std::uint64_t offset, std::uint64_t bytes) const
+{
+    const auto page = static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
+    const std::uint64_t end = std::min(offset + bytes, mSize);
+    const std::uint64_t first = (offset + page - 1) / page * page;
+    const std::uint64_t last = end / page * page;
+    if (first < last) {
+        ::madvise(static_cast<char*>(mData) + first, last - first, MADV_DONTNEED);
+    }
+}
+
+}  // namespace terrain
