@@ -329,6 +329,8 @@ int main(int argc, char** argv)
         args->build.leafDetailError = leafDetailErrorFunction(**synthesizer, !args->noRoughness);
         args->build.detailDisplacementRangeFor = detailDisplacementRangeFunction(**synthesizer);
     }
+    configureGdalReading(args->build.memoryBudget ? args->build.memoryBudget : availableMemoryBytes() / 2,
+                         args->build.threads);
     auto source = openHeightRows(args->inputs, args->read);
     if (!source.ok()) {
         std::fprintf(stderr, "prep: %s\n", source.error().message.c_str());

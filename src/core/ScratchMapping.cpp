@@ -40,6 +40,11 @@ Expected<ScratchMapping> ScratchMapping::create(const std::filesystem::path& dir
     if (data == MAP_FAILED) {
         return makeError(dir.string(), ": cannot map a scratch file of ", bytes, " bytes: ", std::strerror(error));
     }
+    // Small pages: without this the page cache gives the file large folios (2 MiB on ext4 with Linux 6.x),
+    // and one touch maps a whole folio, so reading a node's samples at a coarse stride, or a subtree's
+    // border, would make megabytes resident per sample and release() could not give them back by region.
+    // Random access also turns off read-ahead, which a pass re-reading released pages does not want.
+    ::madvise(data, bytes, MADV_RANDOM);
     return ScratchMapping(data, bytes);
 }
 

@@ -2,18 +2,26 @@
 
 #include "core/Check.h"
 
+#include <libdeflate.h>
 #include <zlib.h>
+
 #include <memory>
 
 namespace terrain {
 
 std::vector<std::uint8_t> zlibCompress(std::span<const std::uint8_t> bytes, int level)
 {
-    uLongf size = ::compressBound(static_cast<uLong>(bytes.size()));
+    // libdeflate writes the same zlib format about 2-3x faster than zlib's deflate at the same level and
+    // ratio (prep spent half its time in zlib's compress2). A compressor per call: its tables are
+    // allocated, not cleared, so this costs a malloc next to compressing a node.
+    std::unique_ptr<libdeflate_compressor, decltype(&libdeflate_free_compressor)> compressor(
+        libdeflate_alloc_compressor(level), &libdeflate_free_compressor);
+    TERRAIN_ASSERT(compressor != nullptr);
+    std::size_t bound = libdeflate_zlib_compress_bound(compressor.get(), bytes.size());
     // Scratch without zero-filling (this runs for every node), then an exact-size copy.
-    std::unique_ptr<std::uint8_t[]> scratch(new std::uint8_t[size]);
-    int result = ::compress2(scratch.get(), &size, bytes.data(), static_cast<uLong>(bytes.size()), level);
-    TERRAIN_ASSERT(result == Z_OK);
+    std::unique_ptr<std::uint8_t[]> scratch(new std::uint8_t[bound]);
+    std::size_t size = libdeflate_zlib_compress(compressor.get(), bytes.data(), bytes.size(), scratch.get(), bound);
+    TERRAIN_ASSERT(size != 0);
     return std::vector<std::uint8_t>(scratch.get(), scratch.get() + size);
 }
 

@@ -10,7 +10,7 @@
 namespace terrain {
 
 /// zlib-compresses `bytes` at `level` (0..9).
-std::vector<std::uint8_t> zlibCompress(std::span<const std::uint8_t> bytes, int level = 6);
+std::vector<std::uint8_t> zlibCompress(std::span<const std::uint8_t> bytes, int level = 4);
 
 /// Inflates a zlib stream that must decode to exactly `expectedSize` bytes and end there. The error
 /// message says what was wrong (corrupt data, too short, trailing data); callers prefix the file and node.

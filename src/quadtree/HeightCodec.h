@@ -58,7 +58,7 @@ void predictChildWindow(std::span<const std::uint16_t> parent, int size, int chu
 std::vector<std::uint8_t> encodeNodeHeights(const NodeWindow& geometry, const NodeId& id,
                                             std::span<const std::uint16_t> window,
                                             std::span<const std::uint16_t> parent, std::uint32_t bin,
-                                            int zlibLevel = 6);
+                                            int zlibLevel = 4);
 
 /// Decodes a node's height stream into `window` (size*size codes, outside samples filled by reflection).
 /// `parent` is the parent's decoded window (empty for the root). Errors say what was wrong with the

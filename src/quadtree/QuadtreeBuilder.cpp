@@ -517,6 +517,10 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
         (source.held() ? 0 : samples * 4) + samples * 2 + QuantizedGrid::storageBytes(gridSize) + fixedBytes;
     InputPlan plan;
     plan.inMemory = inMemoryBytes <= budget && !options.forceOutOfCore;
+    // Out of core, the samples the nodes above the split read (multiples of the split level's stride) stay
+    // in memory beside the scratch file (QuantizedGrid::createMapped).
+    const int coarseShift =
+        std::min(QuantizedGrid::kTileShift, static_cast<int>(header.levels) - 1 - splitLevel(header));
     if (!plan.inMemory) {
         // Bands: a quarter of the budget for the band (samples, fill and mask bytes), at least a leaf row and
         // 256 rows; per thread a subtree's square of codes and its encoded nodes.
@@ -530,7 +534,9 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
         const std::uint64_t perThread = square * square * 6;  // its codes, encoded nodes and textures
         const std::uint64_t needed = (static_cast<std::uint64_t>(plan.coreRows) + 2 * kBandMargin) * rowBytes +
                                      static_cast<std::uint64_t>(options.threads) * perThread + fixedBytes +
-                                     samples / (kFillBlock * kFillBlock) * 16 + (std::uint64_t{4} << 20);
+                                     samples / (kFillBlock * kFillBlock) * 16 +
+                                     QuantizedGrid::coarseLatticeBytes(gridSize, coarseShift) +
+                                     (std::uint64_t{4} << 20);
         if (needed > budget) {
             return makeError("the memory budget of ", formatBytes(budget), " is too small for a ", width, "x", height,
                              " input on ", options.threads, " thread(s) even out of core: it needs about ",
@@ -594,10 +600,11 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
 
     // Pass 2: fill, roughness, codes (the padding replicating the last column and row), filled squares.
     progress(0.0, "quantizing");
-    auto grid = plan.inMemory
-                    ? QuantizedGrid::create(gridSize)
-                    : QuantizedGrid::createMapped(
-                          gridSize, output.has_parent_path() ? output.parent_path() : std::filesystem::path("."));
+    auto grid =
+        plan.inMemory
+            ? QuantizedGrid::create(gridSize)
+            : QuantizedGrid::createMapped(
+                  gridSize, output.has_parent_path() ? output.parent_path() : std::filesystem::path("."), coarseShift);
     TERRAIN_TRY(grid);
     std::optional<LeafRoughnessMeter> meter;
     if (roughness) {

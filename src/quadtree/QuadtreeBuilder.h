@@ -34,7 +34,7 @@ struct BuildOptions {
     /// does not cover; otherwise a PNG stretched over the input.
     std::optional<std::filesystem::path> texture;
     std::optional<std::filesystem::path> weights;  ///< -w: gray weight map for pruning (3.2.13)
-    int zlibLevel = 6;
+    int zlibLevel = 4;  ///< libdeflate level: 4 packs within 2% of 6 at 2/3 of its time (measured on OutOfCoreBench)
     /// The error of the detail synthesized below static leaf `id` (3.4.1), in metres: finite and >= 0. Gets
     /// the map's header (quantization, spacing, origin) and the leaf's window of W x W height codes (W = N +
     /// 4, rows south to north, metres = heightOffset + heightStep * code). Called once for every leaf, from

@@ -215,13 +215,27 @@ Expected<QuantizedGrid> QuantizedGrid::create(std::uint32_t size)
     return grid;
 }
 
-Expected<QuantizedGrid> QuantizedGrid::createMapped(std::uint32_t size, const std::filesystem::path& directory)
+std::uint64_t QuantizedGrid::coarseLatticeBytes(std::uint32_t size, int coarseShift)
 {
+    const std::uint64_t side = ((std::uint64_t{size} - 1) >> coarseShift) + 1;
+    return side * side * sizeof(std::uint16_t);
+}
+
+Expected<QuantizedGrid> QuantizedGrid::createMapped(std::uint32_t size, const std::filesystem::path& directory,
+                                                    int coarseShift)
+{
+    TERRAIN_EXPECTS(coarseShift >= 0 && coarseShift <= kTileShift, "coarse lattice shift out of range");
     auto mapping = ScratchMapping::create(directory, storageBytes(size));
     TERRAIN_TRY(mapping);
     QuantizedGrid grid(size);
     grid.mMapping.emplace(std::move(mapping.value()));
     grid.mData = static_cast<std::uint16_t*>(grid.mMapping->data());
+    grid.mLatticeShift = coarseShift;
+    grid.mLatticeMask = (std::uint64_t{1} << coarseShift) - 1;
+    grid.mLatticeSide = ((std::uint64_t{size} - 1) >> coarseShift) + 1;
+    grid.mLatticeHeap.assign(grid.mLatticeSide * grid.mLatticeSide, 0);
+    grid.mLattice = grid.mLatticeHeap.data();
+    grid.mNoLattice = 0;
     return grid;
 }
 

@@ -76,7 +76,10 @@ std::uint16_t quantizeNative(double native, const Quantization& quantization);
 
 /// The codes of the size x size grid, stored in 64 x 64 tiles (a tile's 8 KiB are contiguous), in memory or,
 /// for prep's out-of-core build, in a ScratchMapping whose pages the builder releases when it is done with
-/// a region (release): resident memory is then the working set, not the grid.
+/// a region (release): resident memory is then the working set, not the grid. A mapped grid keeps the
+/// samples of a coarse lattice (x and y multiples of 2^coarseShift) in memory instead of in their tiles, so
+/// nodes above the builder's split level, which read only such samples spread over the whole map, touch no
+/// page of the file (each touched sample would make at least a page resident, for one code).
 class QuantizedGrid {
 public:
     /// Quantizes `field` into a size x size grid in memory (size >= field's sides), replicating the last
@@ -85,13 +88,16 @@ public:
                                          std::uint32_t size);
     /// An all-zero grid in memory (checked against available memory).
     static Expected<QuantizedGrid> create(std::uint32_t size);
-    /// An all-zero grid in a temporary file in `directory` (see ScratchMapping).
-    static Expected<QuantizedGrid> createMapped(std::uint32_t size, const std::filesystem::path& directory);
+    /// An all-zero grid in a temporary file in `directory` (see ScratchMapping), with the samples on the
+    /// lattice of step 2^coarseShift (0..kTileShift) held in memory: coarseLatticeBytes(size, coarseShift).
+    static Expected<QuantizedGrid> createMapped(std::uint32_t size, const std::filesystem::path& directory,
+                                                int coarseShift);
+    static std::uint64_t coarseLatticeBytes(std::uint32_t size, int coarseShift);
 
     std::uint32_t size() const { return mSize; }
     bool mapped() const { return mMapping.has_value(); }
-    std::uint16_t at(std::uint64_t x, std::uint64_t y) const { return mData[index(x, y)]; }
-    std::uint16_t& at(std::uint64_t x, std::uint64_t y) { return mData[index(x, y)]; }
+    std::uint16_t at(std::uint64_t x, std::uint64_t y) const { return *slot(x, y); }
+    std::uint16_t& at(std::uint64_t x, std::uint64_t y) { return *const_cast<std::uint16_t*>(slot(x, y)); }
     /// Bytes the grid's storage takes for a side of `size`.
     static std::uint64_t storageBytes(std::uint32_t size);
 
@@ -110,10 +116,19 @@ public:
     /// released row of nodes by row of nodes.
     void reconstructLossy(const MapHeader& header, std::uint32_t bin, int threads);
 
-private:
     static constexpr int kTileShift = 6;
+
+private:
     static constexpr std::uint64_t kTileMask = (1u << kTileShift) - 1;
     explicit QuantizedGrid(std::uint32_t size);
+    const std::uint16_t* slot(std::uint64_t x, std::uint64_t y) const
+    {
+        // mNoLattice is 1 without a lattice, so the test never holds and the branch is always predicted.
+        if ((((x | y) & mLatticeMask) | mNoLattice) == 0) {
+            return mLattice + (y >> mLatticeShift) * mLatticeSide + (x >> mLatticeShift);
+        }
+        return mData + index(x, y);
+    }
     std::size_t index(std::uint64_t x, std::uint64_t y) const
     {
         return static_cast<std::size_t>((((y >> kTileShift) * mTilesX + (x >> kTileShift)) << (2 * kTileShift)) |
@@ -125,6 +140,10 @@ private:
     std::vector<std::uint16_t> mHeap;
     std::optional<ScratchMapping> mMapping;
     std::uint16_t* mData = nullptr;
+    std::vector<std::uint16_t> mLatticeHeap;
+    std::uint16_t* mLattice = nullptr;
+    int mLatticeShift = 0;
+    std::uint64_t mLatticeMask = 0, mLatticeSide = 0, mNoLattice = 1;
 };
 
 }  // namespace terrain

@@ -4,6 +4,9 @@
 #include "core/Check.h"
 #include "quadtree/TemplateTriangulation.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <vector>
 
 namespace terrain {
@@ -32,23 +35,33 @@ double directErrorCodesWithin(const QuantizedGrid& grid, const MapHeader& header
     TERRAIN_EXPECTS(within.level >= id.level && (within.x >> (within.level - id.level)) == id.x &&
                         (within.y >> (within.level - id.level)) == id.y,
                     "`within` must be `id` or below it");
-    const std::uint64_t cells = header.chunkSize - 1;
-    auto strideOf = [&](int level) {
-        return std::uint64_t{1} << (header.levels - 1 - static_cast<std::uint32_t>(level));
-    };
-    const std::uint64_t stride = strideOf(id.level);
+    const std::uint64_t cells = header.chunkSize - 1, side = cells + 1;
+    auto shiftOf = [&](int level) { return header.levels - 1 - static_cast<std::uint32_t>(level); };
+    const std::uint32_t shift = shiftOf(id.level);
+    const std::uint64_t stride = std::uint64_t{1} << shift;
+    const double inverseStride = 1.0 / static_cast<double>(stride);  // exact: stride is a power of two
     const std::uint64_t x0 = std::uint64_t{id.x} * cells * stride, y0 = std::uint64_t{id.y} * cells * stride;
-    // The node's surface at finest-grid position (gx, gy) inside its square.
-    auto surface = [&](std::uint64_t gx, std::uint64_t gy) {
-        const std::uint64_t ux = gx - x0, uy = gy - y0;
-        const std::uint64_t ix = std::min(ux / stride, cells - 1), iy = std::min(uy / stride, cells - 1);
-        const double fx = static_cast<double>(ux - ix * stride) / static_cast<double>(stride);
-        const double fy = static_cast<double>(uy - iy * stride) / static_cast<double>(stride);
-        auto code = [&](std::uint64_t i, std::uint64_t j) -> double {
-            return grid.at(x0 + i * stride, y0 + j * stride);
-        };
-        return interpolateQuad(code(ix, iy), code(ix + 1, iy), code(ix, iy + 1), code(ix + 1, iy + 1), fx, fy);
-    };
+    // The node's own codes over the cells that `within` covers, read once; the node's surface at
+    // finest-grid position (gx, gy) interpolates them. Only those codes: `within` may be one subtree of a
+    // large out-of-core map, whose pages outside it must not be touched. A vertex on the far edge of the
+    // covered cells interpolates with weight 0 across it, so the column and row past the edge (kept to
+    // index without a branch) hold 0 instead of codes read from beyond `within`.
+    const std::uint64_t withinSide = cells << shiftOf(within.level);
+    const std::uint64_t wx = std::uint64_t{within.x} * withinSide - x0, wy = std::uint64_t{within.y} * withinSide - y0;
+    const std::uint64_t cx0 = wx >> shift, cy0 = wy >> shift;
+    const std::uint64_t cx1 = std::min(cells, ((wx + withinSide) >> shift) + 1);
+    const std::uint64_t cy1 = std::min(cells, ((wy + withinSide) >> shift) + 1);
+    const std::uint64_t readX1 = std::min(cells, (wx + withinSide + stride - 1) >> shift);
+    const std::uint64_t readY1 = std::min(cells, (wy + withinSide + stride - 1) >> shift);
+    const std::uint64_t span = cx1 - cx0 + 1;
+    std::vector<double> node(span * (cy1 - cy0 + 1), 0.0);
+    for (std::uint64_t j = cy0; j <= readY1; ++j) {
+        for (std::uint64_t i = cx0; i <= readX1; ++i) {
+            node[(j - cy0) * span + (i - cx0)] = grid.at(x0 + i * stride, y0 + j * stride);
+        }
+    }
+    std::vector<std::uint64_t> cellX(side);
+    std::vector<double> fractionX(side);
     double worst = 0.0;
     std::vector<NodeId> stack{within};
     while (!stack.empty()) {
@@ -60,12 +73,25 @@ double directErrorCodesWithin(const QuantizedGrid& grid, const MapHeader& header
             }
             continue;
         }
-        const std::uint64_t s = strideOf(at.level);
+        const std::uint64_t s = std::uint64_t{1} << shiftOf(at.level);
         const std::uint64_t lx0 = std::uint64_t{at.x} * cells * s, ly0 = std::uint64_t{at.y} * cells * s;
-        for (std::uint64_t j = 0; j <= cells; ++j) {
-            for (std::uint64_t i = 0; i <= cells; ++i) {
-                const std::uint64_t gx = lx0 + i * s, gy = ly0 + j * s;
-                worst = std::max(worst, std::abs(static_cast<double>(grid.at(gx, gy)) - surface(gx, gy)));
+        for (std::uint64_t i = 0; i < side; ++i) {
+            const std::uint64_t ux = lx0 + i * s - x0;
+            const std::uint64_t ix = std::min(ux >> shift, cells - 1);
+            cellX[i] = ix - cx0;
+            fractionX[i] = static_cast<double>(ux - ix * stride) * inverseStride;
+        }
+        for (std::uint64_t j = 0; j < side; ++j) {
+            const std::uint64_t gy = ly0 + j * s, uy = gy - y0;
+            const std::uint64_t iy = std::min(uy >> shift, cells - 1);
+            const double fy = static_cast<double>(uy - iy * stride) * inverseStride;
+            const double* row0 = node.data() + (iy - cy0) * span;
+            const double* row1 = row0 + span;
+            for (std::uint64_t i = 0; i < side; ++i) {
+                const std::uint64_t ix = cellX[i];
+                const double surface =
+                    interpolateQuad(row0[ix], row0[ix + 1], row1[ix], row1[ix + 1], fractionX[i], fy);
+                worst = std::max(worst, std::abs(static_cast<double>(grid.at(lx0 + i * s, gy)) - surface));
             }
         }
     }

@@ -11,7 +11,7 @@
 namespace terrain {
 
 /// `rgb` holds size*size interleaved RGB texels, rows south to north (as node heights).
-std::vector<std::uint8_t> encodeTexture(std::span<const std::uint8_t> rgb, int size, int zlibLevel = 6);
+std::vector<std::uint8_t> encodeTexture(std::span<const std::uint8_t> rgb, int size, int zlibLevel = 4);
 
 /// Decodes into `rgb` (size*size*3 bytes). Errors say what was wrong with the stream.
 Status decodeTexture(std::span<const std::uint8_t> stream, int size, std::span<std::uint8_t> rgb);
