@@ -1,4 +1,5 @@
 // prep: height field -> .map (paper 4.4.1). Argument parsing and reporting only; the work is buildMap().
+#include "apps/DataDirectories.h"
 #include "core/Memory.h"
 #include "core/OutputGuard.h"
 #include "core/ParallelFor.h"
@@ -216,7 +217,7 @@ Expected<Arguments> parseArguments(int argc, char** argv)
     }
     if (args.materials.empty() && !args.noMaterial) {
         // The viewer's defaults (detail_material_type = 0, material_path empty): grass.mat alone.
-        args.materials.push_back(std::filesystem::path(TERRAIN_MATERIALS_DIR) / "grass.mat");
+        args.materials.push_back(programDataDirectory("materials", TERRAIN_MATERIALS_DIR) / "grass.mat");
     }
     if (args.detailFactorGiven && args.detail.scheme != "kobbelt") {
         args.warnings.push_back("--detail-factor has no effect with --detail-scheme " + args.detail.scheme +

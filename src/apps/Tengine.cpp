@@ -2,6 +2,7 @@
 // three ways to drive the camera: the user (mouse and keys), demo_mode (camera_path in real time, looping)
 // and video_mode (camera_path once at a fixed time step, every frame (or every video_save_every-th) saved
 // as a PNG, plus a CSV of per-frame statistics and, when ffmpeg is installed, an MP4).
+#include "DataDirectories.h"
 #include "DetailSetup.h"
 #include "FrameRateMeter.h"
 #include "TengineOptions.h"
@@ -227,7 +228,8 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
 
     // Detail synthesis (3.4): the synthesizer dynamic nodes are made with, null when it is off.
     std::vector<std::string> materialWarnings;
-    auto synthesizer = makeDetailSynthesizer(o, header, TERRAIN_MATERIALS_DIR, materialWarnings);
+    auto synthesizer =
+        makeDetailSynthesizer(o, header, programDataDirectory("materials", TERRAIN_MATERIALS_DIR), materialWarnings);
     for (const auto& warning : materialWarnings) {
         log("warning: " + warning);
     }
@@ -241,11 +243,13 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
             "run prep again to get them");
     }
     if (scene->synthesizer && header.hasDetailErrors()) {
-        auto recipe = viewerDetailRecipe(o, *scene->synthesizer, TERRAIN_MATERIALS_DIR);
+        auto recipe =
+            viewerDetailRecipe(o, *scene->synthesizer, programDataDirectory("materials", TERRAIN_MATERIALS_DIR));
         if (!recipe.ok()) {
             return fail(recipe.error().message);
         }
-        const auto files = synthesizedMaterialFiles(o, *scene->synthesizer, TERRAIN_MATERIALS_DIR);
+        const auto files =
+            synthesizedMaterialFiles(o, *scene->synthesizer, programDataDirectory("materials", TERRAIN_MATERIALS_DIR));
         if (auto mismatch = detailRecipeMismatch(header, scene->map->name(), *recipe, files)) {
             log("warning: " + *mismatch);
         }
@@ -272,7 +276,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
     scene->window = std::move(window).value();
     log(scene->window->description());
     const std::filesystem::path shaders =
-        o.shaderPath.empty() ? std::filesystem::path(TERRAIN_SHADER_DIR) : o.shaderPath;
+        o.shaderPath.empty() ? programDataDirectory("shaders", TERRAIN_SHADER_DIR) : o.shaderPath;
     scene->tessellation = o.tessellation;
     if (o.tessellation && !TerrainRenderer::tessellationSupported()) {
         log("render_mode = tessellation needs OpenGL 4.0 tessellation shaders, which this GL lacks: drawing chunks");
@@ -459,9 +463,10 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         log("no map: give a .map file on the command line or map_file in a config (see tengine --help)");
         return 2;
     }
-    if (auto refused = checkOutputsAreNotInputs(parsed, o.detailCreateNewNodes && o.detailAddMaterial
-                                                            ? detailMaterialFiles(o, TERRAIN_MATERIALS_DIR)
-                                                            : std::vector<std::filesystem::path>{});
+    if (auto refused = checkOutputsAreNotInputs(
+            parsed, o.detailCreateNewNodes && o.detailAddMaterial
+                        ? detailMaterialFiles(o, programDataDirectory("materials", TERRAIN_MATERIALS_DIR))
+                        : std::vector<std::filesystem::path>{});
         !refused.ok()) {
         log(refused.error().message);
         return 2;

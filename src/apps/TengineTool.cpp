@@ -1,4 +1,5 @@
 // tengine-tool: inspect (info), check (verify) and query (height) terrain maps.
+#include "apps/DataDirectories.h"
 #include "apps/DetailSetup.h"
 #include "apps/ErrorCommand.h"
 #include "core/Memory.h"
@@ -441,7 +442,8 @@ int main(int argc, char** argv)
         if (!parsed.ok()) {
             return fail("error: " + parsed.error().message);
         }
-        return runErrorCommand(**map, *parsed, TERRAIN_MATERIALS_DIR, stdout, stderr);
+        return runErrorCommand(**map, *parsed, programDataDirectory("materials", TERRAIN_MATERIALS_DIR), stdout,
+                               stderr);
     }
     if (command == "select" || command == "stream") {
         auto view = parseViewOptions(args, 2, command == "stream");
@@ -576,7 +578,8 @@ int main(int argc, char** argv)
     std::optional<SurfaceSampler> sampler;
     if (depth) {
         std::vector<std::string> warnings;
-        auto made = makeDetailSynthesizer(detail, (*map)->header(), TERRAIN_MATERIALS_DIR, warnings);
+        auto made = makeDetailSynthesizer(detail, (*map)->header(),
+                                          programDataDirectory("materials", TERRAIN_MATERIALS_DIR), warnings);
         for (const auto& warning : warnings) {
             std::fprintf(stderr, "tengine-tool: warning: %s\n", warning.c_str());
         }
