@@ -84,6 +84,7 @@ namespace {
 struct Selector {
     const LodTree& tree;
     const ChildrenResident& resident;
+    const NodeHidden& hidden;
     QuadtreeExtent extent;
     Frustum frustum;
     glm::dvec3 eye;
@@ -111,6 +112,12 @@ struct Selector {
         ++out.visitedNodes;
         double dm = static_cast<double>(info.deltaC) * c;
         if (!(ld < dm) || !info.hasChildren) {
+            select(id, d, ld, dm, dmParent, isRoot);
+            return;
+        }
+        if (hidden && hidden(id)) {
+            ++out.hiddenNodes;
+            out.requestsSkippedHidden += resident && !resident(id) ? 1 : 0;
             select(id, d, ld, dm, dmParent, isRoot);
             return;
         }
@@ -156,12 +163,21 @@ struct Selector {
 void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, const ChildrenResident& resident,
                  LodSelection& out)
 {
+    selectNodes(tree, camera, tauPixels, resident, NodeHidden{}, out);
+}
+
+void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, const ChildrenResident& resident,
+                 const NodeHidden& hidden, LodSelection& out)
+{
     out.nodes.clear();
     out.requests.clear();
     out.visitedNodes = 0;
     out.culledNodes = 0;
+    out.hiddenNodes = 0;
+    out.requestsSkippedHidden = 0;
     Selector s{tree,
                resident,
+               hidden,
                tree.extent(),
                Frustum::fromCamera(camera),
                camera.position,

@@ -64,6 +64,10 @@ private:
 /// Whether all four children of `parent` are resident (ready to draw). Empty function: all resident.
 using ChildrenResident = std::function<bool(const NodeId& parent)>;
 
+/// Whether node `id` has shown no pixel for long enough that its hidden terrain need not be refined
+/// (visibility_lod, issue 16; NodeVisibility::hidden). Empty function: nothing is hidden.
+using NodeHidden = std::function<bool(const NodeId& id)>;
+
 /// One node to draw this frame.
 struct SelectedNode {
     NodeId id;
@@ -83,10 +87,12 @@ struct ChildRequest {
 
 /// The output of one frame; owned by the caller and reused so a steady state allocates nothing.
 struct LodSelection {
-    std::vector<SelectedNode> nodes;     ///< in traversal order, see selectNodes()
-    std::vector<ChildRequest> requests;  ///< in traversal order (not sorted by distance)
-    std::size_t visitedNodes = 0;        ///< nodes that passed culling (statistics)
-    std::size_t culledNodes = 0;         ///< nodes rejected by the frustum test (statistics)
+    std::vector<SelectedNode> nodes;        ///< in traversal order, see selectNodes()
+    std::vector<ChildRequest> requests;     ///< in traversal order (not sorted by distance)
+    std::size_t visitedNodes = 0;           ///< nodes that passed culling (statistics)
+    std::size_t culledNodes = 0;            ///< nodes rejected by the frustum test (statistics)
+    std::size_t hiddenNodes = 0;            ///< nodes the error test would refine, selected as they are: hidden
+    std::size_t requestsSkippedHidden = 0;  ///< of those, the ones whose children were not resident
 };
 
 /// C of eq. 3.3: S / (2 tau |tan(fov / 2)|) with S = viewport height in pixels. A node is refined when
@@ -127,5 +133,10 @@ double lodDistance(const Camera& camera, double k, const Aabb& box);
 /// `out` is cleared first; its vectors keep their capacity.
 void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, const ChildrenResident& resident,
                  LodSelection& out);
+/// The same, except that a node the error test would refine but `hidden` says is hidden is selected as it
+/// is and requests nothing (counted in hiddenNodes, and requestsSkippedHidden when its children were not
+/// resident). The nodes it selects still partition the unculled terrain.
+void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, const ChildrenResident& resident,
+                 const NodeHidden& hidden, LodSelection& out);
 
 }  // namespace terrain

@@ -538,3 +538,71 @@ TEST(LodSelectorTest, LodDistanceBoundsTheScreenLengthOfVerticalErrorsEverywhere
 
 }  // namespace
 }  // namespace terrain
+
+namespace terrain {
+namespace {
+
+// ---- Visibility (issue 16): hidden nodes are selected as they are and request nothing ----
+
+TEST(LodSelectorVisibility, HiddenNodesAreNotRefinedAndTheRestIsUnchanged)
+{
+    SyntheticTree tree(7, 77, kExtent);
+    Camera cam;
+    cam.position = {kExtent.originX + 2048.0, kExtent.originY - 300.0, 60.0};  // south of the middle, looking north
+    cam.pitch = -0.2;
+    const double mid = kExtent.originX + kExtent.rootSize / 2;
+    // Hidden: nodes of level >= 2 wholly in the west half.
+    auto westHidden = [&](const NodeId& id) {
+        const double size = kExtent.nodeSize(id.level);
+        return id.level >= 2 && kExtent.originX + (id.x + 1) * size <= mid;
+    };
+    LodSelection plain, hiddenOut;
+    selectNodes(tree, cam, 2.0, sometimesResident, plain);
+    selectNodes(tree, cam, 2.0, sometimesResident, westHidden, hiddenOut);
+    ASSERT_GT(plain.nodes.size(), 20u);
+    EXPECT_LT(hiddenOut.nodes.size(), plain.nodes.size()) << "the west half must be drawn coarser";
+    EXPECT_EQ(plain.hiddenNodes, 0u);
+
+    auto inWest = [&](const NodeId& id) { return kExtent.originX + (id.x + 1) * kExtent.nodeSize(id.level) <= mid; };
+    std::size_t hiddenSelected = 0;
+    for (const SelectedNode& n : hiddenOut.nodes) {
+        if (!inWest(n.id) || n.id.level < 2) {
+            // Where nothing is hidden the selection is the plain one.
+            EXPECT_TRUE(std::any_of(plain.nodes.begin(), plain.nodes.end(), [&](const SelectedNode& p) {
+                return p.id == n.id;
+            })) << n.id.toString();
+            continue;
+        }
+        // In the west half refinement stops at the first hidden level: a level-2 node, or a shallower one
+        // the plain selection also stops at.
+        const bool stopsHere =
+            std::any_of(plain.nodes.begin(), plain.nodes.end(), [&](const SelectedNode& p) { return p.id == n.id; });
+        EXPECT_TRUE(n.id.level == 2 || stopsHere) << n.id.toString();
+        // Counted as hidden where the plain selection refined it, or wanted to and requested its children.
+        const bool requested = std::any_of(plain.requests.begin(), plain.requests.end(),
+                                           [&](const ChildRequest& r) { return r.parent == n.id; });
+        hiddenSelected += !stopsHere || requested ? 1 : 0;
+    }
+    EXPECT_EQ(hiddenOut.hiddenNodes, hiddenSelected);
+    EXPECT_GT(hiddenOut.hiddenNodes, 0u);
+    // Every plain node is covered by exactly one node of the hidden selection (a partition, coarser in
+    // the west), and no request comes from below a hidden node.
+    for (const SelectedNode& p : plain.nodes) {
+        const auto covering = std::count_if(hiddenOut.nodes.begin(), hiddenOut.nodes.end(),
+                                            [&](const SelectedNode& n) { return isAncestor(n.id, p.id); });
+        EXPECT_EQ(covering, 1) << p.id.toString();
+    }
+    for (const ChildRequest& r : hiddenOut.requests) {
+        EXPECT_FALSE(inWest(r.parent) && r.parent.level >= 2) << r.parent.toString();
+    }
+    std::size_t westRequests = 0;
+    for (const ChildRequest& r : plain.requests) {
+        westRequests += inWest(r.parent) && r.parent.level >= 2 ? 1 : 0;
+    }
+    EXPECT_EQ(hiddenOut.requests.size(), plain.requests.size() - westRequests) << "the other requests are the same";
+    // A hidden node whose children are not resident requested them in the plain selection.
+    EXPECT_LE(hiddenOut.requestsSkippedHidden, westRequests);
+}
+
+}  // namespace
+}  // namespace terrain

@@ -1,0 +1,66 @@
+#include "lod/NodeVisibility.h"
+
+#include "core/Check.h"
+
+#include <algorithm>
+
+namespace terrain {
+
+namespace {
+constexpr std::uint64_t kForgetFrames = 256;
+}
+
+NodeVisibility::NodeVisibility(int hiddenFrames) : mHiddenFrames(hiddenFrames)
+{
+    TERRAIN_EXPECTS(hiddenFrames >= 1, "a node must be dark for at least one frame to count as hidden");
+}
+
+void NodeVisibility::record(std::uint64_t frame, std::span<const NodeId> drawn, std::span<const std::uint32_t> pixels)
+{
+    TERRAIN_EXPECTS(drawn.size() == pixels.size(), "one pixel count per drawn node");
+    TERRAIN_EXPECTS(!mAny || frame > mLatest, "frames are recorded in increasing order");
+    // Every drawn node and its ancestors, visible when any node drawn at or below them is.
+    mTouched.clear();
+    for (std::size_t i = 0; i < drawn.size(); ++i) {
+        for (NodeId id = drawn[i];; id = id.parent()) {
+            mTouched.emplace_back(id.key(), pixels[i] > 0);
+            if (id.isRoot()) {
+                break;
+            }
+        }
+    }
+    std::sort(mTouched.begin(), mTouched.end());
+    for (std::size_t i = 0; i < mTouched.size();) {
+        const std::uint64_t key = mTouched[i].first;
+        bool visible = false;
+        for (; i < mTouched.size() && mTouched[i].first == key; ++i) {
+            visible = visible || mTouched[i].second;
+        }
+        Record& r = mRecords[key];
+        if (r.required == 0) {
+            r.required = mHiddenFrames;
+        }
+        if (visible) {
+            if (r.hiddenStreak >= r.required) {
+                r.required = std::min(2 * r.required, 8 * mHiddenFrames);  // revealed: slower to hide again
+            }
+            r.hiddenStreak = 0;
+        } else {
+            ++r.hiddenStreak;
+        }
+        r.lastFrame = frame;
+    }
+    mLatest = frame;
+    mAny = true;
+    if (frame % 64 == 0) {
+        std::erase_if(mRecords, [&](const auto& entry) { return entry.second.lastFrame + kForgetFrames < frame; });
+    }
+}
+
+bool NodeVisibility::hidden(const NodeId& id) const
+{
+    const auto it = mRecords.find(id.key());
+    return it != mRecords.end() && it->second.lastFrame == mLatest && it->second.hiddenStreak >= it->second.required;
+}
+
+}  // namespace terrain

@@ -1,0 +1,52 @@
+// Per-node visibility from the pixels the renderer counted for the nodes it drew (Özak & Demir, seed 001,
+// method 2: a counter per drawn node, incremented by the fragments that pass the depth test), read back
+// one or more frames late. It answers the selection's question (NodeHidden): which nodes have shown no
+// pixel for the last k measured frames. A node's record sums the nodes drawn at or below it, so a refined
+// subtree that is hidden as a whole collapses to its root, whose own count then decides. Pure: no GL.
+#pragma once
+
+#include "quadtree/NodeId.h"
+
+#include <cstdint>
+#include <span>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace terrain {
+
+class NodeVisibility {
+public:
+    /// `hiddenFrames` (k >= 1): measured frames without a visible pixel before a node counts as hidden.
+    explicit NodeVisibility(int hiddenFrames);
+
+    /// The visible-pixel counts of the nodes drawn in frame `frame` (pixels[i] for drawn[i]); frames come in
+    /// increasing order, each once. A node that shows pixels again after being hidden must stay dark twice
+    /// as long before it counts as hidden again (up to 8 k frames): coarse geometry that peeks over a
+    /// ridge while the refined one does not would otherwise refine and collapse by turns.
+    void record(std::uint64_t frame, std::span<const NodeId> drawn, std::span<const std::uint32_t> pixels);
+
+    /// Whether `id` is hidden: it (or a node below it) was drawn in the latest measured frame, and showed
+    /// no pixel in each of the last measured frames it needs (k, more after a reveal). A node never drawn,
+    /// or not drawn in the latest measured frame (out of view, just made), is not hidden: conservative.
+    bool hidden(const NodeId& id) const;
+
+    /// Nodes with a record (statistics; records not drawn for 256 frames are dropped).
+    std::size_t records() const { return mRecords.size(); }
+    /// The latest frame recorded; 0 before any.
+    std::uint64_t latestFrame() const { return mLatest; }
+
+private:
+    struct Record {
+        std::uint64_t lastFrame = 0;  ///< the latest measured frame it or a node below it was drawn in
+        int hiddenStreak = 0;         ///< measured frames in a row without a visible pixel
+        int required = 0;             ///< hiddenStreak needed to count as hidden
+    };
+    int mHiddenFrames;
+    std::uint64_t mLatest = 0;
+    bool mAny = false;
+    std::unordered_map<std::uint64_t, Record> mRecords;
+    std::vector<std::pair<std::uint64_t, bool>> mTouched;  ///< per record(): node key, visible (reused)
+};
+
+}  // namespace terrain
