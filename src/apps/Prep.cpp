@@ -330,8 +330,7 @@ int main(int argc, char** argv)
         args->build.leafDetailError = leafDetailErrorFunction(**synthesizer, !args->noRoughness);
         args->build.detailDisplacementRangeFor = detailDisplacementRangeFunction(**synthesizer);
     }
-    configureGdalReading(args->build.memoryBudget ? args->build.memoryBudget : availableMemoryBytes() / 2,
-                         args->build.threads);
+    configureGdalReading(effectiveMemoryBudget(args->build), args->build.threads);
     auto source = openHeightRows(args->inputs, args->read);
     if (!source.ok()) {
         std::fprintf(stderr, "prep: %s\n", source.error().message.c_str());

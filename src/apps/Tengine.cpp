@@ -202,7 +202,9 @@ struct Scene {
 
 /// Opens the map, the materials, the camera path, the window, the renderer and the streamer; errors are
 /// logged and end the program with status 1.
-std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
+/// `materialsDirectory`: the built-in materials (programDataDirectory).
+std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::filesystem::path& materialsDirectory,
+                                 Log& log)
 {
     const TengineOptions& o = parsed.options;
     auto scene = std::make_unique<Scene>();
@@ -228,8 +230,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
 
     // Detail synthesis (3.4): the synthesizer dynamic nodes are made with, null when it is off.
     std::vector<std::string> materialWarnings;
-    auto synthesizer =
-        makeDetailSynthesizer(o, header, programDataDirectory("materials", TERRAIN_MATERIALS_DIR), materialWarnings);
+    auto synthesizer = makeDetailSynthesizer(o, header, materialsDirectory, materialWarnings);
     for (const auto& warning : materialWarnings) {
         log("warning: " + warning);
     }
@@ -243,13 +244,11 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, Log& log)
             "run prep again to get them");
     }
     if (scene->synthesizer && header.hasDetailErrors()) {
-        auto recipe =
-            viewerDetailRecipe(o, *scene->synthesizer, programDataDirectory("materials", TERRAIN_MATERIALS_DIR));
+        auto recipe = viewerDetailRecipe(o, *scene->synthesizer, materialsDirectory);
         if (!recipe.ok()) {
             return fail(recipe.error().message);
         }
-        const auto files =
-            synthesizedMaterialFiles(o, *scene->synthesizer, programDataDirectory("materials", TERRAIN_MATERIALS_DIR));
+        const auto files = synthesizedMaterialFiles(o, *scene->synthesizer, materialsDirectory);
         if (auto mismatch = detailRecipeMismatch(header, scene->map->name(), *recipe, files)) {
             log("warning: " + *mismatch);
         }
@@ -463,15 +462,15 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         log("no map: give a .map file on the command line or map_file in a config (see tengine --help)");
         return 2;
     }
-    if (auto refused = checkOutputsAreNotInputs(
-            parsed, o.detailCreateNewNodes && o.detailAddMaterial
-                        ? detailMaterialFiles(o, programDataDirectory("materials", TERRAIN_MATERIALS_DIR))
-                        : std::vector<std::filesystem::path>{});
+    const std::filesystem::path materialsDirectory = programDataDirectory("materials", TERRAIN_MATERIALS_DIR);
+    if (auto refused = checkOutputsAreNotInputs(parsed, o.detailCreateNewNodes && o.detailAddMaterial
+                                                            ? detailMaterialFiles(o, materialsDirectory)
+                                                            : std::vector<std::filesystem::path>{});
         !refused.ok()) {
         log(refused.error().message);
         return 2;
     }
-    const auto scene = openScene(parsed, log);
+    const auto scene = openScene(parsed, materialsDirectory, log);
     if (!scene) {
         return 1;
     }

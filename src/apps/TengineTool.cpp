@@ -396,6 +396,7 @@ int stream(const MapFile& map, const ViewOptions& view)
 
 int main(int argc, char** argv)
 {
+    const std::filesystem::path materialsDirectory = programDataDirectory("materials", TERRAIN_MATERIALS_DIR);
     std::vector<std::string> args;
     ReaderKind reader = ReaderKind::Stream;
     for (int i = 1; i < argc; ++i) {
@@ -442,8 +443,7 @@ int main(int argc, char** argv)
         if (!parsed.ok()) {
             return fail("error: " + parsed.error().message);
         }
-        return runErrorCommand(**map, *parsed, programDataDirectory("materials", TERRAIN_MATERIALS_DIR), stdout,
-                               stderr);
+        return runErrorCommand(**map, *parsed, materialsDirectory, stdout, stderr);
     }
     if (command == "select" || command == "stream") {
         auto view = parseViewOptions(args, 2, command == "stream");
@@ -578,8 +578,7 @@ int main(int argc, char** argv)
     std::optional<SurfaceSampler> sampler;
     if (depth) {
         std::vector<std::string> warnings;
-        auto made = makeDetailSynthesizer(detail, (*map)->header(),
-                                          programDataDirectory("materials", TERRAIN_MATERIALS_DIR), warnings);
+        auto made = makeDetailSynthesizer(detail, (*map)->header(), materialsDirectory, warnings);
         for (const auto& warning : warnings) {
             std::fprintf(stderr, "tengine-tool: warning: %s\n", warning.c_str());
         }

@@ -413,6 +413,11 @@ int splitLevel(const MapHeader& header)
 
 }  // namespace
 
+std::uint64_t effectiveMemoryBudget(const BuildOptions& options)
+{
+    return options.memoryBudget ? options.memoryBudget : availableMemoryBytes() / 2;
+}
+
 Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, const std::filesystem::path& output)
 {
     FieldRows rows(std::move(field));
@@ -510,7 +515,7 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
 
     // Memory: the whole input and grid when they fit the budget, else bands of rows and the grid in a
     // scratch file next to the output, released region by region (docs/design.md, "Out-of-core prep").
-    const std::uint64_t budget = options.memoryBudget ? options.memoryBudget : availableMemoryBytes() / 2;
+    const std::uint64_t budget = effectiveMemoryBudget(options);
     const std::uint64_t samples = std::uint64_t{static_cast<std::uint32_t>(width)} * static_cast<std::uint32_t>(height);
     const std::uint64_t fixedBytes = leavesPerSide * leavesPerSide * (1 + (roughness ? 80 : 0));
     const std::uint64_t inMemoryBytes =
