@@ -1,4 +1,11 @@
 #version 330 core
+#ifdef PIXEL_COUNTS
+// Visible pixels per drawn node (issue 16; Özak & Demir, seed 001, method 2): each fragment that passes the
+// depth test adds one to its node's counter. The test must come before the program runs, or occluded
+// fragments would count too (their side effect happens whatever the later test decides).
+#extension GL_ARB_shader_storage_buffer_object : require
+#extension GL_ARB_shader_image_load_store : require
+#endif
 // Chunk fragment program: the node's texture blended with its parent's by the morph factor (eq. 3.6,
 // textural morphing), lit by the sun from the morphed normal, hazed with distance. The node's data comes
 // from the vertex program (flat: the same for the whole node). With NORMAL_MAP the normal comes from the
@@ -15,6 +22,11 @@ in vec4 vMaterials;
 flat in float vMorph;
 flat in vec2 vParentOffset;  // the node's quadrant in the parent's square: (0 or 0.5, 0 or 0.5)
 flat in ivec2 vSlots;        // own, parent's layer of uColour
+#ifdef PIXEL_COUNTS
+layout(early_fragment_tests) in;
+flat in int vInstance;  // the node's index in the frame's draw order
+layout(std430, binding = 0) buffer PixelCounts { uint uPixelCounts[]; };
+#endif
 
 uniform sampler2DArray uColour;   // per slot: the node's texture, corner texels centred on the corners (3.2.7)
 uniform float uTexels;            // texels per side of a node's texture
@@ -107,6 +119,12 @@ void main()
         vRelative.y > uValidRect.w) {
         discard;
     }
+#endif
+#ifdef PIXEL_COUNTS
+    // With early tests a discarded fragment above has written its depth already: padding outside the
+    // input's samples still hides what lies behind it, which is only more padding while the camera is
+    // above the input (its samples form a rectangle, and a ray leaving it does not come back).
+    atomicAdd(uPixelCounts[vInstance], 1u);
 #endif
     if (uWireframe != 0) {
         fragColour = vec4(0.05, 0.05, 0.05, 1.0);

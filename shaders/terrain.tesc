@@ -34,6 +34,9 @@ patch out vec4 eNode1;
 patch out vec4 eNode2;
 patch out ivec4 eBlock;  // bx, by, kind (0 surface, 1 + side for a skirt), level t
 patch out ivec4 eSnap;   // the lattice of the south, east, north and west sides
+#ifdef PIXEL_COUNTS
+patch out int eInstance;  // the node's index in the frame's order (terrain.frag, uPixelCounts)
+#endif
 
 void main()
 {
@@ -53,6 +56,9 @@ void main()
     int t = code & 3;
     eBlock = ivec4(block, kind, t);
     eSnap = ivec4((code >> 2) & 3, (code >> 4) & 3, (code >> 6) & 3, (code >> 8) & 3);
+#ifdef PIXEL_COUNTS
+    eInstance = uFirstInstance + int(cInstance[0]);
+#endif
     eNode0 = cNode0[0];
     eNode1 = cNode1[0];
     eNode2 = cNode2[0];

@@ -12,6 +12,10 @@ patch in vec4 eNode1;
 patch in vec4 eNode2;
 patch in ivec4 eBlock;  // bx, by, kind (0 surface, 1 + side: skirt of the south, east, north, west border), t
 patch in ivec4 eSnap;   // lattices of the south, east, north, west sides
+#ifdef PIXEL_COUNTS
+patch in int eInstance;
+flat out int vInstance;
+#endif
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
 patch in vec4 eLayerOrigin[8];
 flat out vec4 vLayerOrigin[LAYER_COUNT];
@@ -114,5 +118,8 @@ void main()
     vMorph = morph;
     vParentOffset = eNode2.xy;
     vSlots = ivec2(gSlot, int(eNode1.z));
+#ifdef PIXEL_COUNTS
+    vInstance = eInstance;
+#endif
     gl_Position = uViewProjection * vec4(vRelative, 1.0);
 }

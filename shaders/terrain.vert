@@ -43,6 +43,10 @@ out vec4 vMaterials;
 flat out float vMorph;
 flat out vec2 vParentOffset;
 flat out ivec2 vSlots;  // own, parent's
+#ifdef PIXEL_COUNTS
+uniform int uFirstInstance;  // the draw's first node in the frame's order
+flat out int vInstance;
+#endif
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
 flat out vec4 vLayerOrigin[LAYER_COUNT];
 #endif
@@ -97,5 +101,8 @@ void main()
     vMorph = morph;
     vParentOffset = t2.xy;
     vSlots = ivec2(gSlot, int(t1.z));
+#ifdef PIXEL_COUNTS
+    vInstance = uFirstInstance + gl_InstanceID;
+#endif
     gl_Position = uViewProjection * vec4(vRelative, 1.0);
 }

@@ -85,4 +85,48 @@ using VertexArray = Object<VertexArrayTraits>;
 using Texture = Object<TextureTraits>;
 using Program = Object<ProgramTraits>;
 
+/// Owns a fence (glFenceSync): set after the commands it follows, signalled once the GL has finished them.
+class Fence {
+public:
+    Fence() = default;
+    /// A fence after every command issued so far.
+    static Fence place()
+    {
+        Fence f;
+        f.mSync = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+        return f;
+    }
+    Fence(Fence&& other) noexcept : mSync(std::exchange(other.mSync, nullptr)) {}
+    Fence& operator=(Fence&& other) noexcept
+    {
+        if (this != &other) {
+            reset();
+            mSync = std::exchange(other.mSync, nullptr);
+        }
+        return *this;
+    }
+    Fence(const Fence&) = delete;
+    Fence& operator=(const Fence&) = delete;
+    ~Fence() { reset(); }
+
+    explicit operator bool() const { return mSync != nullptr; }
+    /// Waits until the GL has finished the commands before the fence (flushing them first); false if that
+    /// takes longer than `nanoseconds` or the wait fails.
+    bool wait(GLuint64 nanoseconds) const
+    {
+        const GLenum r = glClientWaitSync(mSync, GL_SYNC_FLUSH_COMMANDS_BIT, nanoseconds);
+        return r == GL_ALREADY_SIGNALED || r == GL_CONDITION_SATISFIED;
+    }
+    void reset()
+    {
+        if (mSync != nullptr) {
+            glDeleteSync(mSync);
+            mSync = nullptr;
+        }
+    }
+
+private:
+    GLsync mSync = nullptr;
+};
+
 }  // namespace terrain::gl

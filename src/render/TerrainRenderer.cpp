@@ -138,6 +138,17 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         defines.emplace_back("DETAIL");
         defines.emplace_back("LAYER_COUNT " + std::to_string(layers.size()));
     }
+    r->mPixelCounts = pools.pixelCounts;
+    if (r->mPixelCounts) {
+        if (!pixelCountsSupported()) {
+            return makeError("visibility_lod needs OpenGL 4.3 (or GL_ARB_shader_storage_buffer_object and "
+                             "GL_ARB_shader_image_load_store) to count visible pixels; this GL has neither");
+        }
+        defines.emplace_back("PIXEL_COUNTS");
+        for (CountFrame& frame : r->mCountFrames) {
+            frame.buffer = gl::Buffer::create();
+        }
+    }
     r->mTessellation = pools.tessellation;
     r->mExtent = extentOf(header);
     if (r->mTessellation) {
@@ -451,6 +462,45 @@ bool TerrainRenderer::tessellationSupported()
     return major >= 4;
 }
 
+bool TerrainRenderer::pixelCountsSupported()
+{
+    GLint major = 0, minor = 0;
+    glGetIntegerv(GL_MAJOR_VERSION, &major);
+    glGetIntegerv(GL_MINOR_VERSION, &minor);
+    return major > 4 || (major == 4 && minor >= 3) ||
+           (epoxy_has_gl_extension("GL_ARB_shader_storage_buffer_object") &&
+            epoxy_has_gl_extension("GL_ARB_shader_image_load_store"));
+}
+
+bool TerrainRenderer::takePixelCounts(PixelCounts& out, std::uint64_t lag)
+{
+    CountFrame* oldest = nullptr;
+    for (CountFrame& f : mCountFrames) {
+        if (f.frame != 0 && f.frame + lag <= mFrame && (oldest == nullptr || f.frame < oldest->frame)) {
+            oldest = &f;
+        }
+    }
+    if (oldest == nullptr) {
+        return false;
+    }
+    out.frame = oldest->frame;
+    out.nodes.swap(oldest->nodes);
+    oldest->nodes.clear();
+    oldest->frame = 0;
+    out.pixels.assign(out.nodes.size(), 0);
+    if (oldest->fence) {
+        // Two frames late the GL has long finished: this returns at once, except on a GL that queues more.
+        while (!oldest->fence.wait(1'000'000'000)) {
+        }
+        oldest->fence.reset();
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, oldest->buffer.name());
+        glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0,
+                           static_cast<GLsizeiptr>(out.pixels.size() * sizeof(std::uint32_t)), out.pixels.data());
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+    }
+    return true;
+}
+
 RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentNodeLookup& resident,
                                   const Camera& camera, const SceneStyle& style, double blockPixels,
                                   std::vector<glm::vec3>* feedback)
@@ -458,6 +508,17 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     TERRAIN_EXPECTS(feedback == nullptr || mTessellation, "transform feedback is for the tessellation mode");
     TERRAIN_EXPECTS(!mTessellation || blockPixels > 0.0, "tessellation mode needs a block error budget > 0 pixels");
     RenderStats stats;
+    ++mFrame;
+    CountFrame* counting = nullptr;
+    if (mPixelCounts) {
+        counting = &mCountFrames[mFrame % mCountFrames.size()];
+        if (counting->frame != 0) {
+            ++mDroppedCounts;  // three frames old and never taken
+        }
+        counting->frame = mFrame;
+        counting->nodes.clear();
+        counting->fence.reset();
+    }
     glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
     glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
     glClearDepth(1.0);
@@ -533,6 +594,9 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                     (levels.culled[static_cast<std::size_t>(k)] == 0 ? stats.blocks : stats.culledBlocks) += 1;
                 }
                 tessellatedTriangles += levels.triangles();
+            }
+            if (counting) {
+                counting->nodes.push_back(selected.id);
             }
             ++count;
         }
@@ -619,6 +683,21 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     }
     glActiveTexture(GL_TEXTURE0);
 
+    if (counting) {
+        // One counter a node, zeroed; the fragment program adds each visible fragment to its node's.
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, counting->buffer.name());
+        if (counting->capacity < count) {
+            counting->capacity = std::max<std::size_t>(count, 2 * counting->capacity);
+            glBufferData(GL_SHADER_STORAGE_BUFFER,
+                         static_cast<GLsizeiptr>(counting->capacity * sizeof(std::uint32_t)), nullptr,
+                         GL_DYNAMIC_READ);
+        }
+        const std::vector<std::uint32_t> zeros(count, 0);
+        glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, static_cast<GLsizeiptr>(count * sizeof(std::uint32_t)),
+                        zeros.data());
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, counting->buffer.name());
+    }
     glBindVertexArray(mTessellation ? mPatchVao.name() : mTemplateVao.name());
     if (feedback) {
         if (!mFeedback) {
@@ -640,8 +719,8 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         mPrograms[p].use();
         // The instances' constants start at `first`: the per-instance attributes are pointed there.
         pointNodeConstants(mConstantsBuffer, texels, first);
+        glUniform1i(mPrograms[p].uniform("uFirstInstance"), static_cast<GLint>(first));
         if (mTessellation) {
-            glUniform1i(mPrograms[p].uniform("uFirstInstance"), static_cast<GLint>(first));
             GLuint query = 0, generated = 0;
             if (feedback) {
                 // Each program's triangles after the previous one's (feedback cannot span a program change).
@@ -675,6 +754,12 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     }
     glBindVertexArray(0);
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    if (counting) {
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+        // The counters are read by glGetBufferSubData (takePixelCounts) once the fence says the draws are done.
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        counting->fence = gl::Fence::place();
+    }
     if (feedback) {
         feedback->resize(captured * 3);
         glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, mFeedback.name());

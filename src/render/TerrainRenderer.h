@@ -18,9 +18,11 @@
 #include <glm/vec3.hpp>
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <unordered_map>
+#include <vector>
 
 namespace terrain {
 
@@ -74,6 +76,16 @@ struct PoolOptions {
     /// dynamic_texture_size), and the fragment program lights by them, morphed between the node's and its
     /// parent's like the colours; 0: lit by the vertex normals.
     int normalMapTexels = 0;
+    /// Count each drawn node's visible pixels (issue 16, visibility_lod; takePixelCounts()): needs GL 4.3 or
+    /// its shader storage and early fragment test extensions (pixelCountsSupported()).
+    bool pixelCounts = false;
+};
+
+/// The visible pixels of the nodes drawn in one frame (PoolOptions::pixelCounts).
+struct PixelCounts {
+    std::uint64_t frame = 0;            ///< draw()'s frame number: 1 for the first frame drawn
+    std::vector<NodeId> nodes;          ///< the nodes drawn, in drawing order
+    std::vector<std::uint32_t> pixels;  ///< per node, its fragments that passed the depth test
 };
 
 class TerrainRenderer {
@@ -107,6 +119,21 @@ public:
 
     /// Whether this context runs tessellation shaders (OpenGL 4.0).
     static bool tessellationSupported();
+    /// Whether this context can count visible pixels per node (PoolOptions::pixelCounts): OpenGL 4.3, or
+    /// GL_ARB_shader_storage_buffer_object and GL_ARB_shader_image_load_store.
+    static bool pixelCountsSupported();
+
+    /// Frames between drawing a frame and reading its pixel counts back: the counts of frame F are taken
+    /// before drawing frame F + 3, when the GL has normally finished F long ago, so reading them does not
+    /// wait (seed 001 reads the previous frame's; a frame later leaves the GPU a frame to finish in).
+    static constexpr std::uint64_t kPixelCountLag = 2;
+    /// With PoolOptions::pixelCounts: the pixel counts of the oldest frame not yet taken that was drawn at
+    /// least `lag` frames before the latest one (kPixelCountLag, or 0 for the frame just drawn, which waits
+    /// for the GL to finish it), into `out`; false when there is none. The counts of a frame stay for three
+    /// frames: what is not taken by then is dropped (droppedPixelCounts()).
+    bool takePixelCounts(PixelCounts& out, std::uint64_t lag = kPixelCountLag);
+    /// Frames whose pixel counts were dropped untaken.
+    std::uint64_t droppedPixelCounts() const { return mDroppedCounts; }
 
     /// The node cache evicted `id` (TerrainStreamer::onEvict): its slot is free for another node. Nothing
     /// is freed on the GPU. Unknown ids are ignored (a node evicted before it was ever drawn).
@@ -169,5 +196,17 @@ private:
     gl::Texture mLevelsTexture;  ///< GL_TEXTURE_BUFFER over mLevelsBuffer, R16UI
     std::vector<std::uint16_t> mCodes;
     gl::Buffer mFeedback;  ///< transform feedback of draw(..., feedback)
+    // Pixel counts: three frames' buffers in turn (frame % 3), each a uint a drawn node.
+    struct CountFrame {
+        gl::Buffer buffer;
+        std::size_t capacity = 0;  ///< nodes the buffer holds
+        gl::Fence fence;           ///< after the frame's draws; none when nothing was drawn
+        std::uint64_t frame = 0;   ///< 0: nothing waiting to be taken
+        std::vector<NodeId> nodes;
+    };
+    bool mPixelCounts = false;
+    std::array<CountFrame, 3> mCountFrames;
+    std::uint64_t mFrame = 0;  ///< frames drawn
+    std::uint64_t mDroppedCounts = 0;
 };
 }  // namespace terrain
