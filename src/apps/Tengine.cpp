@@ -12,6 +12,7 @@
 #include "core/StopSignals.h"
 #include "lod/CameraPath.h"
 #include "lod/HeightQuery.h"
+#include "lod/NodeVisibility.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "render/FrameCapture.h"
@@ -175,12 +176,13 @@ private:
 /// and requests_failed (groups that could not be loaded); now: cache_nodes, requests_pending (queued plus
 /// loading), resident_bytes (the process's resident set), deepest_level (of the nodes drawn; below the
 /// map's levels - 1 they are dynamic) and draw_calls (for the terrain: 1); since the start: requests_pending_peak (the
-/// most queued plus loading at once, NodeServerStats::peakPending). New columns go at the end: readers cut columns by
-/// position.
+/// most queued plus loading at once, NodeServerStats::peakPending). With visibility_lod (else 0): nodes_hidden
+/// (drawn as they are, hidden), requests_skipped_hidden (of those, the ones whose children were not resident),
+/// nodes_revealing (morphing in after a reveal). New columns go at the end: readers cut columns by position.
 constexpr const char* kCsvHeader =
     "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
     "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,resident_bytes,"
-    "deepest_level,draw_calls";
+    "deepest_level,draw_calls,nodes_hidden,requests_skipped_hidden,nodes_revealing";
 
 /// Everything the viewer draws with, opened from the options in dependency order. Not movable: the source
 /// refers to the map and the synthesizer, the streamer to the source.
@@ -194,8 +196,12 @@ struct Scene {
     std::unique_ptr<TerrainNodeSource> source;
     std::unique_ptr<TerrainStreamer> streamer;
     bool tessellation = false;  ///< render_mode = tessellation, and the GL has it
-    double nodePixels = 2.0;    ///< the selection's tau: all of lod_error, or what the blocks leave of it
-    double blockPixels = 0.0;   ///< tessellation: the blocks' part of lod_error
+    /// visibility_lod, and the GL counts pixels: what the renderer's pixel counts say is hidden; else null.
+    std::unique_ptr<NodeVisibility> visibility;
+    PixelCounts pixelCounts;                  ///< reused for each frame's counts
+    std::optional<DepthOcclusion> occlusion;  ///< the depth of the latest frame measured
+    double nodePixels = 2.0;                  ///< the selection's tau: all of lod_error, or what the blocks leave of it
+    double blockPixels = 0.0;                 ///< tessellation: the blocks' part of lod_error
 
     const MapHeader& header() const { return map->header(); }
 };
@@ -281,12 +287,20 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
         log("render_mode = tessellation needs OpenGL 4.0 tessellation shaders, which this GL lacks: drawing chunks");
         scene->tessellation = false;
     }
+    const bool countPixels = o.visibilityLod && TerrainRenderer::pixelCountsSupported();
+    if (o.visibilityLod && !countPixels) {
+        log("visibility_lod needs OpenGL 4.3 (or GL_ARB_shader_storage_buffer_object and "
+            "GL_ARB_shader_image_load_store) to count visible pixels, which this GL lacks: refining all in view");
+    }
+    if (countPixels) {
+        scene->visibility = std::make_unique<NodeVisibility>(o.visibilityHiddenFrames);
+    }
     scene->nodePixels = scene->tessellation ? o.lodError * (1.0 - o.tessellationShare) : o.lodError;
     scene->blockPixels = scene->tessellation ? o.lodError * o.tessellationShare : 0.0;
     auto renderer = TerrainRenderer::create(
         shaders, header, o.vertexCacheSize,
         {static_cast<std::size_t>(o.quadCacheSize), o.nodeTextureCompression, scene->tessellation,
-         o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0},
+         o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0, countPixels},
         materials);
     if (!renderer.ok()) {
         return fail(renderer.error().message);
@@ -313,6 +327,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
     streamerOptions.workers = o.workerThreads;
     streamerOptions.velocityLimit = o.detailVelocityLimit;
+    streamerOptions.revealSeconds = o.visibilityRevealSeconds;
     auto streamer = TerrainStreamer::create(*scene->source, extentOf(header), streamerOptions);
     if (!streamer.ok()) {
         return fail(streamer.error().message);
@@ -366,8 +381,8 @@ Camera initialCamera(const TengineOptions& o, const Scene& scene)
 /// The overlay's lines: rate (measured) or frame and time (video), triangles, nodes (and tessellated blocks),
 /// cache, camera.
 std::vector<std::string> overlayLines(bool video, std::size_t frame, double time, std::optional<double> fps,
-                                      const RenderStats& render, const Scene& scene, const Camera& camera, double tau,
-                                      bool wireframe)
+                                      const RenderStats& render, const FrameStats& selection, const Scene& scene,
+                                      const Camera& camera, double tau, bool wireframe)
 {
     char line[160];
     std::vector<std::string> lines;
@@ -387,6 +402,11 @@ std::vector<std::string> overlayLines(bool video, std::size_t frame, double time
         std::snprintf(line, sizeof line, "nodes %zu static, %zu dynamic", render.staticNodes, render.dynamicNodes);
     }
     lines.emplace_back(line);
+    if (scene.visibility) {
+        std::snprintf(line, sizeof line, "visibility: %zu hidden, %zu requests skipped, %zu revealing",
+                      selection.hidden, selection.requestsSkippedHidden, selection.revealing);
+        lines.emplace_back(line);
+    }
     const auto server = scene.streamer->serverStats();
     std::snprintf(line, sizeof line, "cache %zu / %zu nodes, requests pending %zu", scene.streamer->cache().size(),
                   scene.streamer->cache().capacity(), server.queued + server.inFlight);
@@ -401,7 +421,8 @@ std::vector<std::string> overlayLines(bool video, std::size_t frame, double time
 class FrameCounters {
 public:
     /// The frames.csv row of this frame (kCsvHeader's columns), then remembers the totals.
-    std::string row(std::size_t frame, double time, double milliseconds, const RenderStats& render, const Scene& scene)
+    std::string row(std::size_t frame, double time, double milliseconds, const RenderStats& render,
+                    const FrameStats& selection, const Scene& scene)
     {
         const auto server = scene.streamer->serverStats();
         const auto& cache = scene.streamer->cache();
@@ -414,7 +435,8 @@ public:
             << ',' << render.dynamicNodes << ',' << cache.size() << ',' << cache.hits() - mHits << ','
             << cache.misses() - mMisses << ',' << server.requested - mRequested << ',' << server.completed - mCompleted
             << ',' << server.queued + server.inFlight << ',' << server.failed - mFailed << ',' << server.peakPending
-            << ',' << currentResidentBytes() << ',' << deepestLevel << ',' << render.drawCalls;
+            << ',' << currentResidentBytes() << ',' << deepestLevel << ',' << render.drawCalls << ','
+            << selection.hidden << ',' << selection.requestsSkippedHidden << ',' << selection.revealing;
         remember(scene);
         return row.str();
     }
@@ -554,7 +576,23 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         const double speed = frame == 0 || step <= 0.0 ? 0.0 : glm::length(camera.position - previousPosition) / step;
         previousPosition = camera.position;
         const auto frameStart = std::chrono::steady_clock::now();
-        FrameStats frameStats = scene->streamer->update(camera, scene->nodePixels, speed);
+        // Visibility (issue 16): the pixel counts of the frames drawn long enough ago, then what they hide.
+        FrameVisibility visibility;
+        if (scene->visibility) {
+            while (scene->renderer->takePixelCounts(scene->pixelCounts)) {
+                const PixelCounts& counts = scene->pixelCounts;
+                scene->visibility->record(counts.frame, counts.nodes, counts.pixels);
+                scene->occlusion.reset();
+                if (!counts.depth.empty()) {
+                    scene->occlusion.emplace(counts.depth, counts.camera.viewportWidth, counts.camera.viewportHeight,
+                                             counts.camera);
+                }
+            }
+            visibility.hidden = hiddenFrom(*scene->visibility, scene->occlusion ? &*scene->occlusion : nullptr,
+                                           scene->streamer->tree());
+            visibility.time = video || demo ? time : std::chrono::duration<double>(now - start).count();
+        }
+        FrameStats frameStats = scene->streamer->update(camera, scene->nodePixels, speed, visibility);
         if (video) {
             // A recording shows every frame complete: load what it wants, select again, until it wants
             // nothing more (or the cache is full). Independent of thread timing: identical runs give
@@ -562,7 +600,7 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
             for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred + frameStats.tooFast;
                  ++round) {
                 scene->streamer->drain();
-                frameStats = scene->streamer->update(camera, scene->nodePixels, speed);
+                frameStats = scene->streamer->update(camera, scene->nodePixels, speed, visibility);
             }
         }
         const TerrainStreamer& streamer = *scene->streamer;
@@ -570,8 +608,8 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
             streamer.selection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, style,
             scene->blockPixels);
         if (o.drawUserInterface) {
-            scene->overlay->draw(overlayLines(video, frame, time, rate.framesPerSecond(), renderStats, *scene, camera,
-                                              o.lodError, style.wireframe),
+            scene->overlay->draw(overlayLines(video, frame, time, rate.framesPerSecond(), renderStats, frameStats,
+                                              *scene, camera, o.lodError, style.wireframe),
                                  camera.viewportWidth, camera.viewportHeight);
         }
         if (recorder) {
@@ -583,7 +621,7 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
                 pixels = captureFrame(camera.viewportWidth, camera.viewportHeight);
             }
             if (auto added = recorder->add(frame, std::move(pixels),
-                                           counters.row(frame, time, milliseconds, renderStats, *scene));
+                                           counters.row(frame, time, milliseconds, renderStats, frameStats, *scene));
                 !added.ok()) {
                 log(added.error().message);
                 (void)recorder->finish(true);

@@ -301,6 +301,20 @@ std::vector<OptionSpec> makeOptionTable()
                           "How many node loads may wait at once; the nearest are asked for first and stale ones "
                           "cancelled.",
                           &O::requestQueueSize, 1, 4096, "node groups"));
+    t.push_back(
+        boolOption("visibility_lod", kGroupMap,
+                   "Visibility-driven level of detail (Ozak & Demir): the renderer counts every drawn node's "
+                   "visible pixels, and terrain that has shown none for visibility_hidden_frames frames (behind "
+                   "a ridge) is neither refined nor synthesized. Needs OpenGL 4.3.",
+                   &O::visibilityLod));
+    t.push_back(intOption("visibility_hidden_frames", kGroupMap,
+                          "With visibility_lod: measured frames without a visible pixel before a node counts as "
+                          "hidden (twice as many each time it shows again, up to 8x).",
+                          &O::visibilityHiddenFrames, 1, 64, "frames"));
+    t.push_back(realOption("visibility_reveal_seconds", kGroupMap,
+                           "With visibility_lod: when hidden terrain comes into view, each level of detail it gains "
+                           "morphs in over this long, a level after the other, instead of popping in.",
+                           &O::visibilityRevealSeconds, above(0), "seconds"));
 
     // ---- Detail synthesis ----
     t.push_back(boolOption("detail_create_new_nodes", kGroupDetail,

@@ -38,6 +38,9 @@ struct TengineOptions {
     ReaderKind reader = ReaderKind::MemoryMapped;  ///< reader: stream | memory_mapped
     int workerThreads = 1;                         ///< worker_threads: >= 0; 0 loads on the render thread
     int requestQueueSize = 8;                      ///< request_queue_size: node groups waiting, >= 1
+    bool visibilityLod = false;                    ///< visibility_lod: hidden terrain is not refined (issue 16)
+    int visibilityHiddenFrames = 4;                ///< visibility_hidden_frames: dark frames before hidden, [1, 64]
+    double visibilityRevealSeconds = 0.1;          ///< visibility_reveal_seconds: morph-in per level, > 0
 
     // ---- Detail synthesis (3.3, 3.4) ----
     bool detailCreateNewNodes = true;                 ///< detail_create_new_nodes

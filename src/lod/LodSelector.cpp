@@ -85,6 +85,7 @@ struct Selector {
     const LodTree& tree;
     const ChildrenResident& resident;
     const NodeHidden& hidden;
+    const NodeHeld& held;
     QuadtreeExtent extent;
     Frustum frustum;
     glm::dvec3 eye;
@@ -119,10 +120,17 @@ struct Selector {
             ++out.hiddenNodes;
             out.requestsSkippedHidden += resident && !resident(id) ? 1 : 0;
             select(id, d, ld, dm, dmParent, isRoot);
+            out.nodes.back().hidden = true;
             return;
         }
+        const bool isHeld = held && held(id);
+        out.heldNodes += isHeld ? 1 : 0;
         if (resident && !resident(id)) {
             out.requests.push_back({id, d});
+            select(id, d, ld, dm, dmParent, isRoot);
+            return;
+        }
+        if (isHeld) {
             select(id, d, ld, dm, dmParent, isRoot);
             return;
         }
@@ -163,11 +171,17 @@ struct Selector {
 void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, const ChildrenResident& resident,
                  LodSelection& out)
 {
-    selectNodes(tree, camera, tauPixels, resident, NodeHidden{}, out);
+    selectNodes(tree, camera, tauPixels, resident, NodeHidden{}, NodeHeld{}, out);
 }
 
 void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, const ChildrenResident& resident,
                  const NodeHidden& hidden, LodSelection& out)
+{
+    selectNodes(tree, camera, tauPixels, resident, hidden, NodeHeld{}, out);
+}
+
+void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, const ChildrenResident& resident,
+                 const NodeHidden& hidden, const NodeHeld& held, LodSelection& out)
 {
     out.nodes.clear();
     out.requests.clear();
@@ -175,9 +189,11 @@ void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, co
     out.culledNodes = 0;
     out.hiddenNodes = 0;
     out.requestsSkippedHidden = 0;
+    out.heldNodes = 0;
     Selector s{tree,
                resident,
                hidden,
+               held,
                tree.extent(),
                Frustum::fromCamera(camera),
                camera.position,

@@ -68,6 +68,11 @@ using ChildrenResident = std::function<bool(const NodeId& parent)>;
 /// (visibility_lod, issue 16; NodeVisibility::hidden). Empty function: nothing is hidden.
 using NodeHidden = std::function<bool(const NodeId& id)>;
 
+/// Whether node `id` is held at its own detail this frame although the error test would refine it: it is
+/// still morphing in after a reveal (TerrainStreamer, visibility_lod), and refining it now would pop. Unlike a
+/// hidden node it still asks for its children, so they are ready when the hold ends. Empty: nothing held.
+using NodeHeld = std::function<bool(const NodeId& id)>;
+
 /// One node to draw this frame.
 struct SelectedNode {
     NodeId id;
@@ -77,6 +82,9 @@ struct SelectedNode {
     glm::dvec3 cameraRelativeOrigin{
         0.0};           ///< metres: the node's south-west corner at height 0, minus the camera position
     double size = 0.0;  ///< metres: side of the node's square
+    /// Selected as it is because hidden (NodeHidden): nothing of it showed, so the renderer may draw it as
+    /// coarsely as it likes (the tessellation mode's coarsest blocks); it still counts its pixels.
+    bool hidden = false;
 };
 
 /// A node that wants to be refined but whose children are not all resident: load (or synthesize) them.
@@ -93,6 +101,7 @@ struct LodSelection {
     std::size_t culledNodes = 0;            ///< nodes rejected by the frustum test (statistics)
     std::size_t hiddenNodes = 0;            ///< nodes the error test would refine, selected as they are: hidden
     std::size_t requestsSkippedHidden = 0;  ///< of those, the ones whose children were not resident
+    std::size_t heldNodes = 0;              ///< nodes the error test would refine, selected as they are: held
 };
 
 /// C of eq. 3.3: S / (2 tau |tan(fov / 2)|) with S = viewport height in pixels. A node is refined when
@@ -138,5 +147,9 @@ void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, co
 /// resident). The nodes it selects still partition the unculled terrain.
 void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, const ChildrenResident& resident,
                  const NodeHidden& hidden, LodSelection& out);
+/// The same, and a node that is not hidden but `held` says is held is selected as it is too (counted in
+/// heldNodes), still requesting its children when they are not resident.
+void selectNodes(const LodTree& tree, const Camera& camera, double tauPixels, const ChildrenResident& resident,
+                 const NodeHidden& hidden, const NodeHeld& held, LodSelection& out);
 
 }  // namespace terrain

@@ -45,6 +45,7 @@ void NodeVisibility::record(std::uint64_t frame, std::span<const NodeId> drawn, 
                 r.required = std::min(2 * r.required, 8 * mHiddenFrames);  // revealed: slower to hide again
             }
             r.hiddenStreak = 0;
+            r.everVisible = true;
         } else {
             ++r.hiddenStreak;
         }
@@ -61,6 +62,38 @@ bool NodeVisibility::hidden(const NodeId& id) const
 {
     const auto it = mRecords.find(id.key());
     return it != mRecords.end() && it->second.lastFrame == mLatest && it->second.hiddenStreak >= it->second.required;
+}
+
+NodeVisibility::Seen NodeVisibility::seen(const NodeId& id) const
+{
+    const auto it = mRecords.find(id.key());
+    if (it == mRecords.end() || it->second.lastFrame != mLatest) {
+        return Seen::kUnknown;
+    }
+    const Record& r = it->second;
+    if (r.hiddenStreak >= r.required) {
+        return Seen::kHidden;
+    }
+    return r.everVisible ? Seen::kVisible : Seen::kUnknown;
+}
+
+NodeHidden hiddenFrom(const NodeVisibility& visibility, const DepthOcclusion* occlusion, const LodTree& tree)
+{
+    return [&visibility, occlusion, &tree, extent = tree.extent()](const NodeId& id) {
+        switch (visibility.seen(id)) {
+            case NodeVisibility::Seen::kHidden:
+                return true;
+            case NodeVisibility::Seen::kVisible:
+                return false;
+            case NodeVisibility::Seen::kUnknown:
+                break;
+        }
+        if (occlusion == nullptr) {
+            return false;
+        }
+        const NodeInfo info = tree.info(id);
+        return occlusion->occluded(extent.box(id, info.zMin, info.zMax));
+    };
 }
 
 }  // namespace terrain

@@ -5,6 +5,8 @@
 // subtree that is hidden as a whole collapses to its root, whose own count then decides. Pure: no GL.
 #pragma once
 
+#include "lod/DepthOcclusion.h"
+#include "lod/LodSelector.h"
 #include "quadtree/NodeId.h"
 
 #include <cstdint>
@@ -31,6 +33,12 @@ public:
     /// or not drawn in the latest measured frame (out of view, just made), is not hidden: conservative.
     bool hidden(const NodeId& id) const;
 
+    /// What the counts tell of `id`: hidden (hidden()), visible (drawn in the latest measured frame and showed
+    /// pixels within the dark frames it needs to count as hidden), or nothing yet (not drawn in the latest
+    /// measured frame, or dark in every frame measured since its record began: new in view, or just split).
+    enum class Seen { kHidden, kVisible, kUnknown };
+    Seen seen(const NodeId& id) const;
+
     /// Nodes with a record (statistics; records not drawn for 256 frames are dropped).
     std::size_t records() const { return mRecords.size(); }
     /// The latest frame recorded; 0 before any.
@@ -41,6 +49,7 @@ private:
         std::uint64_t lastFrame = 0;  ///< the latest measured frame it or a node below it was drawn in
         int hiddenStreak = 0;         ///< measured frames in a row without a visible pixel
         int required = 0;             ///< hiddenStreak needed to count as hidden
+        bool everVisible = false;     ///< showed a pixel in some measured frame
     };
     int mHiddenFrames;
     std::uint64_t mLatest = 0;
@@ -48,5 +57,10 @@ private:
     std::unordered_map<std::uint64_t, Record> mRecords;
     std::vector<std::pair<std::uint64_t, bool>> mTouched;  ///< per record(): node key, visible (reused)
 };
+
+/// The selection's question (issue 16) from both measures: a node's own pixel counts where they tell
+/// (NodeVisibility::seen is hidden or visible), else its box in `tree` (resident nodes' heights) against
+/// `occlusion`, the depth of the latest measured frame (null: not hidden). Both must outlive the result.
+NodeHidden hiddenFrom(const NodeVisibility& visibility, const DepthOcclusion* occlusion, const LodTree& tree);
 
 }  // namespace terrain

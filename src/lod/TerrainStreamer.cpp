@@ -31,6 +31,9 @@ Expected<std::unique_ptr<TerrainStreamer>> TerrainStreamer::create(NodeSource& s
     if (options.cacheSize < 5) {
         return makeError("quad_cache_size ", options.cacheSize, " must be at least 5 (the root and four children)");
     }
+    if (!(options.revealSeconds > 0.0)) {
+        return makeError("visibility_reveal_seconds ", options.revealSeconds, " must be > 0");
+    }
     if (options.queueLimit < 1) {
         return makeError("the request queue limit must be at least 1");
     }
@@ -71,18 +74,93 @@ std::size_t TerrainStreamer::collect(std::size_t& refused)
 
 FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels, double cameraSpeed)
 {
+    return update(camera, tauPixels, cameraSpeed, FrameVisibility{});
+}
+
+FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels, double cameraSpeed,
+                                   const FrameVisibility& visibility)
+{
     TERRAIN_EXPECTS(cameraSpeed >= 0.0, "the camera speed must be >= 0");
     FrameStats stats;
     mCache.beginFrame();
     stats.inserted = collect(stats.refused);
 
     const auto start = std::chrono::steady_clock::now();
-    selectNodes(
-        mTree, camera, tauPixels, [this](const NodeId& parent) { return mCache.touchChildren(parent) != nullptr; },
-        mSelection);
+    const ChildrenResident resident = [this](const NodeId& parent) { return mCache.touchChildren(parent) != nullptr; };
+    if (!visibility.hidden && mHiddenAt.empty() && mRevealStart.empty()) {
+        selectNodes(mTree, camera, tauPixels, resident, mSelection);
+    } else {
+        const double now = visibility.time;
+        const double ramp = mOptions.revealSeconds;
+        NodeHidden hidden;
+        if (visibility.hidden) {
+            hidden = [&](const NodeId& id) {
+                const bool h = visibility.hidden(id);
+                if (h) {
+                    mHiddenAt[id.key()] = now;
+                }
+                return h;
+            };
+        }
+        // Whether `id` would be new surface in a revealed area: a node above it was drawn in the previous
+        // selection (it refines what was drawn, not what was collapsed into a coarser node), and a node above it
+        // was hidden a moment ago.
+        auto revealedBelow = [&](NodeId id) {
+            if (mHiddenAt.empty()) {
+                return false;
+            }
+            bool refines = false, belowHidden = false;
+            while (!id.isRoot() && !(refines && belowHidden)) {
+                id = id.parent();
+                refines = refines || mPrevious.contains(id.key());
+                if (!belowHidden) {
+                    const auto it = mHiddenAt.find(id.key());
+                    belowHidden = it != mHiddenAt.end() && now - it->second <= kRevealWindowSeconds;
+                }
+            }
+            return refines && belowHidden;
+        };
+        // Held: still morphing in, or about to be drawn for the first time in a revealed area (it morphs in
+        // from this frame on, so its children must wait).
+        const NodeHeld held = [&](const NodeId& id) {
+            const auto it = mRevealStart.find(id.key());
+            if (it != mRevealStart.end()) {
+                return now - it->second < ramp;
+            }
+            return revealedBelow(id);
+        };
+        selectNodes(mTree, camera, tauPixels, resident, hidden, held, mSelection);
+        // Nodes drawn for the first time below a node hidden a moment ago start morphing in now.
+        std::unordered_set<std::uint64_t> drawn;
+        drawn.reserve(mSelection.nodes.size());
+        for (SelectedNode& node : mSelection.nodes) {
+            const std::uint64_t key = node.id.key();
+            drawn.insert(key);
+            auto it = mRevealStart.find(key);
+            if (it == mRevealStart.end() && revealedBelow(node.id)) {
+                it = mRevealStart.emplace(key, now).first;
+            }
+            if (it != mRevealStart.end()) {
+                const double f = (now - it->second) / ramp;
+                if (f < 1.0) {
+                    node.morph = std::min(node.morph, static_cast<float>(f));
+                    ++stats.revealing;
+                }
+            }
+        }
+        std::erase_if(mRevealStart,
+                      [&](const auto& entry) { return !drawn.contains(entry.first) || now - entry.second >= ramp; });
+        std::erase_if(mHiddenAt, [&](const auto& entry) { return now - entry.second > kRevealWindowSeconds; });
+        mPrevious = std::move(drawn);
+    }
+    if (mRevealStart.empty() && mHiddenAt.empty()) {
+        mPrevious.clear();
+    }
     stats.selectionSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     stats.selected = mSelection.nodes.size();
     stats.requested = mSelection.requests.size();
+    stats.hidden = mSelection.hiddenNodes;
+    stats.requestsSkippedHidden = mSelection.requestsSkippedHidden;
 
     // Ask only for what the cache can take now (nearest first): a group loaded without room would be
     // refused and asked for again every frame, wasting the loader on a working set larger than the cache.

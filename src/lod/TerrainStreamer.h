@@ -7,8 +7,11 @@
 #include "lod/NodeCache.h"
 #include "lod/NodeServer.h"
 
+#include <cstdint>
 #include <functional>
 #include <string>
+#include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 namespace terrain {
@@ -20,17 +23,35 @@ struct StreamerOptions {
     /// detail_velocity_limit (3.4.4): no new dynamic nodes while the camera moves faster than this many of
     /// their sample spacings per second; 0 = no limit. Static nodes are always loaded.
     double velocityLimit = 0.0;
+    /// visibility_reveal_seconds (issue 16): with visibility, a node drawn for the first time below a node
+    /// that was hidden less than kRevealWindowSeconds ago morphs in from its parent's surface over this long,
+    /// and is not refined before it has (the next level then morphs in the same way): cresting a ridge
+    /// refines the terrain behind it a level each this many seconds, morphed, instead of popping the levels
+    /// in at once. > 0.
+    double revealSeconds = 0.1;
+};
+
+/// How long after a node was last hidden the nodes first drawn below it morph in (StreamerOptions::revealSeconds).
+inline constexpr double kRevealWindowSeconds = 2.0;
+
+/// What the viewer saw of the nodes it drew (issue 16, visibility_lod) and when, for one update.
+struct FrameVisibility {
+    NodeHidden hidden;  ///< nodes not to refine (NodeVisibility::hidden); empty: none
+    double time = 0.0;  ///< seconds on the viewer's clock (video mode: the frame's time); never decreasing
 };
 
 /// Per-frame figures.
 struct FrameStats {
-    std::size_t selected = 0;       ///< nodes drawn
-    std::size_t requested = 0;      ///< child groups the traversal wanted but were not resident
-    std::size_t deferred = 0;       ///< of those, not asked for: the cache has no room this frame
-    std::size_t tooFast = 0;        ///< of those, not asked for: dynamic, and the camera is too fast (3.4.4)
-    std::size_t inserted = 0;       ///< groups that became resident this frame
-    std::size_t refused = 0;        ///< finished groups the cache had no room (or no parent) for
-    double selectionSeconds = 0.0;  ///< time in selectNodes
+    std::size_t selected = 0;               ///< nodes drawn
+    std::size_t requested = 0;              ///< child groups the traversal wanted but were not resident
+    std::size_t deferred = 0;               ///< of those, not asked for: the cache has no room this frame
+    std::size_t tooFast = 0;                ///< of those, not asked for: dynamic, and the camera is too fast (3.4.4)
+    std::size_t inserted = 0;               ///< groups that became resident this frame
+    std::size_t refused = 0;                ///< finished groups the cache had no room (or no parent) for
+    double selectionSeconds = 0.0;          ///< time in selectNodes
+    std::size_t hidden = 0;                 ///< nodes selected as they are because hidden (LodSelection::hiddenNodes)
+    std::size_t requestsSkippedHidden = 0;  ///< of those, the ones whose children were not resident
+    std::size_t revealing = 0;              ///< nodes selected this frame still morphing in after a reveal
 };
 
 class TerrainStreamer {
@@ -44,6 +65,11 @@ public:
     /// One frame: collect finished loads, select for `camera` at tau pixels, request what is missing.
     /// `cameraSpeed` (metres per second, >= 0) feeds the velocity limit.
     FrameStats update(const Camera& camera, double tauPixels, double cameraSpeed = 0.0);
+    /// The same with visibility (issue 16): `visibility.hidden` nodes are not refined and request nothing;
+    /// nodes first drawn below a node hidden in the last kRevealWindowSeconds morph in over
+    /// StreamerOptions::revealSeconds from their parent's surface (their SelectedNode::morph is at most the
+    /// time since then over revealSeconds) and are not refined before that (NodeHeld).
+    FrameStats update(const Camera& camera, double tauPixels, double cameraSpeed, const FrameVisibility& visibility);
 
     /// Waits for every queued load, then takes the results into the cache (no selection).
     void drain();
@@ -88,6 +114,11 @@ private:
     LodSelection mSelection;
     std::vector<LoadRequest> mRequests;
     std::function<void(const std::string&)> mReport;
+    // Visibility (update with FrameVisibility): by node key, the time a node was last selected hidden; the
+    // time nodes still morphing in after a reveal were first drawn; the nodes of the previous selection.
+    std::unordered_map<std::uint64_t, double> mHiddenAt;
+    std::unordered_map<std::uint64_t, double> mRevealStart;
+    std::unordered_set<std::uint64_t> mPrevious;
 };
 
 }  // namespace terrain

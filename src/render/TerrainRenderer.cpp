@@ -21,6 +21,9 @@ namespace terrain {
 
 namespace {
 
+/// The block error budget of a hidden node (SelectedNode::hidden) in tessellation mode: every block at its coarsest.
+constexpr double kHiddenBlockPixels = 1e30;
+
 /// The turn and scale of each detail layer's second sample (shaders/terrain.frag, uDetailTurn): 0.955 rad and
 /// 0.755, neither a rational multiple of the tile's period nor of a right angle, so the two lattices share no
 /// period and their sum does not tile.
@@ -141,12 +144,14 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     r->mPixelCounts = pools.pixelCounts;
     if (r->mPixelCounts) {
         if (!pixelCountsSupported()) {
-            return makeError("visibility_lod needs OpenGL 4.3 (or GL_ARB_shader_storage_buffer_object and "
-                             "GL_ARB_shader_image_load_store) to count visible pixels; this GL has neither");
+            return makeError(
+                "visibility_lod needs OpenGL 4.3 (or GL_ARB_shader_storage_buffer_object and "
+                "GL_ARB_shader_image_load_store) to count visible pixels; this GL has neither");
         }
         defines.emplace_back("PIXEL_COUNTS");
         for (CountFrame& frame : r->mCountFrames) {
             frame.buffer = gl::Buffer::create();
+            frame.depth = gl::Buffer::create();
         }
     }
     r->mTessellation = pools.tessellation;
@@ -488,6 +493,8 @@ bool TerrainRenderer::takePixelCounts(PixelCounts& out, std::uint64_t lag)
     oldest->nodes.clear();
     oldest->frame = 0;
     out.pixels.assign(out.nodes.size(), 0);
+    out.camera = oldest->camera;
+    out.depth.clear();
     if (oldest->fence) {
         // Two frames late the GL has long finished: this returns at once, except on a GL that queues more.
         while (!oldest->fence.wait(1'000'000'000)) {
@@ -497,6 +504,13 @@ bool TerrainRenderer::takePixelCounts(PixelCounts& out, std::uint64_t lag)
         glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0,
                            static_cast<GLsizeiptr>(out.pixels.size() * sizeof(std::uint32_t)), out.pixels.data());
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+        if (oldest->hasDepth) {
+            out.depth.resize(static_cast<std::size_t>(out.camera.viewportWidth) * out.camera.viewportHeight);
+            glBindBuffer(GL_PIXEL_PACK_BUFFER, oldest->depth.name());
+            glGetBufferSubData(GL_PIXEL_PACK_BUFFER, 0, static_cast<GLsizeiptr>(out.depth.size() * sizeof(float)),
+                               out.depth.data());
+            glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+        }
     }
     return true;
 }
@@ -518,6 +532,8 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         counting->frame = mFrame;
         counting->nodes.clear();
         counting->fence.reset();
+        counting->hasDepth = false;
+        counting->camera = camera;
     }
     glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
     glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
@@ -586,8 +602,10 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                 TERRAIN_EXPECTS(node->tessellation != nullptr,
                                 "tessellation mode needs nodes made with their tessellation errors "
                                 "(DetailPolicy::tessellationBlockQuads)");
-                const BlockLevels levels = chooseBlockLevels(
-                    *node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera, blockPixels);
+                // A hidden node showed nothing: its blocks at the coarsest level (an unbounded budget).
+                const BlockLevels levels =
+                    chooseBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
+                                      selected.hidden ? kHiddenBlockPixels : blockPixels);
                 const int b = levels.blocksPerSide;
                 for (int k = 0; k < b * b; ++k) {
                     mCodes.push_back(levels.code(k));
@@ -688,9 +706,8 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, counting->buffer.name());
         if (counting->capacity < count) {
             counting->capacity = std::max<std::size_t>(count, 2 * counting->capacity);
-            glBufferData(GL_SHADER_STORAGE_BUFFER,
-                         static_cast<GLsizeiptr>(counting->capacity * sizeof(std::uint32_t)), nullptr,
-                         GL_DYNAMIC_READ);
+            glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(counting->capacity * sizeof(std::uint32_t)),
+                         nullptr, GL_DYNAMIC_READ);
         }
         const std::vector<std::uint32_t> zeros(count, 0);
         glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, static_cast<GLsizeiptr>(count * sizeof(std::uint32_t)),
@@ -758,6 +775,18 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
         // The counters are read by glGetBufferSubData (takePixelCounts) once the fence says the draws are done.
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        // The depth too, into a buffer (no wait here): what the nodes not drawn are tested against.
+        const auto pixels = static_cast<std::size_t>(camera.viewportWidth) * camera.viewportHeight;
+        glBindBuffer(GL_PIXEL_PACK_BUFFER, counting->depth.name());
+        if (counting->depthPixels != pixels) {
+            glBufferData(GL_PIXEL_PACK_BUFFER, static_cast<GLsizeiptr>(pixels * sizeof(float)), nullptr,
+                         GL_STREAM_READ);
+            counting->depthPixels = pixels;
+        }
+        glPixelStorei(GL_PACK_ALIGNMENT, 4);
+        glReadPixels(0, 0, camera.viewportWidth, camera.viewportHeight, GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
+        glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+        counting->hasDepth = true;
         counting->fence = gl::Fence::place();
     }
     if (feedback) {

@@ -81,11 +81,15 @@ struct PoolOptions {
     bool pixelCounts = false;
 };
 
-/// The visible pixels of the nodes drawn in one frame (PoolOptions::pixelCounts).
+/// The visible pixels of the nodes drawn in one frame (PoolOptions::pixelCounts), and its depth.
 struct PixelCounts {
     std::uint64_t frame = 0;            ///< draw()'s frame number: 1 for the first frame drawn
     std::vector<NodeId> nodes;          ///< the nodes drawn, in drawing order
     std::vector<std::uint32_t> pixels;  ///< per node, its fragments that passed the depth test
+    /// The frame's depth buffer after the terrain (DepthOcclusion's input), row 0 at the bottom, and the
+    /// camera it was drawn with; empty when nothing was drawn.
+    std::vector<float> depth;
+    Camera camera;
 };
 
 class TerrainRenderer {
@@ -203,6 +207,10 @@ private:
         gl::Fence fence;           ///< after the frame's draws; none when nothing was drawn
         std::uint64_t frame = 0;   ///< 0: nothing waiting to be taken
         std::vector<NodeId> nodes;
+        gl::Buffer depth;             ///< pixel pack buffer the depth is read into
+        std::size_t depthPixels = 0;  ///< its size
+        bool hasDepth = false;        ///< this frame's depth was read
+        Camera camera;
     };
     bool mPixelCounts = false;
     std::array<CountFrame, 3> mCountFrames;

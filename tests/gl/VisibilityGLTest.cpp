@@ -116,8 +116,8 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
     std::size_t visible = 0, hidden = 0, countedSum = 0, ownedSum = 0;
     for (std::size_t i = 0; i < owned.size(); ++i) {
         if (owned[i] > 0) {
-            EXPECT_GT(counts.pixels[i], 0u) << counts.nodes[i].toString() << " owns " << owned[i]
-                                            << " visible pixels but was counted 0";
+            EXPECT_GT(counts.pixels[i], 0u)
+                << counts.nodes[i].toString() << " owns " << owned[i] << " visible pixels but was counted 0";
         }
         EXPECT_GE(counts.pixels[i], owned[i]) << counts.nodes[i].toString();
         (counts.pixels[i] > 0 ? visible : hidden) += 1;
@@ -129,10 +129,10 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
     EXPECT_GE(countedSum, terrainPixels);
     EXPECT_GT(visible, 5u);
     EXPECT_GT(hidden, 5u) << "the valley view hides nodes behind its ridges";
-    std::printf("%s: %zu nodes, %zu with visible pixels, %zu hidden; %zu fragments counted, %zu pixels owned, %zu "
-                "terrain pixels\n",
-                tessellation ? "tessellation" : "chunks", owned.size(), visible, hidden, countedSum, ownedSum,
-                terrainPixels);
+    std::printf(
+        "%s: %zu nodes, %zu with visible pixels, %zu hidden; %zu fragments counted, %zu pixels owned, %zu "
+        "terrain pixels\n",
+        tessellation ? "tessellation" : "chunks", owned.size(), visible, hidden, countedSum, ownedSum, terrainPixels);
 }
 
 TEST_P(VisibilityGLTest, CountsComeTwoFramesLateInOrderAndUntakenOnesAreDropped)
@@ -169,7 +169,8 @@ TEST_P(VisibilityGLTest, CountsComeTwoFramesLateInOrderAndUntakenOnesAreDropped)
     (*streamer)->update(camera, 2.0);
     const TerrainStreamer& s = **streamer;
     auto draw = [&] {
-        (*renderer)->draw(s.selection(), [&s](const NodeId& id) { return s.node(id); }, camera, {}, 1.0);
+        (*renderer)->draw(
+            s.selection(), [&s](const NodeId& id) { return s.node(id); }, camera, {}, 1.0);
     };
     PixelCounts counts;
     draw();  // frame 1

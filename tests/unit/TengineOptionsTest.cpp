@@ -58,6 +58,9 @@ TEST(TengineOptions, DefaultsAreTheDocumentedOnes)
     EXPECT_EQ(o.reader, ReaderKind::MemoryMapped);
     EXPECT_EQ(o.workerThreads, 1);
     EXPECT_EQ(o.requestQueueSize, 8);
+    EXPECT_FALSE(o.visibilityLod);
+    EXPECT_EQ(o.visibilityHiddenFrames, 4);
+    EXPECT_EQ(o.visibilityRevealSeconds, 0.1);
     EXPECT_TRUE(o.detailCreateNewNodes);
     EXPECT_EQ(o.detailSubdivisionFactor, 1.0);
     EXPECT_TRUE(o.detailAddMaterial);
@@ -117,6 +120,9 @@ const std::vector<ValidCase>& validCases()
         {"worker_threads=0", [](const O& o) { return o.workerThreads == 0; }},
         {"worker_threads=8", [](const O& o) { return o.workerThreads == 8; }},
         {"request_queue_size=1", [](const O& o) { return o.requestQueueSize == 1; }},
+        {"visibility_lod=yes", [](const O& o) { return o.visibilityLod; }},
+        {"visibility_hidden_frames=12", [](const O& o) { return o.visibilityHiddenFrames == 12; }},
+        {"visibility_reveal_seconds=0.5", [](const O& o) { return o.visibilityRevealSeconds == 0.5; }},
         {"detail_create_new_nodes=false", [](const O& o) { return !o.detailCreateNewNodes; }},
         {"detail_subdivision_factor=0", [](const O& o) { return o.detailSubdivisionFactor == 0.0; }},
         {"detail_subdivision_factor=2", [](const O& o) { return o.detailSubdivisionFactor == 2.0; }},
@@ -270,6 +276,9 @@ TEST(TengineOptions, InvalidValuesAreErrorsSayingWhatIsExpected)
         {"reader=Stream", "stream or memory_mapped"},
         {"worker_threads=-1", "an integer in [0, 256] (threads)"},
         {"request_queue_size=0", "an integer in [1, 4096] (node groups)"},
+        {"visibility_lod=sometimes", "true or false (also yes/no, on/off, 1/0)"},
+        {"visibility_hidden_frames=0", "an integer in [1, 64] (frames)"},
+        {"visibility_reveal_seconds=0", "a number > 0 (seconds)"},
         {"detail_create_new_nodes=maybe", "true or false (also yes/no, on/off, 1/0)"},
         {"detail_subdivision_factor=2.01", "a number in [0, 2]"},
         {"detail_subdivision_factor=-0.1", "a number in [0, 2]"},

@@ -7,8 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <set>
 
 namespace terrain {
 namespace {
@@ -182,6 +184,131 @@ TEST_F(TerrainStreamerTest, MinimumSpacingStopsRefinement)
     EXPECT_EQ(deepestSettled(15.0), deepestFull - 1);
     // A minimum of exactly a level's spacing still allows that level.
     EXPECT_EQ(deepestSettled(10.0), deepestFull);
+}
+
+/// Whether `id` lies strictly below `ancestor`.
+bool isBelow(NodeId id, const NodeId& ancestor)
+{
+    while (id.level > ancestor.level) {
+        id = id.parent();
+        if (id == ancestor) {
+            return true;
+        }
+    }
+    return false;
+}
+
+TEST_F(TerrainStreamerTest, AHiddenNodeIsNotRefinedAndItsReturnMorphsInALevelAtATime)
+{
+    TerrainNodeSource source(*mMap, {});
+    StreamerOptions options;
+    options.cacheSize = mMap->directory().size();
+    options.workers = 0;
+    options.revealSeconds = 0.1;
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_TRUE(streamer.ok());
+    TerrainStreamer& s = **streamer;
+    Camera camera;
+    flight().evaluate(25.0).applyTo(camera);
+    double time = 0.0;
+    const double step = 1.0 / 30.0;
+    // As video mode does: load what the frame wants, select again.
+    auto frame = [&](const NodeHidden& hidden) {
+        FrameStats stats = s.update(camera, 2.0, 0.0, {hidden, time});
+        for (int round = 0; round < 32 && stats.requested > 0; ++round) {
+            s.drain();
+            stats = s.update(camera, 2.0, 0.0, {hidden, time});
+        }
+        time += step;
+        return stats;
+    };
+    frame({});
+    const LodSelection full = s.selection();
+    // The ancestor two levels above the deepest node drawn: hidden, its subtree collapses to it.
+    const auto deepest = std::max_element(full.nodes.begin(), full.nodes.end(),
+                                          [](const auto& a, const auto& b) { return a.id.level < b.id.level; });
+    ASSERT_GE(deepest->id.level, 3);
+    const NodeId hiddenId = deepest->id.parent().parent();
+    std::size_t below = 0;
+    for (const auto& n : full.nodes) {
+        below += isBelow(n.id, hiddenId) ? 1 : 0;
+    }
+    ASSERT_GT(below, 4u);
+    const NodeHidden hidden = [&](const NodeId& id) { return id == hiddenId; };
+    for (int f = 0; f < 5; ++f) {
+        const FrameStats stats = frame(hidden);
+        EXPECT_EQ(stats.hidden, 1u);
+        EXPECT_EQ(stats.requestsSkippedHidden, 0u) << "its children are resident";
+        const auto& nodes = s.selection().nodes;
+        EXPECT_TRUE(std::any_of(nodes.begin(), nodes.end(), [&](const auto& n) { return n.id == hiddenId; }));
+        for (const auto& n : nodes) {
+            EXPECT_FALSE(isBelow(n.id, hiddenId)) << n.id.toString() << " drawn below the hidden node";
+        }
+        EXPECT_EQ(nodes.size(), full.nodes.size() - below + 1);
+    }
+    // Revealed: the children come in at their parent's surface (morph 0), held there (not refined), morphing
+    // to their own detail over revealSeconds; then the next level does the same; then all is as before.
+    const double revealed = time;
+    std::set<int> levelsMorphedIn;
+    int framesToFull = -1;
+    for (int f = 0; f < 60; ++f) {
+        const double now = time;
+        const FrameStats stats = frame({});
+        const auto& nodes = s.selection().nodes;
+        for (const auto& n : nodes) {
+            if (!isBelow(n.id, hiddenId)) {
+                continue;
+            }
+            // A level every revealSeconds: level l below the hidden node first drawn at ramp * (l - 1).
+            const int depth = n.id.level - hiddenId.level;
+            const double since = now - revealed - options.revealSeconds * (depth - 1);
+            ASSERT_GE(since, -1e-9) << n.id.toString() << " drawn before its parent finished morphing in";
+            const float bound = static_cast<float>(since / options.revealSeconds);
+            const auto reference =
+                std::find_if(full.nodes.begin(), full.nodes.end(), [&](const auto& r) { return r.id == n.id; });
+            const float target = reference == full.nodes.end() ? 1.0f : reference->morph;
+            EXPECT_LE(n.morph, std::max(bound, 0.0f) + 1e-4f) << n.id.toString() << " frame " << f;
+            EXPECT_NEAR(n.morph, std::min(std::max(bound, 0.0f), target), 1e-4f) << n.id.toString() << " frame " << f;
+            if (since < 1e-9) {
+                levelsMorphedIn.insert(n.id.level);
+            }
+        }
+        if (stats.revealing == 0 && nodes.size() == full.nodes.size()) {
+            framesToFull = f;
+            break;
+        }
+    }
+    EXPECT_GE(levelsMorphedIn.size(), 2u) << "each level came in at morph 0";
+    ASSERT_GE(framesToFull, 0) << "full detail again within 2 s";
+    const int levels = deepest->id.level - hiddenId.level;
+    EXPECT_LE(framesToFull, static_cast<int>(std::ceil(levels * options.revealSeconds / step)) + 1);
+    for (std::size_t i = 0; i < full.nodes.size(); ++i) {
+        EXPECT_EQ(s.selection().nodes[i].id, full.nodes[i].id);
+        EXPECT_FLOAT_EQ(s.selection().nodes[i].morph, full.nodes[i].morph);
+    }
+}
+
+TEST_F(TerrainStreamerTest, AHiddenNodeRequestsNothingAndBadRevealTimesAreRefused)
+{
+    TerrainNodeSource source(*mMap, {});
+    StreamerOptions options;
+    options.workers = 0;
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_TRUE(streamer.ok());
+    Camera camera;
+    flight().evaluate(25.0).applyTo(camera);
+    const FrameStats stats = (*streamer)->update(camera, 2.0, 0.0, {[](const NodeId& id) { return id.isRoot(); }, 0.0});
+    EXPECT_EQ(stats.hidden, 1u);
+    EXPECT_EQ(stats.requestsSkippedHidden, 1u);
+    EXPECT_EQ(stats.requested, 0u);
+    ASSERT_EQ((*streamer)->selection().nodes.size(), 1u);
+    EXPECT_TRUE((*streamer)->selection().nodes[0].id.isRoot());
+    EXPECT_EQ((*streamer)->update(camera, 2.0, 0.0, {{}, 0.1}).requested, 1u) << "visible again: it asks";
+
+    options.revealSeconds = 0.0;
+    auto refused = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_NE(refused.error().message.find("visibility_reveal_seconds"), std::string::npos);
 }
 
 }  // namespace
