@@ -274,7 +274,7 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
         std::vector<double> ratios;
     };
     std::vector<LevelFigures> levels(NodeId::kMaxLevel + 1);
-    LodSelection unmorphed;
+    LodSelection atOwnDetail;                                       // geomorph = false: what the renderer draws
     std::unordered_map<std::uint64_t, BlockLevels> previousLevels;  // --pops
     std::vector<LevelSwitch> switches;
     std::vector<float> pops;  // px
@@ -327,11 +327,8 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
         const TerrainStreamer& s = **streamer;
         const LodSelection* drawn = &s.selection();
         if (!o.geomorph) {  // the renderer then draws every node at its own detail
-            unmorphed = s.selection();
-            for (SelectedNode& node : unmorphed.nodes) {
-                node.morph = 1.0f;
-            }
-            drawn = &unmorphed;
+            atOwnDetail = unmorphed(s.selection());
+            drawn = &atOwnDetail;
         }
         if (command.pops) {
             // The blocks' level switches since the previous frame, each at its size on screen now.

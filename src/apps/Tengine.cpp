@@ -11,6 +11,7 @@
 #include "core/Memory.h"
 #include "core/StopSignals.h"
 #include "lod/CameraPath.h"
+#include "lod/ErrorMeter.h"
 #include "lod/HeightQuery.h"
 #include "lod/NodeVisibility.h"
 #include "lod/TerrainNodeSource.h"
@@ -45,6 +46,9 @@ namespace {
 using namespace terrain;
 
 constexpr double kDegrees = std::numbers::pi / 180.0;
+/// How far around a box the previous frame's depth must hide it (DepthOcclusion): the image moves in the frames
+/// between that depth and the one drawn with it (kPixelCountLag), most at silhouettes a low flight crosses.
+constexpr int kOcclusionMarginPixels = 8;
 
 /// Messages to stderr and, when log_file is set, to the log.
 class Log {
@@ -178,11 +182,16 @@ private:
 /// map's levels - 1 they are dynamic) and draw_calls (for the terrain: 1); since the start: requests_pending_peak (the
 /// most queued plus loading at once, NodeServerStats::peakPending). With visibility_lod (else 0): nodes_hidden
 /// (drawn as they are, hidden), requests_skipped_hidden (of those, the ones whose children were not resident),
-/// nodes_revealing (morphing in after a reveal). New columns go at the end: readers cut columns by position.
+/// nodes_revealing (morphing in after a reveal). dynamic_groups_made: groups of four dynamic nodes the workers
+/// synthesized that arrived this frame (FrameStats::synthesized). New columns go at the end: readers cut
+/// columns by position. blocks_occluded: tessellation mode with visibility_lod, blocks of drawn nodes made
+/// coarsest, behind the previous frame's depth. error_max_px, error_p99_px: with video_measure_error_every, the
+/// measured screen-space error of what the frame shows (empty in frames not measured).
 constexpr const char* kCsvHeader =
     "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
     "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,resident_bytes,"
-    "deepest_level,draw_calls,nodes_hidden,requests_skipped_hidden,nodes_revealing";
+    "deepest_level,draw_calls,nodes_hidden,requests_skipped_hidden,nodes_revealing,dynamic_groups_made,blocks_occluded,"
+    "error_max_px,error_p99_px";
 
 /// Everything the viewer draws with, opened from the options in dependency order. Not movable: the source
 /// refers to the map and the synthesizer, the streamer to the source.
@@ -202,6 +211,10 @@ struct Scene {
     std::optional<DepthOcclusion> occlusion;  ///< the depth of the latest frame measured
     double nodePixels = 2.0;                  ///< the selection's tau: all of lod_error, or what the blocks leave of it
     double blockPixels = 0.0;                 ///< tessellation: the blocks' part of lod_error
+    /// video_measure_error_every: the reference the frames are measured against (tengine-tool error's), last
+    /// so that it goes first.
+    std::unique_ptr<TerrainNodeSource> referenceSource;
+    std::unique_ptr<ErrorMeter> meter;
 
     const MapHeader& header() const { return map->header(); }
 };
@@ -335,7 +348,36 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
     scene->streamer = std::move(streamer).value();
     scene->streamer->onLoadError([&log](const std::string& message) { log(message); });
     scene->streamer->onEvict([renderer = scene->renderer.get()](const NodeData& node) { renderer->release(node.id); });
+    if (o.videoMeasureErrorEvery > 0) {
+        // The reference nodes are the viewer's without the tessellation errors they do not need.
+        scene->referenceSource = std::make_unique<TerrainNodeSource>(
+            *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing});
+        scene->meter = std::make_unique<ErrorMeter>(header, *scene->referenceSource,
+                                                    ErrorMeterOptions{o.lodError / 8.0, 1024, 16});
+    }
     return scene;
+}
+
+/// The screen-space error of what the frame just drawn shows (video_measure_error_every): the meter of
+/// tengine-tool error over the drawn selection, only at points the frame's own depth shows.
+Expected<FrameError> measureShownError(Scene& scene, const Camera& camera, const TengineOptions& o,
+                                       const BoxOccluded& occluded)
+{
+    const DepthSurface surface(TerrainRenderer::readDepth(camera.viewportWidth, camera.viewportHeight),
+                               camera.viewportWidth, camera.viewportHeight, camera);
+    const TerrainStreamer& streamer = *scene.streamer;
+    LodSelection atOwnDetail;
+    const LodSelection* drawn = &streamer.selection();
+    if (!o.geomorph) {  // the renderer then draws every node at its own detail
+        atOwnDetail = unmorphed(streamer.selection());
+        drawn = &atOwnDetail;
+    }
+    MeasuredVisibility visibility;
+    visibility.occluded = occluded;
+    visibility.shows = [&surface](const glm::dvec3& point) { return surface.shows(point); };
+    return scene.meter->measure(
+        *drawn, [&streamer](const NodeId& id) { return streamer.node(id); }, camera, o.lodError,
+        scene.tessellation ? scene.blockPixels : 0.0, visibility);
 }
 
 /// Demo and video mode fly the path as given; where it passes below the finest static surface the frames
@@ -403,8 +445,9 @@ std::vector<std::string> overlayLines(bool video, std::size_t frame, double time
     }
     lines.emplace_back(line);
     if (scene.visibility) {
-        std::snprintf(line, sizeof line, "visibility: %zu hidden, %zu requests skipped, %zu revealing",
-                      selection.hidden, selection.requestsSkippedHidden, selection.revealing);
+        std::snprintf(line, sizeof line,
+                      "visibility: %zu hidden, %zu requests skipped, %zu revealing, %zu blocks occluded",
+                      selection.hidden, selection.requestsSkippedHidden, selection.revealing, render.occludedBlocks);
         lines.emplace_back(line);
     }
     const auto server = scene.streamer->serverStats();
@@ -436,7 +479,8 @@ public:
             << cache.misses() - mMisses << ',' << server.requested - mRequested << ',' << server.completed - mCompleted
             << ',' << server.queued + server.inFlight << ',' << server.failed - mFailed << ',' << server.peakPending
             << ',' << currentResidentBytes() << ',' << deepestLevel << ',' << render.drawCalls << ','
-            << selection.hidden << ',' << selection.requestsSkippedHidden << ',' << selection.revealing;
+            << selection.hidden << ',' << selection.requestsSkippedHidden << ',' << selection.revealing << ','
+            << selection.synthesized << ',' << render.occludedBlocks;
         remember(scene);
         return row.str();
     }
@@ -529,6 +573,11 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
     auto previous = start;
     FrameRateMeter rate;
     FrameCounters counters;
+    struct {
+        std::size_t frames = 0, overTau = 0, worstFrame = 0;
+        double worst = 0.0;
+        std::vector<float> pixels;  // every measured point's error
+    } shownError;
     bool windowClosed = false;
     std::size_t frame = 0;
     glm::dvec3 previousPosition = camera.position;
@@ -585,11 +634,13 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
                 scene->occlusion.reset();
                 if (!counts.depth.empty()) {
                     scene->occlusion.emplace(counts.depth, counts.camera.viewportWidth, counts.camera.viewportHeight,
-                                             counts.camera);
+                                             counts.camera, kOcclusionMarginPixels);
                 }
             }
-            visibility.hidden = hiddenFrom(*scene->visibility, scene->occlusion ? &*scene->occlusion : nullptr,
-                                           scene->streamer->tree());
+            const TerrainStreamer& streamer = *scene->streamer;
+            visibility.hidden =
+                hiddenFrom(*scene->visibility, scene->occlusion ? &*scene->occlusion : nullptr, streamer.tree(),
+                           [&streamer](const NodeId& id) { return streamer.childrenResident(id); });
             visibility.time = video || demo ? time : std::chrono::duration<double>(now - start).count();
         }
         FrameStats frameStats = scene->streamer->update(camera, scene->nodePixels, speed, visibility);
@@ -599,14 +650,19 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
             // identical frames.
             for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred + frameStats.tooFast;
                  ++round) {
-                scene->streamer->drain();
+                std::size_t synthesized = frameStats.synthesized + scene->streamer->drain().synthesized;
                 frameStats = scene->streamer->update(camera, scene->nodePixels, speed, visibility);
+                frameStats.synthesized += synthesized;  // the frame's, all rounds together
             }
         }
         const TerrainStreamer& streamer = *scene->streamer;
+        BoxOccluded occluded;
+        if (scene->occlusion) {
+            occluded = [&occlusion = *scene->occlusion](const Aabb& box) { return occlusion.occluded(box); };
+        }
         const RenderStats renderStats = scene->renderer->draw(
             streamer.selection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, style,
-            scene->blockPixels);
+            scene->blockPixels, nullptr, occluded);
         if (o.drawUserInterface) {
             scene->overlay->draw(overlayLines(video, frame, time, rate.framesPerSecond(), renderStats, frameStats,
                                               *scene, camera, o.lodError, style.wireframe),
@@ -620,8 +676,28 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
             if (recorder->savesImage(frame)) {
                 pixels = captureFrame(camera.viewportWidth, camera.viewportHeight);
             }
-            if (auto added = recorder->add(frame, std::move(pixels),
-                                           counters.row(frame, time, milliseconds, renderStats, frameStats, *scene));
+            std::string measured = ",,";  // error_max_px, error_p99_px
+            if (scene->meter && frame % static_cast<std::size_t>(o.videoMeasureErrorEvery) == 0) {
+                auto error = measureShownError(*scene, camera, o, occluded);
+                if (!error.ok()) {
+                    log(error.error().message);
+                    (void)recorder->finish(true);
+                    return 1;
+                }
+                char columns[64];
+                std::snprintf(columns, sizeof columns, ",%.3f,%.3f", error->maxPixels, error->p99Pixels);
+                measured = columns;
+                shownError.frames += 1;
+                shownError.overTau += error->maxPixels > o.lodError ? 1 : 0;
+                if (error->maxPixels > shownError.worst) {
+                    shownError.worst = error->maxPixels;
+                    shownError.worstFrame = frame;
+                }
+                shownError.pixels.insert(shownError.pixels.end(), error->pixels.begin(), error->pixels.end());
+            }
+            if (auto added =
+                    recorder->add(frame, std::move(pixels),
+                                  counters.row(frame, time, milliseconds, renderStats, frameStats, *scene) + measured);
                 !added.ok()) {
                 log(added.error().message);
                 (void)recorder->finish(true);
@@ -639,6 +715,19 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         char line[96];
         std::snprintf(line, sizeof line, "%zu frames drawn in %.1f s, mean frame time %.1f ms", frame, seconds,
                       1000.0 * seconds / static_cast<double>(frame));
+        log(line);
+    }
+    if (shownError.frames > 0) {
+        std::sort(shownError.pixels.begin(), shownError.pixels.end());
+        const double p99 =
+            shownError.pixels.empty()
+                ? 0.0
+                : shownError.pixels[static_cast<std::size_t>(0.99 * static_cast<double>(shownError.pixels.size() - 1))];
+        char line[200];
+        std::snprintf(line, sizeof line,
+                      "measured error of what is shown: max %.3f px (frame %zu), p99 %.3f px over %zu frames; "
+                      "%zu frames over lod_error %g",
+                      shownError.worst, shownError.worstFrame, p99, shownError.frames, shownError.overTau, o.lodError);
         log(line);
     }
     const bool interrupted = stop.received() != 0 || (video && windowClosed);

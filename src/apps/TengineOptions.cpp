@@ -525,6 +525,11 @@ std::vector<OptionSpec> makeOptionTable()
                           &O::videoSaveEvery, 0, INT_MAX, "frames"));
     t.push_back(boolOption("video_ffmpeg", kGroupVideo,
                            "After video mode, make an MP4 of the frames when ffmpeg is on the PATH.", &O::videoFfmpeg));
+    t.push_back(intOption("video_measure_error_every", kGroupVideo,
+                          "Measure the screen-space error of what every Nth video frame shows (its own depth "
+                          "decides what shows), as tengine-tool error does, into frames.csv (error_max_px, "
+                          "error_p99_px) and a summary line; slow: seconds a frame. 0 measures nothing.",
+                          &O::videoMeasureErrorEvery, 0, INT_MAX, "frames"));
     return t;
 }
 
@@ -697,6 +702,11 @@ Status validate(const TengineOptions& o, std::vector<std::string>& warnings)
     }
     if (o.demoMode && o.videoMode) {
         warnings.push_back("video_mode is ignored: demo_mode overrides it");
+    }
+    if (o.videoMeasureErrorEvery > 0 && (!o.videoMode || o.demoMode)) {
+        return makeError(
+            "video_measure_error_every measures video frames: it needs video_mode = true (and "
+            "demo_mode = false)");
     }
     return {};
 }

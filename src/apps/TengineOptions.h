@@ -89,6 +89,7 @@ struct TengineOptions {
     int videoFrames = 0;                         ///< video_frames: >= 0; stop after this many, 0 = whole path
     int videoSaveEvery = 1;                      ///< video_save_every: >= 0; PNG of every Nth frame, 0 = none
     bool videoFfmpeg = true;                     ///< video_ffmpeg: make an MP4 when ffmpeg is on PATH
+    int videoMeasureErrorEvery = 0;  ///< video_measure_error_every: >= 0; ErrorMeter on every Nth frame, 0 = none
 
     bool operator==(const TengineOptions&) const = default;
 };

@@ -34,4 +34,16 @@ enum class PngCompression { Small, Fast };
 Status writePngImage(const std::filesystem::path& path, const Image& image,
                      PngCompression compression = PngCompression::Small);
 
+/// How two images of the same size differ (issue 16: frames drawn with and without visibility_lod).
+struct ImageDifference {
+    std::size_t pixels = 0;     ///< in each image
+    std::size_t identical = 0;  ///< pixels whose channels are all equal
+    /// The largest 4-connected region of pixels where some channel differs by more than `levels`.
+    std::size_t largestRegion = 0;
+    int largestRegionX = 0, largestRegionY = 0;  ///< a pixel of it
+};
+
+/// Compares `a` and `b` (same size and channels, else an error naming both sizes); `levels` >= 0.
+Expected<ImageDifference> compareImages(const Image& a, const Image& b, int levels);
+
 }  // namespace terrain

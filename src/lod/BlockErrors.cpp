@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 
 namespace terrain {
@@ -285,6 +286,17 @@ TessellationErrors computeTessellationErrors(std::span<const float> surface, int
     const std::array<const float*, 2> both = {surface.data(), parent.data()};
     TriangleMemo memo(n);
     out.flip.assign(static_cast<std::size_t>(b) * b, 0.0f);
+    out.top.assign(static_cast<std::size_t>(b) * b, -std::numeric_limits<float>::infinity());
+    for (int by = 0; by < b; ++by) {
+        for (int bx = 0; bx < b; ++bx) {
+            float& top = out.top[static_cast<std::size_t>(by * b + bx)];
+            for (int j = by * blockQuads; j <= (by + 1) * blockQuads; ++j) {
+                for (int i = bx * blockQuads; i <= (bx + 1) * blockQuads; ++i) {
+                    top = std::max(top, surface[static_cast<std::size_t>(j) * n + i]);
+                }
+            }
+        }
+    }
     for (const auto& s : surfaces) {
         for (int j = 0; j + 1 < n; ++j) {
             for (int i = 0; i + 1 < n; ++i) {

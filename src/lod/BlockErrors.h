@@ -95,6 +95,11 @@ struct TessellationErrors {
     /// diagonal (north-west to south-east), the larger for the two surfaces: the tessellator chooses the
     /// diagonals of its quads, so level 0 is exact only where it happens to choose the template's.
     std::vector<float> flip;
+    /// Per block: the highest of its samples (its sides included) on the drawn surface, metres (of `surface`;
+    /// TerrainNodeSource adds the map's height offset, so nodes carry them absolute, like their boxes).
+    /// Every level of the block, snapped or morphed, lies at or below it (the morph blends towards means of
+    /// these samples).
+    std::vector<float> top;
 
     /// Precondition: 0 <= t < e <= blocks.levels.
     float snapError(int bx, int by, int side, int t, int e) const;

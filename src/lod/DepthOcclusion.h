@@ -19,11 +19,14 @@ class DepthOcclusion {
 public:
     /// `depth`: `width` x `height` window-space depths in [0, 1] (1 where nothing was drawn), row 0 at the
     /// bottom, as glReadPixels gives them, of a frame drawn with `camera` (its viewport the same size).
-    DepthOcclusion(std::span<const float> depth, int width, int height, const Camera& camera);
+    /// `marginPixels` (>= 0) widens every box's rectangle by that much each side: the frames drawn since that
+    /// depth moved the image, and what the box would show must lie behind the depth that far around it.
+    DepthOcclusion(std::span<const float> depth, int width, int height, const Camera& camera, int marginPixels = 0);
 
-    /// Whether all of `box` (world metres) lay behind the frame's surface: its corners in front of the
-    /// camera's near plane, their projection inside the image, and nearer no point of the box than the
-    /// farthest depth drawn over the rectangle it covers. False whenever that cannot be told (conservative).
+    /// Whether all of `box` (world metres) that was in the frame's view lay behind its surface: its corners in
+    /// front of the camera's near plane, and no point of the box nearer than the farthest depth drawn over the
+    /// part of the image its projection covers (outside the image nothing was drawn to hide or show). False
+    /// whenever that cannot be told (a corner at or behind the near plane, the box wholly out of the image).
     bool occluded(const Aabb& box) const;
 
     /// Pixels a side of the tiles whose farthest depth the test reads.
@@ -36,6 +39,28 @@ private:
     glm::dmat4 mViewProjection{1.0};  ///< camera-relative world -> clip
     glm::dvec3 mEye{0.0};
     double mNear = 1.0;
+    int mMargin = 0;
+};
+
+/// A frame's own depth, for measuring what it shows (tengine measure_error_every): whether a point lies on the
+/// surface the frame drew, or in front of it, rather than behind it.
+class DepthSurface {
+public:
+    /// `depth` as for DepthOcclusion, of a frame drawn with `camera`.
+    DepthSurface(std::vector<float> depth, int width, int height, const Camera& camera);
+
+    /// Whether the point (world metres) shows: in front of the near plane, inside the image, and at most
+    /// `slack` (a fraction, >= 0) farther than the farthest depth drawn in the 3 x 3 pixels around its own
+    /// (rasterisation samples pixel centres; a steep or grazing surface changes depth within a pixel). Points
+    /// outside the image do not show.
+    bool shows(const glm::dvec3& point, double slack = 0.02) const;
+
+private:
+    std::vector<float> mDepth;
+    int mWidth = 0, mHeight = 0;
+    glm::dmat4 mViewProjection{1.0};
+    glm::dvec3 mEye{0.0};
+    double mNear = 1.0, mFar = 2.0;
 };
 
 }  // namespace terrain

@@ -194,7 +194,8 @@ Status ErrorMeter::referenceLeaves(const View& view, const NodePtr& from, int ma
 }
 
 Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const ResidentNodeLookup& drawn,
-                                         const Camera& camera, double tauPixels, double blockPixels)
+                                         const Camera& camera, double tauPixels, double blockPixels,
+                                         const MeasuredVisibility& visibility)
 {
     const bool tessellated = blockPixels > 0.0;
     std::vector<float> blended;  // tessellation mode: the node's samples as the shaders blend them
@@ -244,8 +245,11 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
         BlockLevels levels;
         if (tessellated) {
             TERRAIN_EXPECTS(node->tessellation != nullptr, "tessellation mode needs nodes with tessellation errors");
-            levels = chooseBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
-                                       blockPixels);
+            levels = selected.hidden
+                         ? chooseBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax),
+                                             camera, kHiddenBlockPixels)
+                         : chooseBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax),
+                                             camera, blockPixels, visibility.occluded);
             blended = morphedSamples(*node, n, selected.id.isRoot() ? 1.0f : f);
             out.tessellatedTriangles += levels.triangles();
         }
@@ -278,6 +282,9 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
                     const double px = projector.pixels(x, y, offset + z, ref - z);
                     if (px < 0.0) {
                         continue;  // outside the view frustum
+                    }
+                    if (visibility.shows && !visibility.shows(glm::dvec3(x, y, offset + z))) {
+                        continue;  // hidden in the frame measured
                     }
                     ownWorst = std::max(ownWorst, own);
                     out.pixels.push_back(static_cast<float>(px));

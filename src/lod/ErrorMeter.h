@@ -17,6 +17,7 @@
 #include "core/Expected.h"
 #include "lod/LodSelector.h"
 #include "lod/NodeData.h"
+#include "lod/TessellationLevels.h"
 #include "quadtree/MapFormat.h"
 
 #include <array>
@@ -83,6 +84,16 @@ struct OracleSelection {
     std::size_t refinedWithinTau = 0;
 };
 
+/// What a frame drawn with visibility_lod (issue 16) showed, for measuring it (ErrorMeter::measure).
+struct MeasuredVisibility {
+    /// The drawing's block test (tessellation mode, TerrainRenderer::draw's `occluded`): the meter picks the
+    /// blocks' levels as the renderer did. Hidden nodes (SelectedNode::hidden) take every block's coarsest
+    /// level either way, as drawn.
+    BoxOccluded occluded;
+    /// Points (world metres, on the drawn surface) it says did not show are not measured; empty: all are.
+    std::function<bool(const glm::dvec3&)> shows;
+};
+
 class ErrorMeter {
 public:
     /// `source` makes the reference nodes (the same source the viewer draws from, so a reference node is the
@@ -96,8 +107,9 @@ public:
     /// blocks at the levels chooseBlockLevels picks for that budget (lod/TessellationLevels.h, what the renderer
     /// uploads), of the node's samples blended by its morph as the shaders blend them; where the tessellator
     /// may split a cell either way, the worse diagonal counts. Its nodes must carry tessellation errors.
+    /// With `visibility`, what is measured is what the frame showed (see MeasuredVisibility).
     Expected<FrameError> measure(const LodSelection& selection, const ResidentNodeLookup& drawn, const Camera& camera,
-                                 double tauPixels, double blockPixels = 0.0);
+                                 double tauPixels, double blockPixels = 0.0, const MeasuredVisibility& visibility = {});
 
     /// The oracle's selection for `camera` at `tauPixels` > 0 (see OracleSelection), from the same reference
     /// as measure(). With `blocks` = 0 a node's error is its largest error in pixels at its points' own

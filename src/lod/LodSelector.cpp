@@ -45,6 +45,14 @@ NodeInfo MapLodTree::info(const NodeId& id) const
     return {e->hasChildren, e->deltaC, h.heightOf(e->minCode), h.heightOf(e->maxCode)};
 }
 
+LodSelection unmorphed(LodSelection selection)
+{
+    for (SelectedNode& node : selection.nodes) {
+        node.morph = 1.0f;
+    }
+    return selection;
+}
+
 double lodDistanceFactor(const Camera& camera, double tauPixels)
 {
     TERRAIN_EXPECTS(tauPixels > 0.0, "the screen-space error threshold tau must be > 0 pixels");

@@ -104,6 +104,9 @@ struct LodSelection {
     std::size_t heldNodes = 0;              ///< nodes the error test would refine, selected as they are: held
 };
 
+/// `selection` as the renderer draws it with geomorph = false: every node at its own detail (morph 1).
+LodSelection unmorphed(LodSelection selection);
+
 /// C of eq. 3.3: S / (2 tau |tan(fov / 2)|) with S = viewport height in pixels. A node is refined when
 /// d < deltaC * C. `tauPixels` > 0.
 double lodDistanceFactor(const Camera& camera, double tauPixels);

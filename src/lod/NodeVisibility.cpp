@@ -77,22 +77,52 @@ NodeVisibility::Seen NodeVisibility::seen(const NodeId& id) const
     return r.everVisible ? Seen::kVisible : Seen::kUnknown;
 }
 
-NodeHidden hiddenFrom(const NodeVisibility& visibility, const DepthOcclusion* occlusion, const LodTree& tree)
+namespace {
+
+/// Whether every drawable surface below `id` lay behind the depth: its nested box is occluded, or, down to
+/// `depth` more levels of resident nodes, every child's box is (tighter: the quarters' own height ranges).
+bool occludedBelow(const NodeId& id, const NodeInfo& info, const DepthOcclusion& occlusion, const LodTree& tree,
+                   const ChildrenKnown& childrenResident, int depth)
 {
-    return [&visibility, occlusion, &tree, extent = tree.extent()](const NodeId& id) {
+    if (occlusion.occluded(tree.extent().box(id, info.zMin, info.zMax))) {
+        return true;
+    }
+    if (depth == 0 || !info.hasChildren || !childrenResident || !childrenResident(id)) {
+        return false;
+    }
+    for (int q = 0; q < 4; ++q) {
+        const NodeId child = id.child(q);
+        if (!occludedBelow(child, tree.info(child), occlusion, tree, childrenResident, depth - 1)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+}  // namespace
+
+NodeHidden hiddenFrom(const NodeVisibility& visibility, const DepthOcclusion* occlusion, const LodTree& tree,
+                      ChildrenKnown childrenResident)
+{
+    return [&visibility, occlusion, &tree, childrenResident = std::move(childrenResident)](const NodeId& id) {
         switch (visibility.seen(id)) {
             case NodeVisibility::Seen::kHidden:
-                return true;
+                // Dark as drawn, but its refined surface may not be: a peak that the coarse node cuts off
+                // below the ridge in front would stay hidden for good. Nested boxes bound every descendant,
+                // so the node stays hidden only where its boxes are behind the depth as well.
+                if (occlusion == nullptr) {
+                    return true;
+                }
+                break;
             case NodeVisibility::Seen::kVisible:
                 return false;
             case NodeVisibility::Seen::kUnknown:
+                if (occlusion == nullptr) {
+                    return false;
+                }
                 break;
         }
-        if (occlusion == nullptr) {
-            return false;
-        }
-        const NodeInfo info = tree.info(id);
-        return occlusion->occluded(extent.box(id, info.zMin, info.zMax));
+        return occludedBelow(id, tree.info(id), *occlusion, tree, childrenResident, kOcclusionLevels);
     };
 }
 

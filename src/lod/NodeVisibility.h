@@ -10,6 +10,7 @@
 #include "quadtree/NodeId.h"
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <unordered_map>
 #include <utility>
@@ -58,9 +59,20 @@ private:
     std::vector<std::pair<std::uint64_t, bool>> mTouched;  ///< per record(): node key, visible (reused)
 };
 
-/// The selection's question (issue 16) from both measures: a node's own pixel counts where they tell
-/// (NodeVisibility::seen is hidden or visible), else its box in `tree` (resident nodes' heights) against
-/// `occlusion`, the depth of the latest measured frame (null: not hidden). Both must outlive the result.
-NodeHidden hiddenFrom(const NodeVisibility& visibility, const DepthOcclusion* occlusion, const LodTree& tree);
+/// Whether the children of a node are resident (without touching them in the cache).
+using ChildrenKnown = std::function<bool(const NodeId&)>;
+
+/// Levels of resident children below a node whose boxes the depth test may use in its place.
+constexpr int kOcclusionLevels = 2;
+
+/// The selection's question (issue 16) from both measures. Without `occlusion` (the depth of the latest
+/// measured frame; null when there is none): a node's own pixel counts (NodeVisibility::hidden). With it, a
+/// node is hidden when its counts do not show it visible and its surface, refined as far as it can be, lay
+/// behind that depth: its nested box in `tree` (resident nodes' heights) is occluded, or, where
+/// `childrenResident` says its children are resident, each child is, down to kOcclusionLevels levels. Counts
+/// alone would keep a coarse node hidden whose finer surface shows (a peak cut off below the ridge in front).
+/// `visibility`, `occlusion` and `tree` must outlive the result.
+NodeHidden hiddenFrom(const NodeVisibility& visibility, const DepthOcclusion* occlusion, const LodTree& tree,
+                      ChildrenKnown childrenResident = {});
 
 }  // namespace terrain

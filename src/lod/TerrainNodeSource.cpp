@@ -108,8 +108,11 @@ void TerrainNodeSource::addTessellationErrors(NodeData& data) const
                 window[static_cast<std::size_t>(j + kBorder) * w + i + kBorder];
         }
     }
-    data.tessellation = std::make_shared<const TessellationErrors>(
-        computeTessellationErrors(surface, n, mPolicy.tessellationBlockQuads));
+    TessellationErrors errors = computeTessellationErrors(surface, n, mPolicy.tessellationBlockQuads);
+    for (float& top : errors.top) {
+        top += static_cast<float>(mMap.header().heightOffset);  // absolute, like the node's box
+    }
+    data.tessellation = std::make_shared<const TessellationErrors>(std::move(errors));
 }
 
 NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) const

@@ -53,9 +53,8 @@ NodePtr TerrainStreamer::node(const NodeId& id) const
     return group ? (*group)[static_cast<std::size_t>(id.quadrant())] : nullptr;
 }
 
-std::size_t TerrainStreamer::collect(std::size_t& refused)
+void TerrainStreamer::collect(FrameStats& stats)
 {
-    std::size_t inserted = 0;
     for (auto& done : mServer.takeCompleted()) {
         if (!done.children.ok()) {
             if (mReport) {
@@ -63,13 +62,14 @@ std::size_t TerrainStreamer::collect(std::size_t& refused)
             }
             continue;  // never requested again: the parent keeps being drawn
         }
+        const ChildNodes& children = done.children.value();
+        stats.synthesized += children[0] && !children[0]->isStatic ? 1 : 0;
         if (mCache.insertChildren(done.parent, std::move(done.children.value())) == NodeCache::Insert::Inserted) {
-            ++inserted;
+            ++stats.inserted;
         } else {
-            ++refused;
+            ++stats.refused;
         }
     }
-    return inserted;
 }
 
 FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels, double cameraSpeed)
@@ -83,7 +83,7 @@ FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels, doubl
     TERRAIN_EXPECTS(cameraSpeed >= 0.0, "the camera speed must be >= 0");
     FrameStats stats;
     mCache.beginFrame();
-    stats.inserted = collect(stats.refused);
+    collect(stats);
 
     const auto start = std::chrono::steady_clock::now();
     const ChildrenResident resident = [this](const NodeId& parent) { return mCache.touchChildren(parent) != nullptr; };
@@ -187,11 +187,12 @@ FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels, doubl
     return stats;
 }
 
-void TerrainStreamer::drain()
+FrameStats TerrainStreamer::drain()
 {
     mServer.drain();
-    std::size_t refused = 0;
-    collect(refused);
+    FrameStats stats;
+    collect(stats);
+    return stats;
 }
 
 }  // namespace terrain

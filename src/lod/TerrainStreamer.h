@@ -48,6 +48,7 @@ struct FrameStats {
     std::size_t tooFast = 0;                ///< of those, not asked for: dynamic, and the camera is too fast (3.4.4)
     std::size_t inserted = 0;               ///< groups that became resident this frame
     std::size_t refused = 0;                ///< finished groups the cache had no room (or no parent) for
+    std::size_t synthesized = 0;            ///< finished groups of dynamic nodes (made by synthesis, 3.4)
     double selectionSeconds = 0.0;          ///< time in selectNodes
     std::size_t hidden = 0;                 ///< nodes selected as they are because hidden (LodSelection::hiddenNodes)
     std::size_t requestsSkippedHidden = 0;  ///< of those, the ones whose children were not resident
@@ -71,8 +72,9 @@ public:
     /// time since then over revealSeconds) and are not refined before that (NodeHeld).
     FrameStats update(const Camera& camera, double tauPixels, double cameraSpeed, const FrameVisibility& visibility);
 
-    /// Waits for every queued load, then takes the results into the cache (no selection).
-    void drain();
+    /// Waits for every queued load, then takes the results into the cache (no selection); returns what it took
+    /// (FrameStats::inserted, refused and synthesized; the rest 0).
+    FrameStats drain();
 
     const LodSelection& selection() const { return mSelection; }
     /// The resident data of a node selected this frame (or any resident node); null if not resident.
@@ -87,6 +89,8 @@ public:
 
     /// The tree the selection sees: resident nodes' NodeData.
     const LodTree& tree() const { return mTree; }
+    /// Whether the children of `id` are resident, without touching them in the cache.
+    bool childrenResident(const NodeId& id) const { return mCache.children(id) != nullptr; }
 
 private:
     /// LodTree over the resident nodes (a node's info is asked for only once it is resident).
@@ -105,7 +109,8 @@ private:
     };
 
     TerrainStreamer(NodeSource& source, const QuadtreeExtent& extent, const StreamerOptions& options);
-    std::size_t collect(std::size_t& refused);
+    /// Takes the finished loads into the cache, counting them into stats (inserted, refused, synthesized).
+    void collect(FrameStats& stats);
 
     StreamerOptions mOptions;
     ResidentTree mTree;

@@ -44,7 +44,8 @@ std::uint64_t BlockLevels::skirtTriangles() const
     return triangles;
 }
 
-BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels)
+BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels,
+                              const BoxOccluded& occluded)
 {
     const BlockErrors& lambda = errors.blocks;
     const int b = lambda.blocksPerSide;
@@ -62,6 +63,7 @@ BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node
     out.level.assign(blocks, 0);
     out.snap.assign(4 * blocks, 0);
     out.culled.assign(blocks, 0);
+    std::vector<std::uint8_t> hidden(blocks, 0);  // drawn, and `occluded` says so
     for (int by = 0; by < b; ++by) {
         for (int bx = 0; bx < b; ++bx) {
             const Aabb box{{node.lo.x + bx * size, node.lo.y + by * size, node.lo.z},
@@ -72,6 +74,11 @@ BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node
             int level = 0;
             while (level < lambda.levels && lambda.at(bx, by, level + 1) * c <= distance[i]) {
                 ++level;  // lambda is non-decreasing in d: the first that does not fit ends the search
+            }
+            if (occluded && !out.culled[i] && i < errors.top.size()) {
+                Aabb own = box;
+                own.hi.z = std::max(static_cast<double>(errors.top[i]), own.lo.z);
+                hidden[i] = occluded(own) ? 1 : 0;
             }
             out.level[i] = static_cast<std::uint8_t>(level);
         }
@@ -106,6 +113,32 @@ BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node
                         changed = true;
                     }
                 }
+            }
+        }
+    }
+    // Occluded blocks with no visible block beside them go to the coarsest level. Those beside a visible one
+    // keep theirs, so the visible block's sides, snapped to the coarser of the two, stay as they were: what
+    // shows is drawn exactly as without the occlusion test. Between hidden blocks nothing shows.
+    if (occluded) {
+        std::vector<std::uint8_t> coarsen(blocks, 0);
+        for (int by = 0; by < b; ++by) {
+            for (int bx = 0; bx < b; ++bx) {
+                const auto i = static_cast<std::size_t>(by * b + bx);
+                if (!hidden[i]) {
+                    continue;
+                }
+                bool besideVisible = false;
+                for (int side = 0; side < 4; ++side) {
+                    const int other = neighbour(bx, by, side);
+                    besideVisible = besideVisible || (other >= 0 && !hidden[static_cast<std::size_t>(other)]);
+                }
+                coarsen[i] = besideVisible ? 0 : 1;
+            }
+        }
+        for (std::size_t i = 0; i < blocks; ++i) {
+            if (coarsen[i] && out.level[i] < lambda.levels) {
+                out.level[i] = static_cast<std::uint8_t>(lambda.levels);
+                ++out.occludedBlocks;
             }
         }
     }

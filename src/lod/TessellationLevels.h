@@ -21,6 +21,7 @@
 #include "lod/NodeData.h"
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <utility>
 #include <vector>
@@ -36,6 +37,7 @@ struct BlockLevels {
     std::vector<std::uint8_t> level;   ///< per block [by * B + bx]: t
     std::vector<std::uint8_t> snap;    ///< per block and side [(by * B + bx) * 4 + side]: the side's lattice, >= t
     std::vector<std::uint8_t> culled;  ///< per block: 1 outside the view frustum (not drawn)
+    int occludedBlocks = 0;            ///< drawn blocks made coarsest because hidden (`occluded`)
 
     /// The block as the shaders read it: t | south << 2 | east << 4 | north << 6 | west << 8 | culled << 10.
     std::uint16_t code(int block) const;
@@ -55,9 +57,21 @@ inline std::uint64_t skirtPatchTriangles(int f)
     return f == 1 ? 2 : 4 * static_cast<std::uint64_t>(f) - 2;
 }
 
+/// The block error budget of a hidden node (SelectedNode::hidden, issue 16) in tessellation mode, in pixels:
+/// every block at its coarsest level.
+constexpr double kHiddenBlockPixels = 1e30;
+
+/// Whether a box lay wholly behind what the previous frame drew (DepthOcclusion::occluded; issue 16).
+using BoxOccluded = std::function<bool(const Aabb&)>;
+
 /// The levels of the blocks of a node whose box is `node` (its square and height range), for `camera` at
-/// `pixels` of error (the part of tau the blocks may spend). `errors` are the node's.
-BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels);
+/// `pixels` of error (the part of tau the blocks may spend). `errors` are the node's. With `occluded`
+/// (visibility_lod), a block whose box up to its own top (TessellationErrors::top) it says was hidden, and
+/// none of whose drawn neighbours in the node is visible, takes the coarsest level: none of its levels would
+/// have shown. Hidden blocks beside visible ones keep their levels, so the visible blocks, sides and all, are
+/// exactly those chosen without `occluded`.
+BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels,
+                              const BoxOccluded& occluded = {});
 
 /// The heights the tessellation mode draws at node sample coordinates (lx, ly) in [0, N - 1]^2, for the
 /// node's blended sample heights `surface` (N x N) and `levels`: under the one and the other diagonal of the

@@ -21,9 +21,6 @@ namespace terrain {
 
 namespace {
 
-/// The block error budget of a hidden node (SelectedNode::hidden) in tessellation mode: every block at its coarsest.
-constexpr double kHiddenBlockPixels = 1e30;
-
 /// The turn and scale of each detail layer's second sample (shaders/terrain.frag, uDetailTurn): 0.955 rad and
 /// 0.755, neither a rational multiple of the tile's period nor of a right angle, so the two lattices share no
 /// period and their sum does not tile.
@@ -477,6 +474,16 @@ bool TerrainRenderer::pixelCountsSupported()
             epoxy_has_gl_extension("GL_ARB_shader_image_load_store"));
 }
 
+std::vector<float> TerrainRenderer::readDepth(int width, int height)
+{
+    TERRAIN_EXPECTS(width > 0 && height > 0, "a depth buffer of at least one pixel");
+    std::vector<float> depth(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadPixels(0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+    return depth;
+}
+
 bool TerrainRenderer::takePixelCounts(PixelCounts& out, std::uint64_t lag)
 {
     CountFrame* oldest = nullptr;
@@ -517,7 +524,7 @@ bool TerrainRenderer::takePixelCounts(PixelCounts& out, std::uint64_t lag)
 
 RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentNodeLookup& resident,
                                   const Camera& camera, const SceneStyle& style, double blockPixels,
-                                  std::vector<glm::vec3>* feedback)
+                                  std::vector<glm::vec3>* feedback, const BoxOccluded& occluded)
 {
     TERRAIN_EXPECTS(feedback == nullptr || mTessellation, "transform feedback is for the tessellation mode");
     TERRAIN_EXPECTS(!mTessellation || blockPixels > 0.0, "tessellation mode needs a block error budget > 0 pixels");
@@ -602,10 +609,12 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                 TERRAIN_EXPECTS(node->tessellation != nullptr,
                                 "tessellation mode needs nodes made with their tessellation errors "
                                 "(DetailPolicy::tessellationBlockQuads)");
-                // A hidden node showed nothing: its blocks at the coarsest level (an unbounded budget).
-                const BlockLevels levels =
-                    chooseBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
-                                      selected.hidden ? kHiddenBlockPixels : blockPixels);
+                // A hidden node showed nothing: its blocks at the coarsest level (an unbounded budget). In the
+                // others, blocks behind the previous frame's depth start there too.
+                const BlockLevels levels = chooseBlockLevels(
+                    *node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
+                    selected.hidden ? kHiddenBlockPixels : blockPixels, selected.hidden ? BoxOccluded{} : occluded);
+                stats.occludedBlocks += static_cast<std::size_t>(levels.occludedBlocks);
                 const int b = levels.blocksPerSide;
                 for (int k = 0; k < b * b; ++k) {
                     mCodes.push_back(levels.code(k));

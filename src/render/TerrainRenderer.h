@@ -45,11 +45,12 @@ struct RenderStats {
     std::size_t staticNodes = 0;
     std::size_t dynamicNodes = 0;
     std::uint64_t triangles = 0;
-    std::size_t uploads = 0;       ///< nodes copied into their slots this frame
-    std::size_t gpuNodes = 0;      ///< slots holding a node after the frame
-    std::size_t drawCalls = 0;     ///< draw calls for the terrain (the sky not counted): 1 with anything in view
-    std::size_t blocks = 0;        ///< tessellation mode: blocks drawn (not culled)
-    std::size_t culledBlocks = 0;  ///< tessellation mode: blocks of drawn nodes outside the frustum
+    std::size_t uploads = 0;         ///< nodes copied into their slots this frame
+    std::size_t gpuNodes = 0;        ///< slots holding a node after the frame
+    std::size_t drawCalls = 0;       ///< draw calls for the terrain (the sky not counted): 1 with anything in view
+    std::size_t blocks = 0;          ///< tessellation mode: blocks drawn (not culled)
+    std::size_t culledBlocks = 0;    ///< tessellation mode: blocks of drawn nodes outside the frustum
+    std::size_t occludedBlocks = 0;  ///< tessellation mode: blocks drawn at their coarsest, hidden (`occluded`)
     std::uint64_t generatedTriangles = 0;  ///< with transform feedback: the triangles the GL says it made
 };
 
@@ -117,9 +118,12 @@ public:
     /// In tessellation mode the blocks spend `blockPixels` of error (the selection was made for the rest of tau).
     /// With `feedback` (tessellation mode, for tests), the camera-relative corners of every triangle the
     /// tessellator made are read back by transform feedback, three a triangle, in drawing order (node by node
-    /// as drawn, patch by patch: blocks, then skirts).
+    /// as drawn, patch by patch: blocks, then skirts). With `occluded` (tessellation mode, visibility_lod: the
+    /// previous frame's depth), blocks whose boxes it says were hidden start at their coarsest level
+    /// (chooseBlockLevels).
     RenderStats draw(const LodSelection& selection, const ResidentNodeLookup& resident, const Camera& camera,
-                     const SceneStyle& style, double blockPixels = 0.0, std::vector<glm::vec3>* feedback = nullptr);
+                     const SceneStyle& style, double blockPixels = 0.0, std::vector<glm::vec3>* feedback = nullptr,
+                     const BoxOccluded& occluded = {});
 
     /// Whether this context runs tessellation shaders (OpenGL 4.0).
     static bool tessellationSupported();
@@ -136,6 +140,10 @@ public:
     /// for the GL to finish it), into `out`; false when there is none. The counts of a frame stay for three
     /// frames: what is not taken by then is dropped (droppedPixelCounts()).
     bool takePixelCounts(PixelCounts& out, std::uint64_t lag = kPixelCountLag);
+    /// The depth buffer of the frame just drawn (the bound framebuffer's, `width` x `height` from its
+    /// origin), rows bottom to top, read at once: waits for the GL. For measuring (tengine
+    /// measure_error_every), not for drawing: the pixel counts' depth comes late and does not wait.
+    static std::vector<float> readDepth(int width, int height);
     /// Frames whose pixel counts were dropped untaken.
     std::uint64_t droppedPixelCounts() const { return mDroppedCounts; }
 

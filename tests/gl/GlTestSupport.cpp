@@ -86,7 +86,9 @@ std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& 
         for (const auto& name : names) {
             std::string value;
             std::getline(fields, value, ',');
-            row[name] = std::stod(value);
+            if (!value.empty()) {  // empty: not measured in this frame (error_max_px, ...)
+                row[name] = std::stod(value);
+            }
         }
         rows.push_back(std::move(row));
     }

@@ -38,7 +38,7 @@ Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::fi
 Status buildDetailMap(HeightField field, double spacing, const std::filesystem::path& path,
                       const std::vector<std::filesystem::path>& materials);
 
-/// Rows of a video's frames.csv as maps from column name to value.
+/// Rows of a video's frames.csv as maps from column name to value; empty fields (not measured) are left out.
 std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& file);
 
 }  // namespace terrain::test

@@ -385,7 +385,8 @@ TEST_F(SoakGLTest, SaveEveryWritesEveryNthFrameAndTheCsvHasTheSoakColumns)
     EXPECT_EQ(header,
               "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
               "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,"
-              "resident_bytes,deepest_level,draw_calls");
+              "resident_bytes,deepest_level,draw_calls,nodes_hidden,requests_skipped_hidden,nodes_revealing,"
+              "dynamic_groups_made,blocks_occluded,error_max_px,error_p99_px");
     const auto rows = readCsv(out.path() / "frames.csv");
     ASSERT_EQ(rows.size(), 5u);
     for (const auto& row : rows) {

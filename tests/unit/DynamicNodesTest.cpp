@@ -18,7 +18,6 @@
 #include <map>
 #include <numbers>
 #include <random>
-#include <thread>
 
 namespace terrain {
 namespace {
@@ -111,6 +110,45 @@ TEST_F(DynamicNodesTest, ViewerGoesBelowTheStaticLeavesAndStaysWithinTheCache)
         EXPECT_LE((*streamer)->cache().size(), options.cacheSize);
     }
     EXPECT_GE(deepest, staticLevels + 3) << "a camera 2 m above the ground sees centimetre detail";
+}
+
+TEST_F(DynamicNodesTest, FramesCountTheDynamicGroupsTheyTakeIn)
+{
+    TerrainNodeSource source(*mMap, {mSynthesizer.get(), 0.05});
+    StreamerOptions options;
+    options.cacheSize = 4000;  // nothing is evicted
+    options.workers = 0;       // loads run in drain(), and drain() says what it took in
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    std::size_t synthesized = 0, taken = 0;
+    for (int round = 0; round < 200; ++round) {
+        const FrameStats frame = (*streamer)->update(lowCamera(5.0), 1.0);
+        const FrameStats drained = (*streamer)->drain();
+        synthesized += frame.synthesized + drained.synthesized;
+        taken += frame.inserted + frame.refused + drained.inserted + drained.refused;
+        if (frame.requested == 0) {
+            break;
+        }
+    }
+    // The reference: walk the resident tree from the root and count the dynamic nodes, four a group.
+    std::size_t dynamicNodes = 0, nodes = 0;
+    std::vector<NodeId> stack{NodeId{}};
+    while (!stack.empty()) {
+        const NodeId id = stack.back();
+        stack.pop_back();
+        const NodePtr node = (*streamer)->node(id);
+        if (!node) {
+            continue;
+        }
+        ++nodes;
+        dynamicNodes += node->isStatic ? 0 : 1;
+        for (int q = 0; q < 4; ++q) {
+            stack.push_back(id.child(q));
+        }
+    }
+    EXPECT_GT(synthesized, 10u) << "5 m above the ground the viewer goes below the static leaves";
+    EXPECT_EQ(synthesized * 4, dynamicNodes);
+    EXPECT_EQ(taken * 4 + 1, nodes) << "every group taken in is resident, with the root";
 }
 
 TEST_F(DynamicNodesTest, AdjacentSelectedNodesAgreeBitForBitOnTheirSharedSamples)

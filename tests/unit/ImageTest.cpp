@@ -9,10 +9,12 @@
 
 #include <gtest/gtest.h>
 #include <png.h>
+#include <algorithm>
 #include <cmath>
 #include <csetjmp>
 #include <cstdio>
 #include <fstream>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -275,6 +277,104 @@ TEST(ImageTest, RewritingReplacesTheFileWhole)
     auto read = readPngImage(dir / "frame.png", 3);
     ASSERT_TRUE(read.ok()) << read.error().message;
     EXPECT_EQ(read->pixels, (Bytes{1, 2, 3, 4, 5, 6}));
+}
+
+/// Union-find over the pixels differing by more than `levels`: the size of the largest 4-connected region,
+/// independently of compareImages' flood fill.
+std::size_t largestRegionByUnionFind(const Image& a, const Image& b, int levels)
+{
+    const int n = a.width * a.height;
+    std::vector<int> parent(static_cast<std::size_t>(n));
+    std::vector<bool> far(static_cast<std::size_t>(n));
+    for (int p = 0; p < n; ++p) {
+        parent[p] = p;
+        for (int c = 0; c < a.channels; ++c) {
+            far[p] = far[p] || std::abs(a.pixels[p * a.channels + c] - b.pixels[p * a.channels + c]) > levels;
+        }
+    }
+    const auto find = [&](int p) {
+        while (parent[p] != p) {
+            p = parent[p] = parent[parent[p]];
+        }
+        return p;
+    };
+    for (int y = 0; y < a.height; ++y) {
+        for (int x = 0; x < a.width; ++x) {
+            const int p = y * a.width + x;
+            if (far[p] && x + 1 < a.width && far[p + 1]) {
+                parent[find(p)] = find(p + 1);
+            }
+            if (far[p] && y + 1 < a.height && far[p + a.width]) {
+                parent[find(p)] = find(p + a.width);
+            }
+        }
+    }
+    std::vector<std::size_t> size(static_cast<std::size_t>(n), 0);
+    std::size_t largest = 0;
+    for (int p = 0; p < n; ++p) {
+        if (far[p]) {
+            largest = std::max(largest, ++size[find(p)]);
+        }
+    }
+    return largest;
+}
+
+TEST(ImageTest, ComparingCountsIdenticalPixelsAndFindsTheLargestRegionOverTheLevels)
+{
+    std::mt19937 random(16);
+    for (int trial = 0; trial < 20; ++trial) {
+        SCOPED_TRACE(trial);
+        const int width = 5 + trial * 3, height = 4 + trial * 2, channels = trial % 2 == 0 ? 3 : 1;
+        Image a = makeImage(width, height, channels, Bytes(static_cast<std::size_t>(width * height * channels)));
+        for (auto& v : a.pixels) {
+            v = static_cast<std::uint8_t>(random() % 256);
+        }
+        Image b = a;
+        std::size_t changed = 0;
+        for (int p = 0; p < width * height; ++p) {
+            if (random() % 3 == 0) {  // a third of the pixels change in one channel, by 1 to 20 levels
+                auto& v = b.pixels[static_cast<std::size_t>(p * channels) + random() % channels];
+                const int step = 1 + static_cast<int>(random() % 20);
+                v = static_cast<std::uint8_t>(v >= 128 ? v - step : v + step);
+                ++changed;
+            }
+        }
+        auto d = compareImages(a, b, 8);
+        ASSERT_TRUE(d.ok()) << d.error().message;
+        EXPECT_EQ(d->pixels, static_cast<std::size_t>(width * height));
+        EXPECT_EQ(d->identical, d->pixels - changed);
+        EXPECT_EQ(d->largestRegion, largestRegionByUnionFind(a, b, 8));
+        if (d->largestRegion > 0) {  // the pixel named lies in a region over the levels
+            const auto* pa = a.pixel(d->largestRegionX, d->largestRegionY);
+            const auto* pb = b.pixel(d->largestRegionX, d->largestRegionY);
+            int worst = 0;
+            for (int c = 0; c < channels; ++c) {
+                worst = std::max(worst, std::abs(pa[c] - pb[c]));
+            }
+            EXPECT_GT(worst, 8);
+        }
+    }
+    // A 5-pixel plus sign over the levels, two lone pixels within them: one region of 5.
+    Image a = makeImage(7, 7, 1, Bytes(49, 100));
+    Image b = a;
+    for (int p : {3 * 7 + 3, 2 * 7 + 3, 4 * 7 + 3, 3 * 7 + 2, 3 * 7 + 4}) {
+        b.pixels[static_cast<std::size_t>(p)] = 120;
+    }
+    b.pixels[0] = 108;
+    b.pixels[48] = 92;
+    auto d = compareImages(a, b, 8);
+    ASSERT_TRUE(d.ok());
+    EXPECT_EQ(d->identical, 42u);
+    EXPECT_EQ(d->largestRegion, 5u);
+    // Diagonal neighbours are separate regions.
+    Image c = a;
+    c.pixels[0] = c.pixels[8] = c.pixels[16] = 0;
+    d = compareImages(a, c, 8);
+    ASSERT_TRUE(d.ok());
+    EXPECT_EQ(d->largestRegion, 1u);
+    auto wrong = compareImages(a, makeImage(7, 6, 1, Bytes(42)), 8);
+    ASSERT_FALSE(wrong.ok());
+    EXPECT_NE(wrong.error().message.find("7x7x1 and 7x6x1"), std::string::npos) << wrong.error().message;
 }
 
 }  // namespace

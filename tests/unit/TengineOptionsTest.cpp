@@ -123,6 +123,7 @@ const std::vector<ValidCase>& validCases()
         {"visibility_lod=yes", [](const O& o) { return o.visibilityLod; }},
         {"visibility_hidden_frames=12", [](const O& o) { return o.visibilityHiddenFrames == 12; }},
         {"visibility_reveal_seconds=0.5", [](const O& o) { return o.visibilityRevealSeconds == 0.5; }},
+        {"video_measure_error_every=25", [](const O& o) { return o.videoMeasureErrorEvery == 25; }},
         {"detail_create_new_nodes=false", [](const O& o) { return !o.detailCreateNewNodes; }},
         {"detail_subdivision_factor=0", [](const O& o) { return o.detailSubdivisionFactor == 0.0; }},
         {"detail_subdivision_factor=2", [](const O& o) { return o.detailSubdivisionFactor == 2.0; }},
@@ -279,6 +280,7 @@ TEST(TengineOptions, InvalidValuesAreErrorsSayingWhatIsExpected)
         {"visibility_lod=sometimes", "true or false (also yes/no, on/off, 1/0)"},
         {"visibility_hidden_frames=0", "an integer in [1, 64] (frames)"},
         {"visibility_reveal_seconds=0", "a number > 0 (seconds)"},
+        {"video_measure_error_every=-1", "an integer >= 0 (frames)"},
         {"detail_create_new_nodes=maybe", "true or false (also yes/no, on/off, 1/0)"},
         {"detail_subdivision_factor=2.01", "a number in [0, 2]"},
         {"detail_subdivision_factor=-0.1", "a number in [0, 2]"},
@@ -610,6 +612,8 @@ TEST_F(TengineOptionsCommandLine, Errors)
          "camera_z_far (10) must be greater than camera_z_near (10)"},
         {{"--set", "demo_mode=on"}, "demo_mode needs a camera_path"},
         {{"--set", "video_mode=on"}, "video_mode needs a camera_path"},
+        {{"--set", "video_measure_error_every=5"},
+         "video_measure_error_every measures video frames: it needs video_mode = true (and demo_mode = false)"},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.args.front());

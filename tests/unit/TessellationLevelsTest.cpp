@@ -151,6 +151,69 @@ TEST(TessellationLevelsTest, EveryDrawnBlockIsWithinItsBudgetAndSharedSidesMatch
     EXPECT_GT(snappedSides, 10) << "the cases must snap sides";
 }
 
+TEST(TessellationLevelsTest, OccludedBlocksAwayFromVisibleOnesAreCoarsestAndTheVisibleUnchanged)
+{
+    const int n = 65;
+    const std::vector<float> surface = hills(n, 5, 6.0);
+    const TessellationErrors errors = computeTessellationErrors(surface, n, 8);
+    const auto [lo, hi] = std::minmax_element(surface.begin(), surface.end());
+    const Aabb node{{0.0, 0.0, *lo - 20.0}, {640.0, 640.0, *hi + 20.0}};
+    const Camera camera = cameraAt({320.0, -50.0, 360.0}, 0.0, -10.0);
+    const double pixels = 1.0;
+    const BlockLevels plain = chooseBlockLevels(errors, node, camera, pixels);
+    EXPECT_EQ(plain.occludedBlocks, 0);
+    const BlockLevels never = chooseBlockLevels(errors, node, camera, pixels, [](const Aabb&) { return false; });
+    EXPECT_EQ(never.level, plain.level);
+    EXPECT_EQ(never.snap, plain.snap);
+    // The east half hidden (bx >= 4). Each box asked about is its block's square, from the node's floor to the
+    // block's highest sample (brute force here).
+    int asked = 0;
+    const BlockLevels levels = chooseBlockLevels(errors, node, camera, pixels, [&](const Aabb& box) {
+        const int bx = static_cast<int>(box.lo.x / 80.0 + 0.5), by = static_cast<int>(box.lo.y / 80.0 + 0.5);
+        float top = -1e30f;
+        for (int j = by * 8; j <= by * 8 + 8; ++j) {
+            for (int i = bx * 8; i <= bx * 8 + 8; ++i) {
+                top = std::max(top, surface[static_cast<std::size_t>(j) * n + i]);
+            }
+        }
+        EXPECT_EQ(box.hi.z, top) << bx << "," << by;
+        EXPECT_EQ(box.lo.z, node.lo.z);
+        ++asked;
+        return box.lo.x >= 320.0;
+    });
+    const int b = levels.blocksPerSide;
+    int made = 0, interior = 0;
+    for (int by = 0; by < b; ++by) {
+        for (int bx = 0; bx < b; ++bx) {
+            const auto i = static_cast<std::size_t>(by * b + bx);
+            ASSERT_EQ(levels.culled[i], plain.culled[i]);
+            if (levels.culled[i]) {
+                continue;
+            }
+            const bool besideVisible = bx == b / 2 && !plain.culled[i - 1];
+            if (bx < b / 2 || besideVisible) {
+                // Visible, or beside a visible one: as chosen without occlusion, and so are the visible
+                // blocks' sides.
+                EXPECT_EQ(levels.level[i], plain.level[i]) << bx << "," << by;
+                if (bx < b / 2) {
+                    for (int side = 0; side < 4; ++side) {
+                        EXPECT_EQ(levels.snap[4 * i + side], plain.snap[4 * i + side]) << bx << "," << by;
+                    }
+                }
+                continue;
+            }
+            ++interior;
+            EXPECT_EQ(levels.level[i], errors.blocks.levels) << bx << "," << by;
+            made += plain.level[i] < errors.blocks.levels ? 1 : 0;
+        }
+    }
+    EXPECT_GT(asked, 0);
+    EXPECT_GT(interior, 10);
+    EXPECT_EQ(levels.occludedBlocks, made);
+    EXPECT_GT(made, 5) << "the hidden blocks must have been finer without the test";
+    EXPECT_LT(levels.surfaceTriangles(), plain.surfaceTriangles());
+}
+
 TEST(TessellationLevelsTest, APlaneTakesTheCoarsestLevelHoweverCloseAndNearTakesMore)
 {
     const int n = 33;
