@@ -627,6 +627,7 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         const auto frameStart = std::chrono::steady_clock::now();
         // Visibility (issue 16): the pixel counts of the frames drawn long enough ago, then what they hide.
         FrameVisibility visibility;
+        double moved = 0.0;  // metres from where the depth tested against was drawn
         if (scene->visibility) {
             while (scene->renderer->takePixelCounts(scene->pixelCounts)) {
                 const PixelCounts& counts = scene->pixelCounts;
@@ -638,9 +639,10 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
                 }
             }
             const TerrainStreamer& streamer = *scene->streamer;
-            visibility.hidden =
-                hiddenFrom(*scene->visibility, scene->occlusion ? &*scene->occlusion : nullptr, streamer.tree(),
-                           [&streamer](const NodeId& id) { return streamer.childrenResident(id); });
+            moved = scene->occlusion ? glm::length(camera.position - scene->occlusion->eye()) : 0.0;
+            visibility.hidden = hiddenFrom(
+                *scene->visibility, scene->occlusion ? &*scene->occlusion : nullptr, streamer.tree(),
+                [&streamer](const NodeId& id) { return streamer.childrenResident(id); }, moved);
             visibility.time = video || demo ? time : std::chrono::duration<double>(now - start).count();
         }
         FrameStats frameStats = scene->streamer->update(camera, scene->nodePixels, speed, visibility);
@@ -658,7 +660,9 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         const TerrainStreamer& streamer = *scene->streamer;
         BoxOccluded occluded;
         if (scene->occlusion) {
-            occluded = [&occlusion = *scene->occlusion](const Aabb& box) { return occlusion.occluded(box); };
+            occluded = [&occlusion = *scene->occlusion, moved](const Aabb& box) {
+                return occlusion.occluded(box, moved);
+            };
         }
         const RenderStats renderStats = scene->renderer->draw(
             streamer.selection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, style,

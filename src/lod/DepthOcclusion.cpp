@@ -33,8 +33,10 @@ DepthOcclusion::DepthOcclusion(std::span<const float> depth, int width, int heig
     }
 }
 
-bool DepthOcclusion::occluded(const Aabb& box) const
+bool DepthOcclusion::occluded(const Aabb& unGrown, double growMetres) const
 {
+    TERRAIN_EXPECTS(growMetres >= 0.0, "a box grows by >= 0 metres");
+    const Aabb box{unGrown.lo - glm::dvec3(growMetres), unGrown.hi + glm::dvec3(growMetres)};
     double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300, nearest = 1e300;
     for (int c = 0; c < 8; ++c) {
         const glm::dvec3 corner{(c & 1) ? box.hi.x : box.lo.x, (c & 2) ? box.hi.y : box.lo.y,

@@ -27,7 +27,12 @@ public:
     /// front of the camera's near plane, and no point of the box nearer than the farthest depth drawn over the
     /// part of the image its projection covers (outside the image nothing was drawn to hide or show). False
     /// whenever that cannot be told (a corner at or behind the near plane, the box wholly out of the image).
-    bool occluded(const Aabb& box) const;
+    /// With `growMetres` > 0 the box is first grown by that much on every side: the distance the viewer has
+    /// moved since the frame, so that what the box holds stays hidden from anywhere along the way (as far
+    /// as moving the box the other way tells).
+    bool occluded(const Aabb& box, double growMetres = 0.0) const;
+    /// Where the frame's camera was.
+    const glm::dvec3& eye() const { return mEye; }
 
     /// Pixels a side of the tiles whose farthest depth the test reads.
     static constexpr int kTile = 8;

@@ -82,9 +82,9 @@ namespace {
 /// Whether every drawable surface below `id` lay behind the depth: its nested box is occluded, or, down to
 /// `depth` more levels of resident nodes, every child's box is (tighter: the quarters' own height ranges).
 bool occludedBelow(const NodeId& id, const NodeInfo& info, const DepthOcclusion& occlusion, const LodTree& tree,
-                   const ChildrenKnown& childrenResident, int depth)
+                   const ChildrenKnown& childrenResident, int depth, double grow)
 {
-    if (occlusion.occluded(tree.extent().box(id, info.zMin, info.zMax))) {
+    if (occlusion.occluded(tree.extent().box(id, info.zMin, info.zMax), grow)) {
         return true;
     }
     if (depth == 0 || !info.hasChildren || !childrenResident || !childrenResident(id)) {
@@ -92,7 +92,7 @@ bool occludedBelow(const NodeId& id, const NodeInfo& info, const DepthOcclusion&
     }
     for (int q = 0; q < 4; ++q) {
         const NodeId child = id.child(q);
-        if (!occludedBelow(child, tree.info(child), occlusion, tree, childrenResident, depth - 1)) {
+        if (!occludedBelow(child, tree.info(child), occlusion, tree, childrenResident, depth - 1, grow)) {
             return false;
         }
     }
@@ -102,28 +102,30 @@ bool occludedBelow(const NodeId& id, const NodeInfo& info, const DepthOcclusion&
 }  // namespace
 
 NodeHidden hiddenFrom(const NodeVisibility& visibility, const DepthOcclusion* occlusion, const LodTree& tree,
-                      ChildrenKnown childrenResident)
+                      ChildrenKnown childrenResident, double growMetres)
 {
-    return [&visibility, occlusion, &tree, childrenResident = std::move(childrenResident)](const NodeId& id) {
-        switch (visibility.seen(id)) {
-            case NodeVisibility::Seen::kHidden:
-                // Dark as drawn, but its refined surface may not be: a peak that the coarse node cuts off
-                // below the ridge in front would stay hidden for good. Nested boxes bound every descendant,
-                // so the node stays hidden only where its boxes are behind the depth as well.
-                if (occlusion == nullptr) {
-                    return true;
-                }
-                break;
-            case NodeVisibility::Seen::kVisible:
-                return false;
-            case NodeVisibility::Seen::kUnknown:
-                if (occlusion == nullptr) {
+    TERRAIN_EXPECTS(growMetres >= 0.0, "boxes grow by >= 0 metres");
+    return
+        [&visibility, occlusion, &tree, childrenResident = std::move(childrenResident), growMetres](const NodeId& id) {
+            switch (visibility.seen(id)) {
+                case NodeVisibility::Seen::kHidden:
+                    // Dark as drawn, but its refined surface may not be: a peak that the coarse node cuts off
+                    // below the ridge in front would stay hidden for good. Nested boxes bound every descendant,
+                    // so the node stays hidden only where its boxes are behind the depth as well.
+                    if (occlusion == nullptr) {
+                        return true;
+                    }
+                    break;
+                case NodeVisibility::Seen::kVisible:
                     return false;
-                }
-                break;
-        }
-        return occludedBelow(id, tree.info(id), *occlusion, tree, childrenResident, kOcclusionLevels);
-    };
+                case NodeVisibility::Seen::kUnknown:
+                    if (occlusion == nullptr) {
+                        return false;
+                    }
+                    break;
+            }
+            return occludedBelow(id, tree.info(id), *occlusion, tree, childrenResident, kOcclusionLevels, growMetres);
+        };
 }
 
 }  // namespace terrain

@@ -71,8 +71,9 @@ constexpr int kOcclusionLevels = 2;
 /// behind that depth: its nested box in `tree` (resident nodes' heights) is occluded, or, where
 /// `childrenResident` says its children are resident, each child is, down to kOcclusionLevels levels. Counts
 /// alone would keep a coarse node hidden whose finer surface shows (a peak cut off below the ridge in front).
+/// Boxes grow by `growMetres` (>= 0: how far the viewer moved since that depth; DepthOcclusion::occluded).
 /// `visibility`, `occlusion` and `tree` must outlive the result.
 NodeHidden hiddenFrom(const NodeVisibility& visibility, const DepthOcclusion* occlusion, const LodTree& tree,
-                      ChildrenKnown childrenResident = {});
+                      ChildrenKnown childrenResident = {}, double growMetres = 0.0);
 
 }  // namespace terrain

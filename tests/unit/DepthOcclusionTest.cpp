@@ -70,6 +70,11 @@ TEST(DepthOcclusionTest, BoxesWhollyBehindTheWallAreOccludedAndNoOthers)
     EXPECT_TRUE(occlusion.occluded(box(-2000, 200, -50, 400, 300, -5)))
         << "what lies outside the image was not in view; the rest is behind the wall";
     EXPECT_FALSE(occlusion.occluded(box(3000, 200, -50, 3100, 300, -5))) << "wholly out of view";
+    // Grown by the viewer's motion: a box just under the wall's top is hidden from here, not from 20 m on.
+    EXPECT_TRUE(occlusion.occluded(box(360, 200, -50, 400, 300, 10)));
+    EXPECT_FALSE(occlusion.occluded(box(360, 200, -50, 400, 300, 10), 20.0));
+    EXPECT_TRUE(occlusion.occluded(box(360, 200, -50, 400, 300, -5), 5.0)) << "well below it, still hidden";
+    EXPECT_EQ(occlusion.eye(), camera.position);
     // A gap in the wall, one tile wide, where the box lies: seen through it.
     auto gap = wallDepth(camera);
     const double column = 80.0;  // the box's centre projects to the image's centre column
@@ -189,6 +194,9 @@ TEST(DepthOcclusionTest, ADarkNodeIsHiddenOnlyWhereItsBoxesAreBehindTheDepth)
     EXPECT_TRUE(hidden(unseen)) << "never measured, and behind the wall";
     resident = true;
     EXPECT_TRUE(hidden(node)) << "every child's box is behind the wall";
+    EXPECT_FALSE(hiddenFrom(
+        counts, &occlusion, tree, [&](const NodeId& id) { return id.key() == node.key(); }, 30.0)(node))
+        << "grown by 30 m, the far children's tops show over the wall";
     tree.add(node.child(3), -200.0, 90.0, false);  // a peak in one far quarter shows over the wall
     EXPECT_FALSE(hidden(node));
 
