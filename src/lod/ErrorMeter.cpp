@@ -245,11 +245,8 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
         BlockLevels levels;
         if (tessellated) {
             TERRAIN_EXPECTS(node->tessellation != nullptr, "tessellation mode needs nodes with tessellation errors");
-            levels = selected.hidden
-                         ? chooseBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax),
-                                             camera, kHiddenBlockPixels)
-                         : chooseBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax),
-                                             camera, blockPixels, visibility.occluded);
+            levels = drawnBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
+                                      blockPixels, selected.hidden, visibility.occluded);
             blended = morphedSamples(*node, n, selected.id.isRoot() ? 1.0f : f);
             out.tessellatedTriangles += levels.triangles();
         }

@@ -104,7 +104,7 @@ public:
     /// selected node must be resident, with its parent (for the morph). `tauPixels` > 0 decides the
     /// refinements that bought nothing. Errors: a reference node that cannot be loaded (file and node named).
     /// With `blockPixels` > 0 the frame is drawn in tessellation mode (render_mode = tessellation): each node's
-    /// blocks at the levels chooseBlockLevels picks for that budget (lod/TessellationLevels.h, what the renderer
+    /// blocks at the levels drawnBlockLevels picks for that budget (lod/TessellationLevels.h, what the renderer
     /// uploads), of the node's samples blended by its morph as the shaders blend them; where the tessellator
     /// may split a cell either way, the worse diagonal counts. Its nodes must carry tessellation errors.
     /// With `visibility`, what is measured is what the frame showed (see MeasuredVisibility).

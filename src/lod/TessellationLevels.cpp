@@ -63,7 +63,8 @@ BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node
     out.level.assign(blocks, 0);
     out.snap.assign(4 * blocks, 0);
     out.culled.assign(blocks, 0);
-    std::vector<std::uint8_t> hidden(blocks, 0);  // drawn, and `occluded` says so
+    std::vector<std::uint8_t> hidden(occluded ? blocks : 0, 0);  // drawn, and `occluded` says so
+    TERRAIN_EXPECTS(!occluded || errors.top.size() == blocks, "the block tops come from computeTessellationErrors");
     for (int by = 0; by < b; ++by) {
         for (int bx = 0; bx < b; ++bx) {
             const Aabb box{{node.lo.x + bx * size, node.lo.y + by * size, node.lo.z},
@@ -75,7 +76,7 @@ BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node
             while (level < lambda.levels && lambda.at(bx, by, level + 1) * c <= distance[i]) {
                 ++level;  // lambda is non-decreasing in d: the first that does not fit ends the search
             }
-            if (occluded && !out.culled[i] && i < errors.top.size()) {
+            if (occluded && !out.culled[i]) {
                 Aabb own = box;
                 own.hi.z = std::max(static_cast<double>(errors.top[i]), own.lo.z);
                 hidden[i] = occluded(own) ? 1 : 0;
@@ -153,6 +154,15 @@ BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node
         }
     }
     return out;
+}
+
+BlockLevels drawnBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels,
+                             bool hidden, const BoxOccluded& occluded)
+{
+    // An unbounded budget: every block at its coarsest (none of them showed).
+    constexpr double kHiddenBlockPixels = 1e30;
+    return hidden ? chooseBlockLevels(errors, node, camera, kHiddenBlockPixels)
+                  : chooseBlockLevels(errors, node, camera, pixels, occluded);
 }
 
 std::pair<double, double> tessellatedHeights(std::span<const float> surface, int chunkSize, const BlockLevels& levels,

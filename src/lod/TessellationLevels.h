@@ -57,10 +57,6 @@ inline std::uint64_t skirtPatchTriangles(int f)
     return f == 1 ? 2 : 4 * static_cast<std::uint64_t>(f) - 2;
 }
 
-/// The block error budget of a hidden node (SelectedNode::hidden, issue 16) in tessellation mode, in pixels:
-/// every block at its coarsest level.
-constexpr double kHiddenBlockPixels = 1e30;
-
 /// Whether a box lay wholly behind what the previous frame drew (DepthOcclusion::occluded; issue 16).
 using BoxOccluded = std::function<bool(const Aabb&)>;
 
@@ -72,6 +68,11 @@ using BoxOccluded = std::function<bool(const Aabb&)>;
 /// exactly those chosen without `occluded`.
 BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels,
                               const BoxOccluded& occluded = {});
+
+/// The levels a selected node is drawn with (TerrainRenderer::draw, and ErrorMeter::measure measuring it): a
+/// `hidden` node's (SelectedNode::hidden, issue 16) every block at its coarsest, the others' chooseBlockLevels.
+BlockLevels drawnBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels,
+                             bool hidden, const BoxOccluded& occluded);
 
 /// The heights the tessellation mode draws at node sample coordinates (lx, ly) in [0, N - 1]^2, for the
 /// node's blended sample heights `surface` (N x N) and `levels`: under the one and the other diagonal of the

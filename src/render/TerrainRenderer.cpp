@@ -609,11 +609,10 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                 TERRAIN_EXPECTS(node->tessellation != nullptr,
                                 "tessellation mode needs nodes made with their tessellation errors "
                                 "(DetailPolicy::tessellationBlockQuads)");
-                // A hidden node showed nothing: its blocks at the coarsest level (an unbounded budget). In the
-                // others, blocks behind the previous frame's depth start there too.
-                const BlockLevels levels = chooseBlockLevels(
-                    *node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
-                    selected.hidden ? kHiddenBlockPixels : blockPixels, selected.hidden ? BoxOccluded{} : occluded);
+                // Hidden nodes' blocks all at their coarsest; in the others, hidden blocks away from visible ones.
+                const BlockLevels levels =
+                    drawnBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
+                                     blockPixels, selected.hidden, occluded);
                 stats.occludedBlocks += static_cast<std::size_t>(levels.occludedBlocks);
                 const int b = levels.blocksPerSide;
                 for (int k = 0; k < b * b; ++k) {

@@ -119,8 +119,8 @@ public:
     /// With `feedback` (tessellation mode, for tests), the camera-relative corners of every triangle the
     /// tessellator made are read back by transform feedback, three a triangle, in drawing order (node by node
     /// as drawn, patch by patch: blocks, then skirts). With `occluded` (tessellation mode, visibility_lod: the
-    /// previous frame's depth), blocks whose boxes it says were hidden start at their coarsest level
-    /// (chooseBlockLevels).
+    /// previous frame's depth), hidden blocks with no visible neighbour are drawn at their coarsest level
+    /// (drawnBlockLevels).
     RenderStats draw(const LodSelection& selection, const ResidentNodeLookup& resident, const Camera& camera,
                      const SceneStyle& style, double blockPixels = 0.0, std::vector<glm::vec3>* feedback = nullptr,
                      const BoxOccluded& occluded = {});

@@ -113,6 +113,39 @@ protected:
 
     static void expectNoHolesAlongTheFlight(const std::vector<std::string>& more);
 
+    /// The camera a video frame of `image`'s size was drawn with at `t` seconds of `path` (60 degrees, far 150 km).
+    static Camera frameCamera(const CameraPath& path, double t, const Image& image)
+    {
+        Camera camera;
+        camera.viewportWidth = image.width;
+        camera.viewportHeight = image.height;
+        camera.verticalFov = 60.0 * std::numbers::pi / 180;
+        camera.farPlane = 150000;
+        path.evaluate(t).applyTo(camera);
+        return camera;
+    }
+    /// The hole check of one frame: pixels whose view ray must hit the terrain (above zMin) and, of them, those
+    /// showing the clear colour, with the first one's position.
+    struct Holes {
+        int holes = 0, checked = 0, firstX = -1, firstY = -1;
+    };
+    static Holes holesIn(const Image& image, const Camera& camera, const MapHeader& header, double zMin)
+    {
+        Holes h;
+        for (int y = 0; y < image.height; ++y) {
+            for (int x = 0; x < image.width; ++x) {
+                if (mustHitTerrain(camera, header, zMin, x, y)) {
+                    ++h.checked;
+                    if (isHole(image.pixel(x, y)) && h.holes++ == 0) {
+                        h.firstX = x;
+                        h.firstY = y;
+                    }
+                }
+            }
+        }
+        return h;
+    }
+
     static test::ScratchDir* sDir;
 };
 
@@ -160,31 +193,12 @@ void TengineGLTest::expectNoHolesAlongTheFlight(const std::vector<std::string>& 
                                                       std::to_string(f) + ".png"))) {
             break;
         }
-        Image image = frame(frames.path(), f);
-        Camera camera;
-        camera.viewportWidth = image.width;
-        camera.viewportHeight = image.height;
-        camera.verticalFov = 60.0 * std::numbers::pi / 180;
-        camera.farPlane = 150000;
-        path->evaluate(f / 4.0).applyTo(camera);
-        int holes = 0, firstX = -1, firstY = -1;
-        for (int y = 0; y < image.height; ++y) {
-            for (int x = 0; x < image.width; ++x) {
-                if (!mustHitTerrain(camera, header, zMin, x, y)) {
-                    continue;
-                }
-                ++pixelsChecked;
-                if (isHole(image.pixel(x, y))) {
-                    if (holes++ == 0) {
-                        firstX = x;
-                        firstY = y;
-                    }
-                }
-            }
-        }
-        EXPECT_EQ(holes, 0) << "frame " << f << ": " << holes
-                            << " pixels show the clear colour below the horizon, first at (" << firstX << ", " << firstY
-                            << ")";
+        const Image image = frame(frames.path(), f);
+        const Holes h = holesIn(image, frameCamera(*path, f / 4.0, image), header, zMin);
+        pixelsChecked += h.checked;
+        EXPECT_EQ(h.holes, 0) << "frame " << f << ": " << h.holes
+                              << " pixels show the clear colour below the horizon, first at (" << h.firstX << ", "
+                              << h.firstY << ")";
         ++framesChecked;
     }
     EXPECT_EQ(framesChecked, 33);
@@ -510,24 +524,10 @@ TEST_F(TengineGLTest, DetailFlightHasDynamicNodesAndNoHoles)
     ASSERT_EQ(rows.size(), 13u);
     for (std::size_t f = 0; f < rows.size(); ++f) {
         EXPECT_GT(rows[f].at("nodes_dynamic"), 20) << "frame " << f;
-        Image image = frame(frames.path(), static_cast<int>(f));
-        Camera camera;
-        camera.viewportWidth = image.width;
-        camera.viewportHeight = image.height;
-        camera.verticalFov = 60.0 * std::numbers::pi / 180;
-        camera.farPlane = 150000;
-        path->evaluate(static_cast<double>(f) / 4.0).applyTo(camera);
-        int holes = 0, checked = 0;
-        for (int y = 0; y < image.height; ++y) {
-            for (int x = 0; x < image.width; ++x) {
-                if (mustHitTerrain(camera, header, zMin, x, y)) {
-                    ++checked;
-                    holes += isHole(image.pixel(x, y)) ? 1 : 0;
-                }
-            }
-        }
-        EXPECT_GT(checked, image.width * image.height / 2) << "frame " << f;
-        EXPECT_EQ(holes, 0) << "frame " << f;
+        const Image image = frame(frames.path(), static_cast<int>(f));
+        const Holes h = holesIn(image, frameCamera(*path, static_cast<double>(f) / 4.0, image), header, zMin);
+        EXPECT_GT(h.checked, image.width * image.height / 2) << "frame " << f;
+        EXPECT_EQ(h.holes, 0) << "frame " << f;
     }
 }
 
@@ -578,32 +578,11 @@ TEST_F(TengineGLTest, CrestingThePassWithVisibilityLodShowsNoHolesAndTheSameFram
             }
             hidden += rows[f].at("nodes_hidden");
             revealing += rows[f].at("nodes_revealing");
-            Image image = frame(on.path(), static_cast<int>(f));
-            Camera camera;
-            camera.viewportWidth = image.width;
-            camera.viewportHeight = image.height;
-            camera.verticalFov = 60.0 * std::numbers::pi / 180;
-            camera.farPlane = 150000;
-            path->evaluate(static_cast<double>(f) / 4.0).applyTo(camera);
-            struct Holes {
-                int holes = 0, checked = 0, firstX = -1, firstY = -1;
-            };
-            const auto holesIn = [&](const Image& drawn) {
-                Holes h;
-                for (int y = 0; y < drawn.height; ++y) {
-                    for (int x = 0; x < drawn.width; ++x) {
-                        if (mustHitTerrain(camera, header, zMin, x, y)) {
-                            ++h.checked;
-                            if (isHole(drawn.pixel(x, y)) && h.holes++ == 0) {
-                                h.firstX = x;
-                                h.firstY = y;
-                            }
-                        }
-                    }
-                }
-                return h;
-            };
-            const Holes withIt = holesIn(image), without = holesIn(frame(off.path(), static_cast<int>(f)));
+            const Image image = frame(on.path(), static_cast<int>(f));
+            const Image imageWithout = frame(off.path(), static_cast<int>(f));
+            const Camera camera = frameCamera(*path, static_cast<double>(f) / 4.0, image);
+            const Holes withIt = holesIn(image, camera, header, zMin);
+            const Holes without = holesIn(imageWithout, camera, header, zMin);
             EXPECT_GT(withIt.checked, image.width * image.height / 3) << "frame " << f;
             // Tessellation mode leaves a pixel open in frame 0 at 640 x 360 with or without visibility (before
             // any count or depth exists): a crack of its own, not of the reveal. Visibility must add none.
@@ -615,7 +594,7 @@ TEST_F(TengineGLTest, CrestingThePassWithVisibilityLodShowsNoHolesAndTheSameFram
             }
             holesWithout += without.holes;
             if (f >= 4) {  // after the first second: the counts arrive two frames late, k = 4 dark frames
-                auto d = compareImages(image, frame(off.path(), static_cast<int>(f)), 8);
+                auto d = compareImages(image, imageWithout, 8);
                 ASSERT_TRUE(d.ok()) << d.error().message;
                 EXPECT_GE(static_cast<double>(d->identical), 0.995 * static_cast<double>(d->pixels)) << "frame " << f;
                 EXPECT_LE(d->largestRegion, 16u)
@@ -726,23 +705,9 @@ TEST_F(TengineGLTest, NormalMapsShowShadingDetailFinerThanTheTriangles)
     auto path = CameraPath::load(*sDir / "low.path");
     ASSERT_TRUE(path.ok());
     for (const Image* image : {&small, &large}) {
-        Camera camera;
-        camera.viewportWidth = image->width;
-        camera.viewportHeight = image->height;
-        camera.verticalFov = 60.0 * std::numbers::pi / 180;
-        camera.farPlane = 150000;
-        path->evaluate(0.0).applyTo(camera);
-        int holes = 0, checked = 0;
-        for (int y = 0; y < image->height; ++y) {
-            for (int x = 0; x < image->width; ++x) {
-                if (mustHitTerrain(camera, header, zMin, x, y)) {
-                    ++checked;
-                    holes += isHole(image->pixel(x, y)) ? 1 : 0;
-                }
-            }
-        }
-        EXPECT_GT(checked, image->width * image->height / 2);
-        EXPECT_EQ(holes, 0);
+        const Holes h = holesIn(*image, frameCamera(*path, 0.0, *image), header, zMin);
+        EXPECT_GT(h.checked, image->width * image->height / 2);
+        EXPECT_EQ(h.holes, 0);
     }
 }
 
