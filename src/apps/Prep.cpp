@@ -45,6 +45,9 @@ or one directory, are tiles of one mosaic: they must share CRS, resolution and g
   --offset METRES      added to every height after -v (default 0)
   --chunk N            samples per node side, 2^k+1 (default 65)
   --max-error METRES   L-infinity bound on stored heights; 0 = lossless (default 0)
+  --height-codec C     residual: Kobbelt prediction from the parent plus residuals, lossless or within
+                       --max-error (default); pifs: seed 003's fractal code of node interiors (lossy, its
+                       measured error stored; in memory only, no --max-error)
   --texture-size T     texels per node side, 2^k+1 (default: the chunk size)
   --threads N          worker threads (default: all cores)
   --memory SIZE        memory prep may use, e.g. 256M, 2G (suffixes K, M, G); inputs larger than that are
@@ -125,6 +128,16 @@ Expected<Arguments> parseArguments(int argc, char** argv)
             auto text = value();
             TERRAIN_TRY(text);
             args.read.targetSrs = *text;
+        } else if (arg == "--height-codec") {
+            auto text = value();
+            TERRAIN_TRY(text);
+            if (*text == "residual") {
+                args.build.heightCoding = kHeightCodingKobbeltResidual;
+            } else if (*text == "pifs") {
+                args.build.heightCoding = kHeightCodingPifs;
+            } else {
+                return makeError("--height-codec: unknown codec '", *text, "' (expected residual or pifs)");
+            }
         } else if (arg == "--material" || arg == "--detail-scheme") {
             auto text = value();
             TERRAIN_TRY(text);
@@ -374,8 +387,7 @@ int main(int argc, char** argv)
                 static_cast<unsigned long long>(report->nodes), h.chunkSize, h.chunkSize,
                 static_cast<unsigned long long>(h.gridSize()), static_cast<unsigned long long>(h.gridSize()),
                 h.textureSize, h.textureSize);
-    std::printf("  heights   step %g m, %s\n", h.heightStep,
-                h.maxErrorBound == 0 ? "lossless" : ("max error " + std::to_string(h.maxErrorBound) + " m").c_str());
+    std::printf("  heights   step %g m, %s\n", h.heightStep, describeHeightCoding(h).c_str());
     std::printf("  file      %s: heights %s (%.2f bits per input sample, %.2f per stored sample),\n",
                 formatBytes(report->fileBytes).c_str(), formatBytes(report->heightBytes).c_str(),
                 8.0 * static_cast<double>(report->heightBytes) / inputSamples,

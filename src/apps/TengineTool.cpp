@@ -107,7 +107,7 @@ int info(const MapFile& map)
     std::printf("chunks     %u x %u samples (+%d border), textures %u x %u\n", h.chunkSize, h.chunkSize, kBorder,
                 h.textureSize, h.textureSize);
     std::printf("heights    metres = %.9g + %.9g * code; %s\n", h.heightOffset, h.heightStep,
-                h.maxErrorBound == 0 ? "lossless" : ("max error " + std::to_string(h.maxErrorBound) + " m").c_str());
+                describeHeightCoding(h).c_str());
     std::printf("levels     %u\n", h.levels);
     // What detail_delta_c was estimated for (version 3): the viewer warns when its settings differ.
     std::printf("detail     %s\n", h.detailRecipe ? ("errors estimated for " + h.detailRecipe->describe()).c_str()

@@ -12,6 +12,16 @@
 
 namespace terrain {
 
+/// Maps signed to unsigned so that small magnitudes get small codes: 0, -1, 1, -2, ... -> 0, 1, 2, 3, ...
+inline std::uint32_t zigzagEncode(std::int32_t v)
+{
+    return (static_cast<std::uint32_t>(v) << 1) ^ static_cast<std::uint32_t>(v >> 31);
+}
+inline std::int32_t zigzagDecode(std::uint32_t v)
+{
+    return static_cast<std::int32_t>(v >> 1) ^ -static_cast<std::int32_t>(v & 1);
+}
+
 /// Appends little-endian fields to a byte vector.
 class ByteWriter {
 public:
@@ -47,6 +57,15 @@ public:
         if (mOut.size() < size) {
             mOut.resize(size, 0);
         }
+    }
+    /// An unsigned LEB128 varint: 7 bits per byte, low bits first, high bit set on all but the last.
+    void putVarint(std::uint32_t value)
+    {
+        while (value >= 0x80) {
+            mOut.push_back(static_cast<std::uint8_t>(value | 0x80));
+            value >>= 7;
+        }
+        mOut.push_back(static_cast<std::uint8_t>(value));
     }
 
 private:
@@ -88,6 +107,24 @@ public:
             }
         }
         return s;
+    }
+    /// Reads a varint of ByteWriter::putVarint into `value`; false (and failed()) when the bytes end first
+    /// or the number does not fit 32 bits.
+    bool getVarint(std::uint32_t& value)
+    {
+        value = 0;
+        for (int shift = 0; shift <= 28; shift += 7) {
+            if (mPos >= mIn.size()) {
+                break;
+            }
+            const std::uint8_t byte = mIn[mPos++];
+            value |= static_cast<std::uint32_t>(byte & 0x7f) << shift;
+            if ((byte & 0x80) == 0) {
+                return true;
+            }
+        }
+        mFailed = true;
+        return false;
     }
     void skip(std::size_t size) { mPos = std::min(mIn.size(), mPos + size); }
     std::size_t position() const { return mPos; }

@@ -13,24 +13,6 @@ namespace terrain {
 
 namespace {
 
-std::uint32_t zigzag(std::int32_t v)
-{
-    return (static_cast<std::uint32_t>(v) << 1) ^ static_cast<std::uint32_t>(v >> 31);
-}
-std::int32_t unzigzag(std::uint32_t v)
-{
-    return static_cast<std::int32_t>(v >> 1) ^ -static_cast<std::int32_t>(v & 1);
-}
-
-void putVarint(std::vector<std::uint8_t>& out, std::uint32_t v)
-{
-    while (v >= 0x80) {
-        out.push_back(static_cast<std::uint8_t>(v | 0x80));
-        v >>= 7;
-    }
-    out.push_back(static_cast<std::uint8_t>(v));
-}
-
 bool isCoded(const NodeId& id, int x, int y)
 {
     // Window index parity equals sample parity (kBorder is even); even-even samples are the parent's.
@@ -105,6 +87,7 @@ std::vector<std::uint8_t> encodeNodeHeights(const NodeWindow& geometry, const No
     }
     std::vector<std::uint8_t> raw;
     raw.reserve(geometry.sampleCount());
+    ByteWriter rawWriter(raw);
     for (int y = inside.y0; y <= inside.y1; ++y) {
         for (int x = inside.x0; x <= inside.x1; ++x) {
             if (!isCoded(id, x, y)) {
@@ -114,7 +97,7 @@ std::vector<std::uint8_t> encodeNodeHeights(const NodeWindow& geometry, const No
             std::int32_t predicted = id.isRoot() ? rootPrediction(window, size, inside, x, y) : prediction[i];
             std::int32_t residual = window[i] - predicted;
             TERRAIN_ASSERT(residual % static_cast<std::int32_t>(bin) == 0);
-            putVarint(raw, zigzag(residual / static_cast<std::int32_t>(bin)));
+            rawWriter.putVarint(zigzagEncode(residual / static_cast<std::int32_t>(bin)));
         }
     }
     std::vector<std::uint8_t> stream;
@@ -145,8 +128,8 @@ Status decodeNodeHeights(const NodeWindow& geometry, const NodeId& id, std::span
     if (!id.isRoot()) {
         predictChildWindow(parent, size, geometry.chunkSize(), id.quadrant(), prediction);
     }
-    std::size_t pos = 0;
     const auto& bytes = raw.value();
+    ByteReader reader(bytes);
     const auto b = static_cast<std::int32_t>(bin);
     for (int y = inside.y0; y <= inside.y1; ++y) {
         for (int x = inside.x0; x <= inside.x1; ++x) {
@@ -156,28 +139,19 @@ Status decodeNodeHeights(const NodeWindow& geometry, const NodeId& id, std::span
                 continue;
             }
             std::uint32_t v = 0;
-            int shift = 0;
-            while (true) {
-                if (pos >= bytes.size() || shift > 28) {
-                    return makeError("height stream ends early or holds a malformed number");
-                }
-                std::uint8_t byte = bytes[pos++];
-                v |= static_cast<std::uint32_t>(byte & 0x7f) << shift;
-                shift += 7;
-                if ((byte & 0x80) == 0) {
-                    break;
-                }
+            if (!reader.getVarint(v)) {
+                return makeError("height stream ends early or holds a malformed number");
             }
             std::int32_t predicted = id.isRoot() ? rootPrediction(window, size, inside, x, y) : prediction[i];
-            std::int64_t value = std::int64_t{predicted} + std::int64_t{unzigzag(v)} * b;
+            std::int64_t value = std::int64_t{predicted} + std::int64_t{zigzagDecode(v)} * b;
             if (value < 0 || value > 65535) {
                 return makeError("height stream decodes to ", value, ", outside the 16-bit range");
             }
             window[i] = static_cast<std::uint16_t>(value);
         }
     }
-    if (pos != bytes.size()) {
-        return makeError("height stream has ", bytes.size() - pos, " bytes left over");
+    if (reader.position() != bytes.size()) {
+        return makeError("height stream has ", bytes.size() - reader.position(), " bytes left over");
     }
     fillOutside(window, size, inside);
     return {};

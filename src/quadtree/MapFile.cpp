@@ -1,5 +1,7 @@
 #include "quadtree/MapFile.h"
 
+#include "quadtree/PifsCodec.h"
+
 #include "core/MappedCopy.h"
 #include "quadtree/TextureCodec.h"
 
@@ -239,8 +241,10 @@ Expected<StaticNode> MapFile::loadNode(const NodeId& id, std::span<const std::ui
     node.heights.resize(mWindow.sampleCount());
     node.texture.resize(std::size_t{mHeader.textureSize} * mHeader.textureSize * 3);
     std::span<const std::uint8_t> bytes = payload.value();
-    auto status = decodeNodeHeights(mWindow, id, bytes.first(entry->heightBytes), parentHeights, mHeader.quantizerBin,
-                                    node.heights);
+    auto status = mHeader.heightCoding == kHeightCodingPifs
+                      ? decodePifsHeights(mWindow, id, bytes.first(entry->heightBytes), parentHeights, node.heights)
+                      : decodeNodeHeights(mWindow, id, bytes.first(entry->heightBytes), parentHeights,
+                                          mHeader.quantizerBin, node.heights);
     if (!status.ok()) {
         return makeError(mName, ": node ", id.toString(), ": ", status.error().message);
     }

@@ -42,6 +42,18 @@ bool DetailRecipe::sameSynthesis(const DetailRecipe& other) const
            (scheme != "kobbelt" || omega == other.omega);
 }
 
+std::string describeHeightCoding(const MapHeader& header)
+{
+    std::ostringstream out;
+    out << (header.heightCoding == kHeightCodingPifs ? "fractal (PIFS), measured " : "Kobbelt residual, ");
+    if (header.maxErrorBound == 0) {
+        out << "lossless";
+    } else {
+        out << "max error " << header.maxErrorBound << " m";
+    }
+    return out.str();
+}
+
 std::string DetailRecipe::describe() const
 {
     std::ostringstream s;
@@ -396,11 +408,16 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
     if (!isPowerOfTwoPlusOne(h.textureSize) || h.textureSize > std::uint32_t{kMaxTextureSize}) {
         return bad("texture size ", h.textureSize, " is not 2^k+1 in [3, ", kMaxTextureSize, "]");
     }
-    if (h.heightCoding != kHeightCodingKobbeltResidual || h.textureCoding != kTextureCodingMedRgb8) {
+    if ((h.heightCoding != kHeightCodingKobbeltResidual && h.heightCoding != kHeightCodingPifs) ||
+        h.textureCoding != kTextureCodingMedRgb8) {
         return bad("unknown height coding ", h.heightCoding, " or texture coding ", h.textureCoding);
     }
     if (h.quantizerBin < 1 || h.quantizerBin % 2 == 0) {
         return bad("quantizer bin ", h.quantizerBin, " is not a positive odd number");
+    }
+    if (h.heightCoding == kHeightCodingPifs && (h.quantizerBin != 1 || h.chunkSize < 9)) {
+        return bad("fractal height coding with quantizer bin ", h.quantizerBin, " and chunk size ", h.chunkSize,
+                   " (it needs bin 1 and chunks of at least 9 samples)");
     }
     if (!(h.sampleSpacing > 0) || !std::isfinite(h.sampleSpacing) || !(h.heightStep > 0) ||
         !std::isfinite(h.heightStep) || !std::isfinite(h.heightOffset) || !std::isfinite(h.originX) ||

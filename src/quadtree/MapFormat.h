@@ -39,9 +39,12 @@ inline constexpr std::uint32_t kMinMapVersion = 1;
 inline constexpr std::size_t kHeaderBytes = 256;
 inline constexpr std::size_t kDirectoryEntryBytes = 48;
 
-/// Height coding of node payloads. The only one so far: Kobbelt 4-point prediction from the parent's
-/// window (root: previous sample), residuals divided by the quantizer bin, zigzag varints, zlib.
+/// Height coding of node payloads: Kobbelt 4-point prediction from the parent's window (root: previous
+/// sample), residuals divided by the quantizer bin, zigzag varints, zlib (quadtree/HeightCodec.h).
 inline constexpr std::uint32_t kHeightCodingKobbeltResidual = 1;
+/// Seed 003's fractal (PIFS) coding of node interiors, shared samples exact (quadtree/PifsCodec.h); lossy,
+/// its measured error in maxErrorBound; quantizerBin is 1.
+inline constexpr std::uint32_t kHeightCodingPifs = 2;
 /// Texture coding: RGB8 planes, LOCO-I median predictor, residual bytes, zlib.
 inline constexpr std::uint32_t kTextureCodingMedRgb8 = 1;
 
@@ -152,6 +155,10 @@ struct MapHeader {
     /// Where node payloads may start: after the header, the recipe, roughness and georeference blocks.
     std::uint64_t nodeAreaOffset() const { return georeferenceOffset() + georeferenceBytes; }
 };
+
+/// "Kobbelt residual, lossless", "Kobbelt residual, max error 2 m" or "fractal (PIFS), measured max error
+/// 3.5 m": how the heights are coded and how far they may lie from the input.
+std::string describeHeightCoding(const MapHeader& header);
 
 /// One directory entry: where a node's payload is and what the LOD selection needs without loading it.
 struct DirectoryEntry {

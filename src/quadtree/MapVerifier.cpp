@@ -129,7 +129,16 @@ private:
                 // delta_c = max(children's, the measured distance to the leaves' samples).
                 const float direct = static_cast<float>(mMap.header().heightStep * directError(node, below));
                 const float nested = std::max(kErrorNesting * worst, direct);
-                if (std::abs(nested - entry.deltaC) > 1e-4f * std::max(1.0f, nested)) {
+                if (mMap.header().heightCoding == kHeightCodingPifs) {
+                    // Fractal coding stores a bound: the input's distance plus the node's and leaves' coding
+                    // errors (QuadtreeBuilder), which must hold for what the map decodes to.
+                    if (entry.deltaC < nested * (1.0f - 1e-5f)) {
+                        problem(node.id, "delta_c is " + std::to_string(entry.deltaC) +
+                                             " m, below the larger of its children's (x kErrorNesting) and the "
+                                             "measured distance of its decoded heights to the leaves' below, " +
+                                             std::to_string(nested) + " m");
+                    }
+                } else if (std::abs(nested - entry.deltaC) > 1e-4f * std::max(1.0f, nested)) {
                     problem(node.id, "delta_c is " + std::to_string(entry.deltaC) +
                                          " m but the larger of its children's (x kErrorNesting) and the measured "
                                          "distance to the leaves below is " +

@@ -10,6 +10,7 @@
 #include "heightfield/NoDataFill.h"
 #include "quadtree/HeightCodec.h"
 #include "quadtree/NodeTexture.h"
+#include "quadtree/PifsCodec.h"
 #include "quadtree/QuantizedGrid.h"
 #include "quadtree/SimplificationError.h"
 #include "quadtree/TextureCodec.h"
@@ -106,8 +107,9 @@ struct NodeSummary {
     bool hasFilledNoData = false;  ///< the node's square holds input samples that were no-data
     float deltaM = 0.0f;
     float deltaC = 0.0f;
-    float detailDeltaC = 0.0f;  ///< the error with the detail synthesized below the leaves (3.4.1)
-    float leafDetail = 0.0f;    ///< the largest leaf detail error in the subtree
+    float detailDeltaC = 0.0f;         ///< the error with the detail synthesized below the leaves (3.4.1)
+    float leafDetail = 0.0f;           ///< the largest leaf detail error in the subtree
+    std::uint32_t leafCodecError = 0;  ///< fractal coding: the largest stored-vs-input error of its leaves, codes
     std::uint16_t minCode = 0;
     std::uint16_t maxCode = 0;
     std::vector<std::uint8_t> texture;
@@ -141,9 +143,10 @@ class Builder {
 public:
     Builder(const MapHeader& header, const QuantizedGrid& grid, const TreeShape& shape, const TextureSource& texture,
             const std::vector<std::uint8_t>& filledSquares, const SplitPartials& partials, const BuildOptions& options,
-            std::atomic<std::uint64_t>& done, std::atomic<std::int64_t>& detailNanoseconds)
+            const PifsPyramid* pifs, std::atomic<std::uint64_t>& done, std::atomic<std::int64_t>& detailNanoseconds)
         : mHeader(header),
           mGrid(grid),
+          mPifs(pifs),
           mShape(shape),
           mTexture(texture),
           mFilledSquares(filledSquares),
@@ -165,7 +168,7 @@ public:
             return *summary;
         }
         std::vector<std::uint16_t> window(mWindow.sampleCount());
-        mGrid.extractWindow(mHeader, id, window);
+        storedWindow(id, window);
         const WindowRect inside = mWindow.insideRect(id);
         NodeSummary summary;
         summary.minCode = 65535;
@@ -183,6 +186,7 @@ public:
             summary.hasFilledNoData = containsFilledSample(id);
             summary.detailDeltaC = leafDetailError(id, window);
             summary.leafDetail = summary.detailDeltaC;
+            summary.leafCodecError = mPifs ? mPifs->errorCodes(id) : 0;
             ++mDone;
             return summary;
         }
@@ -195,23 +199,22 @@ public:
         float worstChildDetail = 0.0f;
         for (int q = 0; q < 4; ++q) {
             const NodeId child = id.child(q);
-            std::vector<std::uint16_t> childWindow(mWindow.sampleCount());
-            mGrid.extractWindow(mHeader, child, childWindow);
-            emit(child,
-                 encodeNodeHeights(mWindow, child, childWindow, window, mHeader.quantizerBin, mOptions.zlibLevel),
-                 children[q], out);
+            emit(child, heightStream(child, window), children[q], out);
             worstChild = std::max(worstChild, children[q].deltaC);
             worstChildDetail = std::max(worstChildDetail, children[q].detailDeltaC);
             summary.leafDetail = std::max(summary.leafDetail, children[q].leafDetail);
+            summary.leafCodecError = std::max(summary.leafCodecError, children[q].leafCodecError);
             summary.hasFilledNoData = summary.hasFilledNoData || children[q].hasFilledNoData;
             summary.minCode = std::min(summary.minCode, children[q].minCode);
             summary.maxCode = std::max(summary.maxCode, children[q].maxCode);
         }
-        summary.deltaM = static_cast<float>(simplificationErrorCodes(mGrid, mHeader, id) * mHeader.heightStep);
+        summary.deltaM = static_cast<float>(simplificationError(id) * mHeader.heightStep);
         // The measured distance to the finest data, nested with max and a margin for the geomorph
         // (kErrorNesting; issue 12: eq. 3.1 summed delta_m over the levels, an upper bound of this that grows
-        // with every level).
-        const float direct = static_cast<float>(directError(id) * mHeader.heightStep);
+        // with every level). Fractal coding stores neither the node nor the leaves as the input has them: the
+        // distance between what they store is at most the input's plus both their coding errors.
+        const double codecError = mPifs ? static_cast<double>(mPifs->errorCodes(id)) + summary.leafCodecError : 0.0;
+        const float direct = static_cast<float>((directError(id) + codecError) * mHeader.heightStep);
         summary.deltaC = std::max(kErrorNesting * worstChild, direct);
         summary.detailDeltaC =
             mOptions.leafDetailError
@@ -244,14 +247,44 @@ public:
     /// Emits the root, which has no parent to be emitted by.
     void emitRoot(const NodeSummary& root, EncodedBlock& out) const
     {
-        std::vector<std::uint16_t> window(mWindow.sampleCount());
-        mGrid.extractWindow(mHeader, NodeId::root(), window);
-        emit(NodeId::root(),
-             encodeNodeHeights(mWindow, NodeId::root(), window, {}, mHeader.quantizerBin, mOptions.zlibLevel), root,
-             out);
+        emit(NodeId::root(), heightStream(NodeId::root(), {}), root, out);
     }
 
 private:
+    /// The heights node `id` stores: the (reconstructed) grid's, or the fractal pyramid's.
+    void storedWindow(const NodeId& id, std::span<std::uint16_t> window) const
+    {
+        if (mPifs) {
+            mPifs->extractWindow(id, window);
+        } else {
+            mGrid.extractWindow(mHeader, id, window);
+        }
+    }
+
+    /// Node `id`'s height stream; `parent` is its parent's stored window (empty for the root).
+    std::vector<std::uint8_t> heightStream(const NodeId& id, std::span<const std::uint16_t> parent) const
+    {
+        if (mPifs) {
+            return mPifs->stream(id);
+        }
+        std::vector<std::uint16_t> window(mWindow.sampleCount());
+        mGrid.extractWindow(mHeader, id, window);
+        return encodeNodeHeights(mWindow, id, window, parent, mHeader.quantizerBin, mOptions.zlibLevel);
+    }
+
+    /// delta_m in codes, from what the children store (MapVerifier measures the same from the decoded map).
+    double simplificationError(const NodeId& id) const
+    {
+        if (!mPifs) {
+            return simplificationErrorCodes(mGrid, mHeader, id);
+        }
+        const std::uint64_t x0 = std::uint64_t{id.x} * 2 * (mHeader.chunkSize - 1);
+        const std::uint64_t y0 = std::uint64_t{id.y} * 2 * (mHeader.chunkSize - 1);
+        return simplificationErrorCodes(static_cast<int>(mHeader.chunkSize), [&](int a, int b) -> std::int32_t {
+            return mPifs->at(id.level + 1, x0 + static_cast<std::uint64_t>(a), y0 + static_cast<std::uint64_t>(b));
+        });
+    }
+
     /// The estimated error of the detail synthesized below leaf `id` (3.4.1); 0 without an estimator.
     float leafDetailError(const NodeId& id, std::span<const std::uint16_t> window) const
     {
@@ -353,6 +386,7 @@ private:
 
     const MapHeader& mHeader;
     const QuantizedGrid& mGrid;
+    const PifsPyramid* mPifs;  ///< fractal coding's stored heights and streams; null for the residual coding
     const TreeShape& mShape;
     const TextureSource& mTexture;
     const std::vector<std::uint8_t>& mFilledSquares;  ///< per finest-level node: its square held a no-data sample
@@ -449,6 +483,21 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     if (options.threads < 1) {
         return makeError("thread count ", options.threads, " must be at least 1");
     }
+    const bool pifs = options.heightCoding == kHeightCodingPifs;
+    if (!pifs && options.heightCoding != kHeightCodingKobbeltResidual) {
+        return makeError("unknown height coding ", options.heightCoding);
+    }
+    if (pifs && options.maxError > 0) {
+        return makeError(
+            "--max-error has no effect with --height-codec pifs: the fractal code's error is what it "
+            "measures, stored in the map (use the residual codec for a bound)");
+    }
+    if (pifs && options.chunkSize < 9) {
+        return makeError(
+            "--height-codec pifs needs a chunk size of at least 9 (4 x 4 range blocks and 8 x 8 "
+            "domains), not ",
+            options.chunkSize);
+    }
     const HeightField& info = source.info();
     if (info.width < 2 || info.height < 2) {
         return makeError("height field is ", info.width, "x", info.height, "; at least 2x2 samples are needed");
@@ -522,6 +571,13 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
         (source.held() ? 0 : samples * 4) + samples * 2 + QuantizedGrid::storageBytes(gridSize) + fixedBytes;
     InputPlan plan;
     plan.inMemory = inMemoryBytes <= budget && !options.forceOutOfCore;
+    if (pifs && !plan.inMemory) {
+        return makeError("--height-codec pifs builds in memory, and a ", width, "x", height, " input needs about ",
+                         formatBytes(inMemoryBytes + QuantizedGrid::storageBytes(gridSize) * 4 / 3),
+                         (options.forceOutOfCore ? std::string(" (--out-of-core was given)")
+                                                 : ", more than the memory budget of " + formatBytes(budget)),
+                         ": use the residual codec out of core");
+    }
     // Out of core, the samples the nodes above the split read (multiples of the split level's stride) stay
     // in memory beside the scratch file (QuantizedGrid::createMapped).
     const int coarseShift =
@@ -745,6 +801,16 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     }
     const TreeShape shape(header, weights.get());
     const std::uint64_t totalNodes = shape.count();
+    std::optional<PifsPyramid> pyramid;
+    if (pifs) {
+        // Seed 003's fractal code, top-down over the whole tree before the nodes' errors (which need every
+        // node's stored heights and coding error).
+        progress(0.03, "fractal coding");
+        header.heightCoding = kHeightCodingPifs;
+        pyramid.emplace(PifsPyramid::build(
+            header, *grid, [&](int level) { return shape.nodesAt(level); }, options.threads, options.zlibLevel));
+        header.maxErrorBound = pyramid->maxErrorCodes() * header.heightStep + quantization->errorBound;
+    }
 
     auto file = AtomicFile::create(output);
     TERRAIN_TRY(file);
@@ -773,8 +839,8 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     partials.codes.resize(partials.subtrees.size());
     const int split = partials.split;
     const std::vector<NodeId>& subtrees = partials.subtrees;
-    Builder builder(header, *grid, shape, *textureSource, filledSquares, partials, nodeOptions, done,
-                    detailNanoseconds);
+    Builder builder(header, *grid, shape, *textureSource, filledSquares, partials, nodeOptions,
+                    pyramid ? &*pyramid : nullptr, done, detailNanoseconds);
     std::vector<DirectoryEntry> directory;
     directory.reserve(totalNodes);
     auto append = [&](EncodedBlock& block) {

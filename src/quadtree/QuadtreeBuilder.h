@@ -22,7 +22,11 @@ struct BuildOptions {
     std::optional<double> verticalScale;  ///< -v: metres per native unit, used when the file has none
     double offset = 0.0;                  ///< --offset: metres added after scaling
     double maxError = 0.0;                ///< --max-error: L-infinity bound in metres, 0 = lossless
-    int textureSize = 0;                  ///< --texture-size: 2^k + 1 up to kMaxTextureSize; 0 = the chunk size
+    /// --height-codec: kHeightCodingKobbeltResidual (lossless or within maxError) or kHeightCodingPifs (seed
+    /// 003's fractal code: lossy, its error measured and stored; needs maxError 0, chunks >= 9, the build in
+    /// memory).
+    std::uint32_t heightCoding = kHeightCodingKobbeltResidual;
+    int textureSize = 0;  ///< --texture-size: 2^k + 1 up to kMaxTextureSize; 0 = the chunk size
     int threads = 1;
     /// --memory: bytes prep may hold. The input and the code grid are held whole when they fit, otherwise
     /// the input is streamed in bands of rows and the grid lives in a scratch file next to the output (the

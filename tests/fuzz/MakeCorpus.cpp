@@ -83,11 +83,14 @@ int main(int argc, char** argv)
         int chunk;
         double maxError;
         bool detail;
+        std::uint32_t heightCoding = kHeightCodingKobbeltResidual;
     };
-    for (const MapSeed& seed : {MapSeed{"chunk5", 5, 0.0, false}, MapSeed{"chunk9-lossy", 9, 2.0, false},
-                                MapSeed{"chunk17-detail", 17, 0.0, true}}) {
+    for (const MapSeed& seed :
+         {MapSeed{"chunk5", 5, 0.0, false}, MapSeed{"chunk9-lossy", 9, 2.0, false},
+          MapSeed{"chunk17-detail", 17, 0.0, true}, MapSeed{"chunk9-pifs", 9, 0.0, false, kHeightCodingPifs}}) {
         BuildOptions options;
         options.chunkSize = seed.chunk;
+        options.heightCoding = seed.heightCoding;
         options.spacing = 30.0;
         options.maxError = seed.maxError;
         if (seed.detail) {

@@ -592,7 +592,7 @@ TEST(MapFileTest, BadHeaderFieldsAreErrors)
         {"no levels", 24, 4, 0, true, "level count 0"},
         {"25 levels", 24, 4, 25, true, "level count 25"},
         {"texture size 100", 28, 4, 100, true, "texture size 100"},
-        {"height coding 2", 32, 4, 2, true, "height coding 2"},
+        {"height coding 3", 32, 4, 3, true, "height coding 3"},
         {"texture coding 7", 36, 4, 7, true, "texture coding 7"},
         {"even quantizer bin", 40, 4, 4, true, "quantizer bin 4"},
         {"zero quantizer bin", 40, 4, 0, true, "quantizer bin 0"},

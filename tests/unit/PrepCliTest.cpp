@@ -352,6 +352,11 @@ TEST(PrepCliTest, BadArgumentsAndInputsAreErrorsNamingTheCulprit)
         {{small, "--detail-scheme", "loop"}, "'loop'"},
         {{small, "--detail-factor", "2.5"}, "--detail-factor"},
         {{small, "--detail-factor", "x"}, "--detail-factor"},
+        {{small, "--height-codec", "jpeg"}, "--height-codec: unknown codec 'jpeg'"},
+        {{small, "--height-codec"}, "--height-codec needs a value"},
+        {{small, "--height-codec", "pifs", "--max-error", "2"}, "--max-error has no effect with --height-codec pifs"},
+        {{small, "--height-codec", "pifs", "--chunk", "5"}, "chunk size of at least 9"},
+        {{small, "--height-codec", "pifs", "--out-of-core"}, "--height-codec pifs builds in memory"},
     };
     for (const Case& c : cases) {
         std::string line;

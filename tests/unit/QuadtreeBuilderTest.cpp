@@ -69,6 +69,7 @@ struct MapCase {
     double maxError = 0.0;
     double scale = 1.0;
     double offset = 0.0;
+    std::uint32_t heightCoding = kHeightCodingKobbeltResidual;
 
     BuildOptions options() const
     {
@@ -76,6 +77,7 @@ struct MapCase {
         o.maxError = maxError;
         o.verticalScale = scale;
         o.offset = offset;
+        o.heightCoding = heightCoding;
         return o;
     }
 };
@@ -96,6 +98,10 @@ const MapCase kMapCases[] = {
     {"HillyScaledOffsetPadded", [] { return test::hillyField(70, 41, 4); }, 17, 0.0, 0.5, -20.0},
     {"FractionalSamples", [] { return test::fractionalField(65, 65); }, 17},
     {"FractionalLossyE2", [] { return test::fractionalField(65, 65, 5); }, 9, 2.0},
+    // Seed 003's fractal coding (quadtree/PifsCodec.h): lossy, its stored heights no longer the input's.
+    {"HillyPifs", [] { return test::hillyField(129, 129, 1); }, 17, 0.0, 1.0, 0.0, kHeightCodingPifs},
+    {"RoughPifsChunk9", [] { return test::roughField(65, 65, 2, 0, 3000); }, 9, 0.0, 1.0, 0.0, kHeightCodingPifs},
+    {"HillyPifsScaledOffsetPadded", [] { return test::hillyField(70, 41, 4); }, 17, 0.0, 0.5, -20.0, kHeightCodingPifs},
 };
 
 // ---- Errors and bounds ----
@@ -198,12 +204,18 @@ TEST_P(BuilderErrorsTest, DeltaCIsTheMeasuredDistanceToTheLeavesNestedWithMax)
             worstChild = std::max<double>(worstChild, child->deltaC);
         }
         const double expected = std::max(kErrorNesting * worstChild, direct);
+        if (c.heightCoding == kHeightCodingPifs) {
+            // Fractal coding stores a bound (the input's distance plus the coding errors): at least this.
+            EXPECT_GE(entry.deltaC, expected * (1 - 1e-5)) << "node " << entry.id.toString();
+            ++measured;
+            continue;
+        }
         EXPECT_NEAR(entry.deltaC, expected, 1e-5 * std::max(1.0, expected)) << "node " << entry.id.toString();
         largestGain = std::max(largestGain, worstChild + entry.deltaM - entry.deltaC);
         ++measured;
     }
     EXPECT_GT(measured, 0);
-    if (c.field().width >= 65) {
+    if (c.field().width >= 65 && c.heightCoding != kHeightCodingPifs) {
         EXPECT_GT(largestGain, 0.0) << "the measured error should be tighter than eq. 3.1 somewhere";
     }
     EXPECT_TRUE(verifyMap(*built.map).empty());
@@ -324,6 +336,7 @@ struct RoundTripCase {
     double maxError = 0.0;
     double scale = 1.0;
     double offset = 0.0;
+    std::uint32_t heightCoding = kHeightCodingKobbeltResidual;
 };
 
 void PrintTo(const RoundTripCase& c, std::ostream* os)
@@ -344,10 +357,12 @@ TEST_P(BuilderRoundTripTest, StaticHeightAtEveryInputSample)
     options.maxError = c.maxError;
     options.verticalScale = c.scale;
     options.offset = c.offset;
+    options.heightCoding = c.heightCoding;
     const Built built = buildAndDecode(dir, field, options);
     ASSERT_TRUE(built.map);
     const MapHeader& h = built.header();
-    const bool lossless = field.integerSamples && c.maxError < c.scale;
+    const bool pifs = c.heightCoding == kHeightCodingPifs;
+    const bool lossless = field.integerSamples && c.maxError < c.scale && !pifs;
     if (lossless) {
         EXPECT_EQ(h.maxErrorBound, 0.0);
         EXPECT_EQ(h.quantizerBin, 1u);
@@ -376,7 +391,7 @@ TEST_P(BuilderRoundTripTest, StaticHeightAtEveryInputSample)
         }
     }
     EXPECT_EQ(mismatches, 0);
-    if (!lossless) {
+    if (!lossless && !pifs) {  // a fractal map's bound is over every node (PifsCodecTest), not the leaves only
         // The bound is used, not just respected: a lossy map is actually lossy.
         EXPECT_GE(worst, 0.5 * h.maxErrorBound)
             << "largest error " << worst << " m of a " << h.maxErrorBound << " m bound";
@@ -392,6 +407,7 @@ TEST_P(BuilderRoundTripTest, FractionalPositionsFollowTheTemplateTriangles)
     options.maxError = c.maxError;
     options.verticalScale = c.scale;
     options.offset = c.offset;
+    options.heightCoding = c.heightCoding;
     const Built built = buildAndDecode(dir, field, options);
     ASSERT_TRUE(built.map);
     const MapHeader& h = built.header();
@@ -407,7 +423,7 @@ TEST_P(BuilderRoundTripTest, FractionalPositionsFollowTheTemplateTriangles)
                                                   static_cast<int>(gy - std::int64_t{leaf.y} * n1)))
                     : std::numeric_limits<double>::quiet_NaN();
     };
-    const bool lossless = field.integerSamples && c.maxError < c.scale;
+    const bool lossless = field.integerSamples && c.maxError < c.scale && c.heightCoding != kHeightCodingPifs;
     for (int k = 0; k < 300; ++k) {
         const double fx = test::unitNoise(77, k, 0) * (field.width - 1);
         const double fy = k % 10 == 0 ? fx * (field.height - 1) / (field.width - 1)  // on a diagonal now and then
@@ -447,7 +463,13 @@ INSTANTIATE_TEST_SUITE_P(
         RoundTripCase{"RoughLossyE2", [] { return test::roughField(65, 65, 15, 0, 3000); }, 17, 2.0},
         RoundTripCase{"RoughLossyE7Scaled", [] { return test::roughField(65, 65, 16, 0, 3000); }, 9, 7.0, 0.5, 3.0},
         RoundTripCase{"FractionalLossless", [] { return test::fractionalField(65, 65, 17); }},
-        RoundTripCase{"FractionalLossyE1", [] { return test::fractionalField(65, 65, 18); }, 17, 1.0}),
+        RoundTripCase{"FractionalLossyE1", [] { return test::fractionalField(65, 65, 18); }, 17, 1.0},
+        RoundTripCase{"RoughPifs", [] { return test::roughField(65, 65, 19, 0, 3000); }, 17, 0.0, 1.0, 0.0,
+                      kHeightCodingPifs},
+        RoundTripCase{"RoughPifsPadded70x41Chunk9", [] { return test::roughField(70, 41, 20, 0, 1000); }, 9, 0.0, 2.0,
+                      100.0, kHeightCodingPifs},
+        RoundTripCase{"FractionalPifs", [] { return test::fractionalField(65, 65, 21); }, 17, 0.0, 1.0, 0.0,
+                      kHeightCodingPifs}),
     [](const auto& paramInfo) { return std::string(paramInfo.param.name); });
 
 // ---- Determinism ----
@@ -459,16 +481,19 @@ TEST(QuadtreeBuilderTest, FileIsByteIdenticalForAnyThreadCount)
         HeightField field;
         double maxError;
         bool detail = false;  ///< with leaf detail errors
+        std::uint32_t heightCoding = kHeightCodingKobbeltResidual;
     };
     const Case cases[] = {{"lossless", test::hillyField(129, 129, 19), 0.0},
                           {"lossy padded", test::roughField(129, 100, 20, 0, 4000), 3.0},
-                          {"lossy padded, leaf detail errors", test::roughField(129, 100, 20, 0, 4000), 3.0, true}};
+                          {"lossy padded, leaf detail errors", test::roughField(129, 100, 20, 0, 4000), 3.0, true},
+                          {"fractal padded", test::roughField(129, 100, 20, 0, 4000), 0.0, true, kHeightCodingPifs}};
     for (const Case& c : cases) {
         test::ScratchDir dir;
         test::Bytes reference;
         for (int threads : {1, 2, 3, 4, 8}) {
             BuildOptions options = test::testOptions(17, threads);
             options.maxError = c.maxError;
+            options.heightCoding = c.heightCoding;
             if (c.detail) {
                 options.leafDetailError = test::fakeLeafDetailError;
             }
