@@ -187,6 +187,43 @@ FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels, doubl
     return stats;
 }
 
+FrameStats TerrainStreamer::updateFor(std::span<const NodeId> wanted)
+{
+    FrameStats stats;
+    mCache.beginFrame();
+    collect(stats);
+    mSelection = {};
+    mRequests.clear();
+    std::unordered_set<std::uint64_t> asked;
+    for (const NodeId& id : wanted) {
+        // Down from the root: touch each resident group on the way, ask for the first one missing.
+        NodePtr at = mCache.root();
+        for (int level = 1; level <= id.level && at; ++level) {
+            const NodeId step{level, id.x >> (id.level - level), id.y >> (id.level - level)};
+            const ChildNodes* group = mCache.touchChildren(step.parent());
+            if (group) {
+                at = (*group)[static_cast<std::size_t>(step.quadrant())];
+                continue;
+            }
+            if (at->hasChildren && asked.insert(step.parent().key()).second) {
+                mRequests.push_back({at, static_cast<double>(level)});
+            }
+            at = nullptr;
+        }
+    }
+    stats.requested = mRequests.size();
+    const std::size_t room = mCache.groupsInsertable();
+    if (mRequests.size() > room) {
+        // Coarse levels first: finer groups need them as parents.
+        std::stable_sort(mRequests.begin(), mRequests.end(),
+                         [](const LoadRequest& a, const LoadRequest& b) { return a.distance < b.distance; });
+        stats.deferred = mRequests.size() - room;
+        mRequests.resize(room);
+    }
+    mServer.submit(mRequests);
+    return stats;
+}
+
 FrameStats TerrainStreamer::drain()
 {
     mServer.drain();

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -71,6 +72,12 @@ public:
     /// StreamerOptions::revealSeconds from their parent's surface (their SelectedNode::morph is at most the
     /// time since then over revealSeconds) and are not refined before that (NodeHeld).
     FrameStats update(const Camera& camera, double tauPixels, double cameraSpeed, const FrameVisibility& visibility);
+
+    /// Clipmap mode (issue 17, lod/ClipmapTerrain.h): no selection (it stays empty). Keeps the `wanted` nodes and
+    /// their ancestors resident and, for each one missing, asks for the children of its deepest resident
+    /// ancestor that can have them, coarse levels first (within the cache's room). FrameStats::requested counts
+    /// the groups asked for (or wanted and deferred), inserted / refused / synthesized what arrived.
+    FrameStats updateFor(std::span<const NodeId> wanted);
 
     /// Waits for every queued load, then takes the results into the cache (no selection); returns what it took
     /// (FrameStats::inserted, refused and synthesized; the rest 0).

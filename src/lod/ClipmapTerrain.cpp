@@ -1,0 +1,222 @@
+// Clipmap ring data from the quadtree's resident nodes (seed 002's toroidal updates; ClipmapTerrain.h).
+#include "lod/ClipmapTerrain.h"
+
+#include "core/Check.h"
+#include "quadtree/ChunkGeometry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace terrain {
+
+ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize)
+    : mSamples(layout.samples()),
+      mChunk(chunkSize),
+      mTexture(textureSize),
+      mRings(static_cast<std::size_t>(layout.ringCount()))
+{
+    TERRAIN_EXPECTS(chunkSize >= 3 && textureSize >= 2, "chunks have at least 3 samples and textures 2 texels");
+    const auto samples = static_cast<std::size_t>(mSamples) * static_cast<std::size_t>(mSamples);
+    for (ClipmapRing& ring : mRings) {
+        ring.heights.assign(samples, 0.0f);
+        ring.colour.assign(samples * 4, 255);
+    }
+}
+
+std::vector<LatticeRect> ClipmapTerrain::takeChanged(int ring)
+{
+    return std::exchange(mRings[static_cast<std::size_t>(ring)].changed, {});
+}
+
+std::size_t ClipmapTerrain::upsampledNodes() const
+{
+    std::size_t count = 0;
+    for (const ClipmapRing& ring : mRings) {
+        count += ring.upsampled.size();
+    }
+    return count;
+}
+
+std::size_t ClipmapTerrain::bytes() const
+{
+    std::size_t total = 0;
+    for (const ClipmapRing& ring : mRings) {
+        total += ring.heights.size() * sizeof(float) + ring.colour.size();
+    }
+    return total;
+}
+
+namespace {
+
+LatticeRect windowRect(const ClipmapWindow& w, int n)
+{
+    return {w.x0, w.y0, w.x0 + n, w.y0 + n};
+}
+
+LatticeRect intersect(const LatticeRect& a, const LatticeRect& b)
+{
+    return {std::max(a.x0, b.x0), std::max(a.y0, b.y0), std::min(a.x1, b.x1), std::min(a.y1, b.y1)};
+}
+
+/// The samples of node `id`'s square (edges included) in its level's grid.
+LatticeRect nodeSquare(const NodeId& id, int chunk)
+{
+    const std::int64_t cells = chunk - 1;
+    return {std::int64_t{id.x} * cells, std::int64_t{id.y} * cells, (std::int64_t{id.x} + 1) * cells + 1,
+            (std::int64_t{id.y} + 1) * cells + 1};
+}
+
+/// The level-grid samples nodeSampleAt() maps to node `id` or its edges: its square, extended without bound
+/// on the sides where it is the terrain's last node (outside samples are clamped to the terrain).
+LatticeRect nodeRegion(const NodeId& id, int chunk)
+{
+    constexpr std::int64_t kFar = std::int64_t{1} << 40;
+    const std::uint32_t last = (1u << id.level) - 1;
+    LatticeRect r = nodeSquare(id, chunk);
+    r.x0 = id.x == 0 ? -kFar : r.x0;
+    r.y0 = id.y == 0 ? -kFar : r.y0;
+    r.x1 = id.x == last ? kFar : r.x1;
+    r.y1 = id.y == last ? kFar : r.y1;
+    return r;
+}
+
+}  // namespace
+
+void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, const ResidentNodeLookup& resident)
+{
+    const int n = mSamples;
+    ClipmapRing& ring = mRings[static_cast<std::size_t>(r)];
+    rect = intersect(rect, windowRect(layout.window(r), n));
+    if (rect.empty()) {
+        return;
+    }
+    const int level = layout.window(r).level;
+    const int w = windowSize(mChunk);
+    const bool coarser = r + 1 < ringCount();
+    const ClipmapRing* up = coarser ? &mRings[static_cast<std::size_t>(r + 1)] : nullptr;
+    // Node lookups are per node, not per sample: the last one is kept.
+    NodeId lastId{-1, 0, 0};
+    NodePtr node;
+    for (std::int64_t gy = rect.y0; gy < rect.y1; ++gy) {
+        for (std::int64_t gx = rect.x0; gx < rect.x1; ++gx) {
+            const NodeSample at = nodeSampleAt(level, gx, gy, mChunk);
+            if (!(at.id == lastId)) {
+                lastId = at.id;
+                node = resident(at.id);
+            }
+            const std::size_t t = static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n);
+            const bool haveColour = node && !node->texture.empty();
+            if (node) {
+                ring.heights[t] = node->heights.height(static_cast<std::size_t>(at.v) * w + at.u);
+            }
+            if (haveColour) {
+                // Texel nearest the sample (textures have T x T texels over the node's square, corners on corners).
+                const int tx = static_cast<int>(std::lround((at.u - kBorder) * (mTexture - 1.0) / (mChunk - 1)));
+                const int ty = static_cast<int>(std::lround((at.v - kBorder) * (mTexture - 1.0) / (mChunk - 1)));
+                const std::size_t k = (static_cast<std::size_t>(ty) * mTexture + tx) * 3;
+                for (int c = 0; c < 3; ++c) {
+                    ring.colour[t * 4 + c] = node->texture[k + c];
+                }
+            }
+            if ((!node || !haveColour) && up) {
+                // The coarser ring's bilinear value at this point (its window holds it: windows nest).
+                const std::int64_t cx = gx >> 1, cy = gy >> 1;
+                const std::int64_t dx = gx & 1, dy = gy & 1;
+                float h = 0.0f;
+                float rgb[3] = {0.0f, 0.0f, 0.0f};
+                for (std::int64_t j = 0; j <= dy; ++j) {
+                    for (std::int64_t i = 0; i <= dx; ++i) {
+                        const float weight = (dx ? 0.5f : 1.0f) * (dy ? 0.5f : 1.0f);
+                        const std::size_t u =
+                            static_cast<std::size_t>(toroidalTexel(cy + j, n)) * n + toroidalTexel(cx + i, n);
+                        h += weight * up->heights[u];
+                        for (int c = 0; c < 3; ++c) {
+                            rgb[c] += weight * up->colour[u * 4 + c];
+                        }
+                    }
+                }
+                if (!node) {
+                    ring.heights[t] = h;
+                }
+                for (int c = 0; c < 3; ++c) {
+                    ring.colour[t * 4 + c] = static_cast<std::uint8_t>(std::lround(rgb[c]));
+                }
+            }
+            if (!node) {
+                ring.upsampled.emplace(at.id.key(), at.id);
+            }
+        }
+    }
+    ring.changed.push_back(rect);
+}
+
+void ClipmapTerrain::update(const ClipmapLayout& layout, const std::vector<std::vector<LatticeRect>>& entered,
+                            const ResidentNodeLookup& resident)
+{
+    TERRAIN_EXPECTS(static_cast<int>(entered.size()) == ringCount(), "one list of entered samples per ring");
+    const int n = mSamples;
+    bool coarserChanged = false;
+    for (int r = ringCount() - 1; r >= 0; --r) {
+        ClipmapRing& ring = mRings[static_cast<std::size_t>(r)];
+        const std::size_t changedBefore = ring.changed.size();
+        const LatticeRect window = windowRect(layout.window(r), n);
+        // Upsampled nodes: forget those the window left; fill again those that arrived, or all of them when
+        // the coarser ring they were upsampled from changed.
+        std::vector<NodeId> refill;
+        for (auto it = ring.upsampled.begin(); it != ring.upsampled.end();) {
+            const NodeId id = it->second;
+            if (intersect(nodeRegion(id, mChunk), window).empty()) {
+                it = ring.upsampled.erase(it);
+            } else if (coarserChanged || resident(id)) {
+                refill.push_back(id);
+                it = ring.upsampled.erase(it);
+            } else {
+                ++it;
+            }
+        }
+        for (const LatticeRect& rect : entered[static_cast<std::size_t>(r)]) {
+            fill(layout, r, rect, resident);
+        }
+        std::sort(refill.begin(), refill.end(), [](const NodeId& a, const NodeId& b) { return a.key() < b.key(); });
+        for (const NodeId& id : refill) {
+            fill(layout, r, nodeRegion(id, mChunk), resident);
+        }
+        if (ring.changed.size() != changedBefore) {
+            float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+            for (float h : ring.heights) {
+                lo = std::min(lo, h);
+                hi = std::max(hi, h);
+            }
+            ring.zMin = lo;
+            ring.zMax = hi;
+        }
+        coarserChanged = ring.changed.size() != changedBefore;
+    }
+}
+
+std::vector<NodeId> ClipmapTerrain::wanted(const ClipmapLayout& layout, int firstRing) const
+{
+    std::vector<NodeId> ids;
+    const std::int64_t cells = mChunk - 1;
+    for (int r = ringCount() - 1; r >= firstRing; --r) {
+        const ClipmapWindow& w = layout.window(r);
+        const std::int64_t last = (std::int64_t{1} << w.level) - 1;
+        const std::int64_t x0 = std::clamp<std::int64_t>(w.x0 / cells - 1, 0, last);
+        const std::int64_t y0 = std::clamp<std::int64_t>(w.y0 / cells - 1, 0, last);
+        const std::int64_t x1 = std::clamp<std::int64_t>((w.x0 + mSamples - 1) / cells, 0, last);
+        const std::int64_t y1 = std::clamp<std::int64_t>((w.y0 + mSamples - 1) / cells, 0, last);
+        for (std::int64_t y = y0; y <= y1; ++y) {
+            for (std::int64_t x = x0; x <= x1; ++x) {
+                const NodeId id{w.level, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y)};
+                if (!intersect(nodeSquare(id, mChunk), windowRect(w, mSamples)).empty()) {
+                    ids.push_back(id);
+                }
+            }
+        }
+    }
+    return ids;
+}
+
+}  // namespace terrain

@@ -1,0 +1,193 @@
+// Clipmap ring data from the quadtree (lod/ClipmapTerrain.h): once the nodes the windows want are resident,
+// every window sample holds its node's height (against the decoded map, independently of the node server)
+// and texel; toroidal updates over a flight end where a fresh fill at the last position does; rings below the
+// static levels hold the synthesized dynamic nodes; missing nodes are upsampled from the coarser ring.
+#include "lod/ClipmapTerrain.h"
+
+#include "MapTestSupport.h"
+#include "lod/TerrainNodeSource.h"
+#include "lod/TerrainStreamer.h"
+
+#include <gtest/gtest.h>
+
+namespace terrain {
+namespace {
+
+class ClipmapTerrainTest : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        // 257 x 257 at 2 m, chunks of 17: 5 static levels, root 512 m.
+        BuildOptions options = test::testOptions(17);
+        options.leafDetailError = test::fakeLeafDetailError;
+        auto built = buildMap(test::hillyField(257, 257, 3), options, mDir / "c.map");
+        ASSERT_TRUE(built.ok()) << built.error().message;
+        mMap = test::openMap(mDir / "c.map");
+        ASSERT_TRUE(mMap);
+        auto tree = test::decodeTree(*mMap);
+        ASSERT_TRUE(tree.ok()) << tree.error().message;
+        mTree = std::move(tree.value());
+    }
+
+    /// Moves to (x, y) and loads until the windows want nothing more; returns the rounds it took.
+    static int settle(ClipmapLayout& layout, ClipmapTerrain& terrain, TerrainStreamer& streamer, double x, double y)
+    {
+        const ResidentNodeLookup lookup = [&streamer](const NodeId& id) { return streamer.node(id); };
+        terrain.update(layout, layout.moveTo(x, y), lookup);
+        const std::vector<std::vector<LatticeRect>> none(static_cast<std::size_t>(layout.ringCount()));
+        for (int round = 0; round < 100; ++round) {
+            const FrameStats stats = streamer.updateFor(terrain.wanted(layout));
+            streamer.drain();
+            terrain.update(layout, none, lookup);
+            if (stats.requested == 0) {
+                return round;
+            }
+        }
+        return 100;
+    }
+
+    /// Ring `r`'s samples against the decoded static map: height and colour at every window sample (clamped to
+    /// the terrain, as the clipmap reads it).
+    void expectStaticRing(const ClipmapLayout& layout, const ClipmapTerrain& terrain, int r) const
+    {
+        const MapHeader& h = mMap->header();
+        const int n = layout.samples(), cells = static_cast<int>(h.chunkSize) - 1;
+        const ClipmapWindow& w = layout.window(r);
+        const std::int64_t last = std::int64_t{cells} << w.level;
+        int mismatches = 0;
+        for (std::int64_t gy = w.y0; gy < w.y0 + n; ++gy) {
+            for (std::int64_t gx = w.x0; gx < w.x0 + n; ++gx) {
+                const std::int64_t cx = std::clamp<std::int64_t>(gx, 0, last),
+                                   cy = std::clamp<std::int64_t>(gy, 0, last);
+                const auto nx = static_cast<std::uint32_t>(std::min<std::int64_t>(cx / cells, (1 << w.level) - 1));
+                const auto ny = static_cast<std::uint32_t>(std::min<std::int64_t>(cy / cells, (1 << w.level) - 1));
+                const StaticNode* node = mTree.find({w.level, nx, ny});
+                ASSERT_NE(node, nullptr);
+                const int u = static_cast<int>(cx - std::int64_t{nx} * cells);
+                const int v = static_cast<int>(cy - std::int64_t{ny} * cells);
+                const double expected = h.heightOf(test::windowCode(h, *node, u, v)) - h.heightOffset;
+                const std::size_t t = static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n);
+                const ClipmapRing& ring = terrain.ring(r);
+                if (std::abs(ring.heights[t] - expected) > 1e-3 && ++mismatches <= 3) {
+                    ADD_FAILURE() << "ring " << r << " sample (" << gx << ", " << gy << "): " << ring.heights[t]
+                                  << " m, node " << node->id.toString() << " has " << expected << " m";
+                }
+                const std::size_t k = (static_cast<std::size_t>(v) * h.textureSize + u) * 3;  // T = N here
+                for (int c = 0; c < 3; ++c) {
+                    if (ring.colour[t * 4 + c] != node->texture[k + c] && ++mismatches <= 3) {
+                        ADD_FAILURE() << "ring " << r << " sample (" << gx << ", " << gy << ") colour " << c;
+                    }
+                }
+            }
+        }
+        EXPECT_EQ(mismatches, 0) << "ring " << r;
+    }
+
+    test::ScratchDir mDir;
+    std::unique_ptr<MapFile> mMap;
+    test::DecodedTree mTree;
+};
+
+TEST_F(ClipmapTerrainTest, SettledRingsHoldTheirNodesSamplesAlongAFlight)
+{
+    TerrainNodeSource source(*mMap, {});
+    StreamerOptions options;
+    options.cacheSize = 400;
+    options.workers = 0;
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 4, 0);
+    ClipmapTerrain terrain(layout, 17, 17);
+    EXPECT_EQ(terrain.bytes(), std::size_t{5} * 31 * 31 * 8);
+    // Small steps, a jump, the edge of the terrain and beyond.
+    const std::pair<double, double> flight[] = {{200, 300}, {203, 301}, {211, 290}, {260, 250},
+                                                {20, 500},  {-30, 530}, {400, 100}, {401.5, 99}};
+    for (auto [x, y] : flight) {
+        const int rounds = settle(layout, terrain, **streamer, x, y);
+        EXPECT_LT(rounds, 100) << "at " << x << ", " << y;
+        EXPECT_EQ(terrain.upsampledNodes(), 0u) << "every static node the windows want exists";
+        for (int r = 0; r < layout.ringCount(); ++r) {
+            expectStaticRing(layout, terrain, r);
+        }
+    }
+    // A fresh clipmap at the last position holds the same bits: the toroidal updates lose nothing.
+    ClipmapLayout freshLayout(extentOf(mMap->header()), 17, 31, 4, 0);
+    ClipmapTerrain fresh(freshLayout, 17, 17);
+    settle(freshLayout, fresh, **streamer, flight[std::size(flight) - 1].first, flight[std::size(flight) - 1].second);
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        EXPECT_EQ(fresh.ring(r).heights, terrain.ring(r).heights) << "ring " << r;
+        EXPECT_EQ(fresh.ring(r).colour, terrain.ring(r).colour) << "ring " << r;
+    }
+}
+
+TEST_F(ClipmapTerrainTest, MissingNodesAreUpsampledFromTheCoarserRingUntilTheyArrive)
+{
+    TerrainNodeSource source(*mMap, {});
+    StreamerOptions options;
+    options.workers = 0;
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 2, 0);
+    ClipmapTerrain terrain(layout, 17, 17);
+    const ResidentNodeLookup lookup = [&](const NodeId& id) { return (*streamer)->node(id); };
+    terrain.update(layout, layout.moveTo(250.0, 260.0), lookup);
+    // Only the root is resident: rings 1 and 0 are the root's surface, bilinearly upsampled.
+    EXPECT_GT(terrain.upsampledNodes(), 0u);
+    const int n = 31;
+    const ClipmapRing& coarse = terrain.ring(2);
+    const ClipmapRing& fine = terrain.ring(1);
+    const ClipmapWindow& w = layout.window(1);
+    for (std::int64_t gy = w.y0; gy < w.y0 + n; ++gy) {
+        for (std::int64_t gx = w.x0; gx < w.x0 + n; ++gx) {
+            auto at = [&](std::int64_t x, std::int64_t y) {
+                return coarse.heights[static_cast<std::size_t>(toroidalTexel(y, n)) * n + toroidalTexel(x, n)];
+            };
+            const double expected = 0.25 * (at(gx >> 1, gy >> 1) + at((gx + 1) >> 1, gy >> 1) +
+                                            at(gx >> 1, (gy + 1) >> 1) + at((gx + 1) >> 1, (gy + 1) >> 1));
+            EXPECT_NEAR(fine.heights[static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n)],
+                        expected, 1e-3)
+                << gx << ", " << gy;
+        }
+    }
+    settle(layout, terrain, **streamer, 250.0, 260.0);
+    EXPECT_EQ(terrain.upsampledNodes(), 0u);
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        expectStaticRing(layout, terrain, r);
+    }
+}
+
+TEST_F(ClipmapTerrainTest, RingsBelowTheStaticLevelsHoldTheSynthesizedNodes)
+{
+    const auto synthesizer = test::grassAndRockSynthesizer(17);
+    TerrainNodeSource source(*mMap, {synthesizer.get(), 0.05});
+    StreamerOptions options;
+    options.cacheSize = 600;
+    options.workers = 0;
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 6, 0);  // two levels of dynamic nodes
+    ClipmapTerrain terrain(layout, 17, 17);
+    settle(layout, terrain, **streamer, 130.0, 170.0);
+    EXPECT_EQ(terrain.upsampledNodes(), 0u);
+    const int n = 31, w = windowSize(17);
+    for (int r = 0; r < 2; ++r) {
+        const ClipmapWindow& win = layout.window(r);
+        for (std::int64_t gy = win.y0; gy < win.y0 + n; ++gy) {
+            for (std::int64_t gx = win.x0; gx < win.x0 + n; ++gx) {
+                const NodeId id{win.level, static_cast<std::uint32_t>(gx / 16), static_cast<std::uint32_t>(gy / 16)};
+                NodePtr node = (*streamer)->node(id);
+                ASSERT_TRUE(node) << id.toString();
+                ASSERT_FALSE(node->isStatic);
+                const auto k = static_cast<std::size_t>(gy - std::int64_t{id.y} * 16 + kBorder) * w +
+                               static_cast<std::size_t>(gx - std::int64_t{id.x} * 16 + kBorder);
+                EXPECT_EQ(
+                    terrain.ring(r).heights[static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n)],
+                    node->heights.height(k))
+                    << "ring " << r << " (" << gx << ", " << gy << ")";
+            }
+        }
+    }
+}
+
+}  // namespace
+}  // namespace terrain
