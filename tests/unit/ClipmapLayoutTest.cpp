@@ -98,8 +98,10 @@ TEST(ClipmapLayoutTest, WindowsNestOnTheCoarserGridAndFollowTheViewer)
             // The viewer within one sample of the window's centre.
             const double s = layout.spacing(ring);
             EXPECT_NEAR(s, extent().rootSize / (64.0 * std::ldexp(1.0, w.level)), 1e-9);
-            EXPECT_LE(std::abs((x - extent().originX) / s - (static_cast<double>(w.x0) + (n - 1) / 2.0)), 1.0 + 1e-9) << ring;
-            EXPECT_LE(std::abs((y - extent().originY) / s - (static_cast<double>(w.y0) + (n - 1) / 2.0)), 1.0 + 1e-9) << ring;
+            EXPECT_LE(std::abs((x - extent().originX) / s - (static_cast<double>(w.x0) + (n - 1) / 2.0)), 1.0 + 1e-9)
+                << ring;
+            EXPECT_LE(std::abs((y - extent().originY) / s - (static_cast<double>(w.y0) + (n - 1) / 2.0)), 1.0 + 1e-9)
+                << ring;
             if (ring > 0) {
                 // m - 1 or m coarse cells between the finer window and this one's perimeter on each side.
                 const LatticeRect h = layout.hole(ring);
