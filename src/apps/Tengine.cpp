@@ -11,11 +11,14 @@
 #include "core/Memory.h"
 #include "core/StopSignals.h"
 #include "lod/CameraPath.h"
+#include "lod/ClipmapLayout.h"
+#include "lod/ClipmapTerrain.h"
 #include "lod/ErrorMeter.h"
 #include "lod/HeightQuery.h"
 #include "lod/NodeVisibility.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
+#include "render/ClipmapRenderer.h"
 #include "render/FrameCapture.h"
 #include "render/GlWindow.h"
 #include "render/TerrainRenderer.h"
@@ -215,9 +218,28 @@ struct Scene {
     /// so that it goes first.
     std::unique_ptr<TerrainNodeSource> referenceSource;
     std::unique_ptr<ErrorMeter> meter;
+    /// lod_mode = clipmap (seed 002): the rings' layout and data and their renderer; the quadtree renderer
+    /// is not made.
+    std::optional<ClipmapLayout> clipmapLayout;
+    std::unique_ptr<ClipmapTerrain> clipmap;
+    std::unique_ptr<ClipmapRenderer> clipmapRenderer;
+    int clipmapFirstRing = 0;  ///< the finest ring drawn this frame
 
     const MapHeader& header() const { return map->header(); }
 };
+
+/// lod_mode = clipmap: the finest ring's quadtree level, the deepest whose spacing is at least
+/// clipmap_finest_spacing (and lod_minimum_spacing), below the map's data only with synthesis.
+int clipmapFinestLevel(const TengineOptions& o, const MapHeader& header, bool synthesis)
+{
+    const double limit = std::max(o.clipmapFinestSpacing, o.lodMinimumSpacing);
+    const int deepest = synthesis ? NodeId::kMaxLevel : static_cast<int>(header.levels) - 1;
+    int level = 0;
+    while (level < deepest && header.spacingAt(level + 1) >= limit) {
+        ++level;
+    }
+    return level;
+}
 
 /// Opens the map, the materials, the camera path, the window, the renderer and the streamer; errors are
 /// logged and end the program with status 1.
@@ -308,18 +330,43 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
     if (countPixels) {
         scene->visibility = std::make_unique<NodeVisibility>(o.visibilityHiddenFrames);
     }
+    if (o.clipmap) {
+        if (o.visibilityLod || o.videoMeasureErrorEvery > 0) {
+            log("warning: lod_mode = clipmap draws no quadtree selection: visibility_lod and video_measure_error_every "
+                "have no effect");
+        }
+        scene->tessellation = false;
+        scene->visibility.reset();
+        const bool synthesis = scene->synthesizer && header.hasDetailErrors();
+        const int finest = clipmapFinestLevel(o, header, synthesis);
+        scene->clipmapLayout.emplace(extentOf(header), static_cast<int>(header.chunkSize), o.clipmapSamples, finest, 0);
+        scene->clipmap = std::make_unique<ClipmapTerrain>(*scene->clipmapLayout, static_cast<int>(header.chunkSize),
+                                                          static_cast<int>(header.textureSize));
+        auto clipmapRenderer = ClipmapRenderer::create(shaders, header, *scene->clipmapLayout);
+        if (!clipmapRenderer.ok()) {
+            return fail(clipmapRenderer.error().message);
+        }
+        scene->clipmapRenderer = std::move(clipmapRenderer).value();
+        log("clipmap: " + std::to_string(scene->clipmapLayout->ringCount()) + " rings of " +
+            std::to_string(o.clipmapSamples) + " x " + std::to_string(o.clipmapSamples) + " samples, levels 0 to " +
+            std::to_string(finest) + " (finest spacing " + std::to_string(header.spacingAt(finest)) + " m), " +
+            std::to_string(scene->clipmapRenderer->textureBytes() + scene->clipmap->bytes()) +
+            " bytes of ring data (GPU and CPU)");
+    }
     scene->nodePixels = scene->tessellation ? o.lodError * (1.0 - o.tessellationShare) : o.lodError;
     scene->blockPixels = scene->tessellation ? o.lodError * o.tessellationShare : 0.0;
-    auto renderer = TerrainRenderer::create(
-        shaders, header, o.vertexCacheSize,
-        {static_cast<std::size_t>(o.quadCacheSize), o.nodeTextureCompression, scene->tessellation,
-         o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0, countPixels},
-        materials);
+    auto renderer = o.clipmap
+                        ? Expected<std::unique_ptr<TerrainRenderer>>(std::unique_ptr<TerrainRenderer>())
+                        : TerrainRenderer::create(
+                              shaders, header, o.vertexCacheSize,
+                              {static_cast<std::size_t>(o.quadCacheSize), o.nodeTextureCompression, scene->tessellation,
+                               o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0, countPixels},
+                              materials);
     if (!renderer.ok()) {
         return fail(renderer.error().message);
     }
     scene->renderer = std::move(renderer).value();
-    {
+    if (scene->renderer) {
         const SlotBytes& b = scene->renderer->slotBytes();
         log("node pools: " + std::to_string(scene->renderer->slots()) + " slots of " + std::to_string(b.total()) +
             " bytes (heights " + std::to_string(b.heights) + ", parent normals " + std::to_string(b.normals) +
@@ -347,8 +394,11 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
     }
     scene->streamer = std::move(streamer).value();
     scene->streamer->onLoadError([&log](const std::string& message) { log(message); });
-    scene->streamer->onEvict([renderer = scene->renderer.get()](const NodeData& node) { renderer->release(node.id); });
-    if (o.videoMeasureErrorEvery > 0) {
+    if (scene->renderer) {
+        scene->streamer->onEvict(
+            [renderer = scene->renderer.get()](const NodeData& node) { renderer->release(node.id); });
+    }
+    if (o.videoMeasureErrorEvery > 0 && !o.clipmap) {
         // The reference nodes are the viewer's without the tessellation errors they do not need.
         scene->referenceSource = std::make_unique<TerrainNodeSource>(
             *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing});
@@ -437,7 +487,13 @@ std::vector<std::string> overlayLines(bool video, std::size_t frame, double time
         std::snprintf(line, sizeof line, "-- fps  %.2f Mtriangles", mtriangles);
     }
     lines.emplace_back(line);
-    if (scene.tessellation) {
+    if (scene.clipmap) {
+        const ClipmapLayout& layout = *scene.clipmapLayout;
+        std::snprintf(line, sizeof line,
+                      "clipmap: rings from level %d (%d rings), %zu footprints, %zu culled, %zu nodes upsampled",
+                      layout.window(scene.clipmapFirstRing).level, layout.ringCount() - scene.clipmapFirstRing,
+                      render.blocks, render.culledBlocks, scene.clipmap->upsampledNodes());
+    } else if (scene.tessellation) {
         std::snprintf(line, sizeof line, "nodes %zu static, %zu dynamic, %zu blocks tessellated", render.staticNodes,
                       render.dynamicNodes, render.blocks);
     } else {
@@ -469,7 +525,7 @@ public:
     {
         const auto server = scene.streamer->serverStats();
         const auto& cache = scene.streamer->cache();
-        int deepestLevel = 0;
+        int deepestLevel = scene.clipmap ? scene.clipmapLayout->window(scene.clipmapFirstRing).level : 0;
         for (const SelectedNode& node : scene.streamer->selection().nodes) {
             deepestLevel = std::max(deepestLevel, node.id.level);
         }
@@ -511,6 +567,33 @@ VideoRecorderOptions recorderOptions(const TengineOptions& o, std::size_t frames
     recording.progressInPlace = ::isatty(STDERR_FILENO) != 0;
     recording.log = [&log](const std::string& message) { log(message); };
     return recording;
+}
+
+/// lod_mode = clipmap, one frame: the windows follow the camera, the finest ring worth drawing from its
+/// height above the ground, the nodes the windows want are asked for and what arrived fills the rings. In
+/// video mode it loads until the windows want nothing more (as the quadtree's rounds do): identical runs give
+/// identical frames.
+FrameStats updateClipmap(Scene& scene, const Camera& camera, bool video)
+{
+    ClipmapLayout& layout = *scene.clipmapLayout;
+    ClipmapTerrain& clipmap = *scene.clipmap;
+    TerrainStreamer& streamer = *scene.streamer;
+    const ResidentNodeLookup resident = [&streamer](const NodeId& id) { return streamer.node(id); };
+    const auto entered = layout.moveTo(camera.position.x, camera.position.y);
+    // The ground below from the rings as they are (the finest one covers the viewer).
+    const double ground =
+        scene.header().heightOffset + clipmap.heightAt(layout, 0, camera.position.x, camera.position.y);
+    scene.clipmapFirstRing = layout.finestActiveRing(std::max(0.0, camera.position.z - ground));
+    FrameStats stats = streamer.updateFor(clipmap.wanted(layout, scene.clipmapFirstRing));
+    clipmap.update(layout, entered, resident);
+    const std::vector<std::vector<LatticeRect>> none(static_cast<std::size_t>(layout.ringCount()));
+    for (int round = 0; video && round < 64 && stats.requested > stats.deferred; ++round) {
+        const std::size_t synthesized = stats.synthesized + streamer.drain().synthesized;
+        stats = streamer.updateFor(clipmap.wanted(layout, scene.clipmapFirstRing));
+        stats.synthesized += synthesized;
+        clipmap.update(layout, none, resident);
+    }
+    return stats;
 }
 
 int run(const ParsedCommandLine& parsed, const StopSignals& stop)
@@ -614,6 +697,10 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
             scene->path->evaluateLooping(time).applyTo(camera);
         } else {
             flight->update(camera, std::min(dt, 0.25), [&](double x, double y) -> std::optional<double> {
+                if (scene->clipmap) {
+                    return header.heightOffset + scene->clipmap->heightAt(*scene->clipmapLayout, 0, x, y) +
+                           o.cameraMinClearance;
+                }
                 const auto ground = drawnHeightAt(*scene->streamer, header, x, y);
                 return ground ? std::optional<double>(*ground + o.cameraMinClearance) : std::nullopt;
             });
@@ -645,28 +732,40 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
                 [&streamer](const NodeId& id) { return streamer.childrenResident(id); }, moved);
             visibility.time = video || demo ? time : std::chrono::duration<double>(now - start).count();
         }
-        FrameStats frameStats = scene->streamer->update(camera, scene->nodePixels, speed, visibility);
-        if (video) {
-            // A recording shows every frame complete: load what it wants, select again, until it wants
-            // nothing more (or the cache is full). Independent of thread timing: identical runs give
-            // identical frames.
-            for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred + frameStats.tooFast;
-                 ++round) {
-                std::size_t synthesized = frameStats.synthesized + scene->streamer->drain().synthesized;
-                frameStats = scene->streamer->update(camera, scene->nodePixels, speed, visibility);
-                frameStats.synthesized += synthesized;  // the frame's, all rounds together
-            }
-        }
-        const TerrainStreamer& streamer = *scene->streamer;
         BoxOccluded occluded;
         if (scene->occlusion) {
             occluded = [&occlusion = *scene->occlusion, moved](const Aabb& box) {
                 return occlusion.occluded(box, moved);
             };
         }
-        const RenderStats renderStats = scene->renderer->draw(
-            streamer.selection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, style,
-            scene->blockPixels, nullptr, occluded);
+        FrameStats frameStats;
+        RenderStats renderStats;
+        if (scene->clipmap) {
+            frameStats = updateClipmap(*scene, camera, video);
+            const ClipmapStats drawn = scene->clipmapRenderer->draw(*scene->clipmapLayout, *scene->clipmap,
+                                                                    scene->clipmapFirstRing, camera, style);
+            renderStats.triangles = drawn.triangles;
+            renderStats.drawCalls = drawn.pieces;
+            renderStats.blocks = drawn.pieces;
+            renderStats.culledBlocks = drawn.culledPieces;
+        } else {
+            frameStats = scene->streamer->update(camera, scene->nodePixels, speed, visibility);
+            if (video) {
+                // A recording shows every frame complete: load what it wants, select again, until it wants
+                // nothing more (or the cache is full). Independent of thread timing: identical runs give
+                // identical frames.
+                for (int round = 0; round < 64 && frameStats.requested > frameStats.deferred + frameStats.tooFast;
+                     ++round) {
+                    std::size_t synthesized = frameStats.synthesized + scene->streamer->drain().synthesized;
+                    frameStats = scene->streamer->update(camera, scene->nodePixels, speed, visibility);
+                    frameStats.synthesized += synthesized;  // the frame's, all rounds together
+                }
+            }
+            const TerrainStreamer& streamer = *scene->streamer;
+            renderStats = scene->renderer->draw(
+                streamer.selection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, style,
+                scene->blockPixels, nullptr, occluded);
+        }
         if (o.drawUserInterface) {
             scene->overlay->draw(overlayLines(video, frame, time, rate.framesPerSecond(), renderStats, frameStats,
                                               *scene, camera, o.lodError, style.wireframe),

@@ -2,6 +2,8 @@
 // to parse it and how to write it back. Errors, configs/tengine.cfg and --print-config all come from it.
 #include "apps/TengineOptions.h"
 
+#include "lod/ClipmapLayout.h"
+
 #include "apps/VideoRecorder.h"
 #include "core/OutputGuard.h"
 
@@ -468,6 +470,38 @@ std::vector<OptionSpec> makeOptionTable()
                      return true;
                  },
                  [](const TengineOptions& o) { return std::string(o.tessellation ? "tessellation" : "chunks"); }});
+    t.push_back({"lod_mode", kGroupDisplay,
+                 "How the level of detail is chosen: quadtree selects chunked-quadtree nodes by their errors (the "
+                 "paper; render_mode applies); clipmap draws seed 002's geometry clipmaps instead: nested n x n "
+                 "grids around the viewer, one per quadtree level, from the same nodes and synthesis, blended to "
+                 "the coarser level near each perimeter (a baseline: docs/methods.md compares them).",
+                 "quadtree or clipmap",
+                 [](std::string_view value, const SetContext&, TengineOptions& o) {
+                     const std::string v = lowerCase(value);
+                     if (v != "quadtree" && v != "clipmap") {
+                         return false;
+                     }
+                     o.clipmap = v == "clipmap";
+                     return true;
+                 },
+                 [](const TengineOptions& o) { return std::string(o.clipmap ? "clipmap" : "quadtree"); }});
+    t.push_back({"clipmap_samples", kGroupDisplay,
+                 "With lod_mode = clipmap: samples per side of each level's grid, n = 2^k - 1 (seed 002 uses 255).",
+                 "an integer 2^k - 1 in [15, 1023]",
+                 [](std::string_view value, const SetContext&, TengineOptions& o) {
+                     auto v = parseInt(value, kMinClipmapSamples, kMaxClipmapSamples);
+                     if (!v || !isValidClipmapSize(*v)) {
+                         return false;
+                     }
+                     o.clipmapSamples = *v;
+                     return true;
+                 },
+                 [](const TengineOptions& o) { return std::to_string(o.clipmapSamples); }});
+    t.push_back(realOption("clipmap_finest_spacing", kGroupDisplay,
+                           "With lod_mode = clipmap: the finest level's sample spacing is the first at or above this "
+                           "(levels below the map's data are synthesized as dynamic nodes; never below "
+                           "lod_minimum_spacing, nor below the data without detail_create_new_nodes).",
+                           &O::clipmapFinestSpacing, above(0), "metres"));
     t.push_back(realOption("tessellation_error_share", kGroupDisplay,
                            "With render_mode = tessellation: the part of lod_error the blocks inside a node may spend; "
                            "the nodes are selected for the rest, so the drawn surface stays within lod_error.",

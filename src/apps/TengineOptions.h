@@ -73,6 +73,9 @@ struct TengineOptions {
     bool geomorph = true;                     ///< geomorph: off draws every node at its own detail (pops)
     bool nodeTextureCompression = false;      ///< node_texture_compression: DXT1 colour textures on the GPU
     bool tessellation = true;                 ///< render_mode: true tessellation (issue 13), false chunks
+    bool clipmap = false;                     ///< lod_mode: false quadtree, true clipmap (seed 002, issue 17)
+    int clipmapSamples = 255;                 ///< clipmap_samples: n = 2^k - 1 in [15, 1023]
+    double clipmapFinestSpacing = 1.0;        ///< clipmap_finest_spacing: metres, > 0
     double tessellationShare = 0.5;           ///< tessellation_error_share: the part of tau the blocks spend
     double sunAzimuth = 135.0;                ///< sun_azimuth: degrees in [0, 360], clockwise from north
     double sunElevation = 35.0;               ///< sun_elevation: degrees in [-90, 90] above the horizon

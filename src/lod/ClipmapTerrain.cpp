@@ -196,6 +196,25 @@ void ClipmapTerrain::update(const ClipmapLayout& layout, const std::vector<std::
     }
 }
 
+double ClipmapTerrain::heightAt(const ClipmapLayout& layout, int ring, double x, double y) const
+{
+    const ClipmapWindow& w = layout.window(ring);
+    const double s = layout.spacing(ring);
+    const double n1 = mSamples - 1.0;
+    const double gx = std::clamp((x - layout.worldX(ring, 0.0)) / s - static_cast<double>(w.x0), 0.0, n1);
+    const double gy = std::clamp((y - layout.worldY(ring, 0.0)) / s - static_cast<double>(w.y0), 0.0, n1);
+    const auto i = static_cast<std::int64_t>(std::min(std::floor(gx), n1 - 1.0));
+    const auto j = static_cast<std::int64_t>(std::min(std::floor(gy), n1 - 1.0));
+    const double fx = gx - static_cast<double>(i), fy = gy - static_cast<double>(j);
+    const ClipmapRing& data = mRings[static_cast<std::size_t>(ring)];
+    auto at = [&](std::int64_t a, std::int64_t b) {
+        return double{data.heights[static_cast<std::size_t>(toroidalTexel(w.y0 + b, mSamples)) * mSamples +
+                                   toroidalTexel(w.x0 + a, mSamples)]};
+    };
+    return (1 - fy) * ((1 - fx) * at(i, j) + fx * at(i + 1, j)) +
+           fy * ((1 - fx) * at(i, j + 1) + fx * at(i + 1, j + 1));
+}
+
 std::vector<NodeId> ClipmapTerrain::wanted(const ClipmapLayout& layout, int firstRing) const
 {
     std::vector<NodeId> ids;

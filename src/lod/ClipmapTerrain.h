@@ -40,6 +40,10 @@ public:
     /// meets the ring's window (clamped to the terrain), coarse rings first.
     std::vector<NodeId> wanted(const ClipmapLayout& layout, int firstRing = 0) const;
 
+    /// The surface of ring `ring` at world (x, y) metres, bilinear between its samples (metres above the map's
+    /// offset); the position is clamped to the ring's window.
+    double heightAt(const ClipmapLayout& layout, int ring, double x, double y) const;
+
     int ringCount() const { return static_cast<int>(mRings.size()); }
     const ClipmapRing& ring(int ring) const { return mRings[static_cast<std::size_t>(ring)]; }
     /// Takes ring `ring`'s changed rectangles (the renderer uploads them).

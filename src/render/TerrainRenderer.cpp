@@ -240,7 +240,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
             glUniformMatrix2fv(program.uniform("uDetailTurn"), 1, GL_FALSE, glm::value_ptr(turn));
         }
     }
-    auto sky = ShaderProgram::load(shaderDirectory, "sky");
+    auto sky = Sky::create(shaderDirectory);
     TERRAIN_TRY(sky);
     r->mSky = std::move(sky.value());
 
@@ -279,7 +279,6 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
                      indices.data(), GL_STATIC_DRAW);
     }
     glBindVertexArray(0);
-    r->mEmptyVao = gl::VertexArray::create();
     if (r->mTessellation) {
         // One patch vertex per block and per border block side, numbered (terrain_tess.vert); the node
         // constants per instance, as for the chunks.
@@ -439,24 +438,6 @@ int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats)
     return slot;
 }
 
-void TerrainRenderer::drawSky(const Camera& camera, const SceneStyle& style)
-{
-    const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
-    const glm::mat4 inverse = glm::inverse(viewProjection);
-    mSky.use();
-    glUniformMatrix4fv(mSky.uniform("uInverseViewProjection"), 1, GL_FALSE, glm::value_ptr(inverse));
-    glUniform3fv(mSky.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
-    glUniform3fv(mSky.uniform("uZenithColour"), 1, glm::value_ptr(style.zenithColour));
-    const glm::vec3 sun = glm::normalize(style.sunDirection);
-    glUniform3fv(mSky.uniform("uSunDirection"), 1, glm::value_ptr(sun));
-    glUniform3fv(mSky.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
-    glDepthMask(GL_FALSE);
-    glDisable(GL_DEPTH_TEST);
-    glBindVertexArray(mEmptyVao.name());
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    glDepthMask(GL_TRUE);
-}
-
 bool TerrainRenderer::tessellationSupported()
 {
     GLint major = 0;
@@ -547,7 +528,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     glClearDepth(1.0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     if (style.drawSky) {
-        drawSky(camera, style);
+        mSky.draw(camera, style);
     }
 
     // The frame's nodes: slots (uploading what is new) and constants. In the selection's (front to back)

@@ -12,6 +12,7 @@
 #include "quadtree/MapFormat.h"
 #include "render/GlObjects.h"
 #include "render/ShaderProgram.h"
+#include "render/Sky.h"
 #include "render/TemplateMesh.h"
 #include "synthesis/Material.h"
 
@@ -25,20 +26,6 @@
 #include <vector>
 
 namespace terrain {
-
-/// How the scene looks (config options draw_sky, sun_*, haze_distance, clear_color, wireframe).
-struct SceneStyle {
-    glm::vec3 sunDirection{0.5f, -0.5f, 0.7f};  ///< towards the sun; normalised by the renderer
-    glm::vec3 sunColour{1.0f, 0.95f, 0.85f};
-    glm::vec3 ambient{0.35f, 0.4f, 0.5f};
-    glm::vec3 hazeColour{0.68f, 0.76f, 0.86f};
-    glm::vec3 zenithColour{0.25f, 0.45f, 0.8f};
-    glm::vec3 clearColour{0.68f, 0.76f, 0.86f};
-    float hazeDistance = 60000.0f;  ///< metres
-    bool drawSky = true;
-    bool wireframe = false;
-    bool geomorph = true;  ///< false: every node at its own detail, morph factor 1 (shows popping)
-};
 
 struct RenderStats {
     std::size_t nodes = 0;
@@ -157,7 +144,6 @@ public:
 private:
     TerrainRenderer(const MapHeader& header) : mHeader(header) {}
     int slotFor(const NodePtr& node, RenderStats& stats);
-    void drawSky(const Camera& camera, const SceneStyle& style);
 
     MapHeader mHeader;
     TemplateMesh mMesh;
@@ -167,14 +153,13 @@ private:
     static constexpr std::size_t kNear = 0;
     static constexpr std::size_t kFar = 1;
     double mCoarsestLayer = 0.0;  ///< metres per repeat of the detail layer that fades out last
-    ShaderProgram mSky;
+    Sky mSky;
     gl::VertexArray mTemplateVao;
     gl::Buffer mTemplateVertices;
     gl::Buffer mTemplateIndices;
     GLsizei mIndexCount = 0;
     GLenum mIndexType = GL_UNSIGNED_INT;
     std::uint64_t mTrianglesPerNode = 0;
-    gl::VertexArray mEmptyVao;       ///< the sky's full-screen triangle needs no attributes
     gl::Texture mDetail;             ///< GL_TEXTURE_2D_ARRAY of the detail layers, or none
     std::vector<double> mLayerSize;  ///< metres per repeat of each detail layer
     /// Repeats of a detail layer beyond which the fragment shader has faded it out (terrain.frag).

@@ -1,0 +1,43 @@
+#version 330 core
+// Geometry clipmap fragment program (render/ClipmapRenderer.h): the ring's colour blended with the coarser
+// ring's by the vertex's transition weight (seed 002 blends textures in the transition region too), lit and
+// hazed as shaders/terrain.frag lights the quadtree's nodes. Outside the input's samples: discarded.
+
+in vec3 vRelative;
+in vec3 vNormal;
+in vec2 vFineUv;
+in vec2 vCoarseUv;
+in float vBlend;
+
+uniform sampler2DArray uColour;  // per ring: n x n RGBA8, toroidal (REPEAT wraps it)
+uniform int uRing;
+uniform int uHasCoarser;
+uniform vec3 uSunDirection;
+uniform vec3 uSunColour;
+uniform vec3 uAmbient;
+uniform vec3 uHazeColour;
+uniform float uHazeDistance;
+uniform vec4 uValidRect;  // camera-relative x0, y0, x1, y1 of the input's samples
+uniform int uWireframe;
+
+out vec4 fragColour;
+
+void main()
+{
+    if (vRelative.x < uValidRect.x || vRelative.y < uValidRect.y || vRelative.x > uValidRect.z ||
+        vRelative.y > uValidRect.w) {
+        discard;
+    }
+    if (uWireframe != 0) {
+        fragColour = vec4(0.05, 0.05, 0.05, 1.0);
+        return;
+    }
+    vec3 albedo = texture(uColour, vec3(vFineUv, float(uRing))).rgb;
+    if (uHasCoarser != 0) {
+        albedo = mix(albedo, texture(uColour, vec3(vCoarseUv, float(uRing + 1))).rgb, vBlend);
+    }
+    vec3 n = normalize(vNormal);
+    vec3 light = uAmbient * (0.6 + 0.4 * n.z) + uSunColour * max(dot(n, uSunDirection), 0.0);
+    float haze = 1.0 - exp(-length(vRelative) / uHazeDistance);
+    fragColour = vec4(mix(albedo * light, uHazeColour, haze), 1.0);
+}

@@ -1,0 +1,80 @@
+#version 330 core
+// Geometry clipmap vertex program (seed 002, GPU Gems 2 chapter 2; render/ClipmapRenderer.h): a footprint's
+// grid vertex becomes a sample of its ring's window, its height fetched from the ring's toroidal elevation
+// layer and blended towards the next coarser ring's surface (bilinear there) by the transition weight
+// alpha = clamp((max |p - viewer| - ((n - 1) / 2 - w - 1)) / w, 0, 1), the same for its normal, so the
+// perimeter of a ring lies exactly on the coarser ring and nothing cracks or pops as the viewer moves.
+
+layout(location = 0) in ivec2 aGrid;  // the vertex, cells from its footprint's corner
+
+uniform mat4 uViewProjection;    // camera-relative world -> clip
+uniform sampler2DArray uHeights; // per ring: n x n metres above the map's offset, texel = sample mod n
+uniform int uSamples;            // n
+uniform int uRing;               // this ring's layer
+uniform int uHasCoarser;         // 0 for the coarsest ring (nothing to blend to)
+uniform ivec2 uPieceOrigin;      // the footprint's corner, cells from the window origin
+uniform ivec2 uWindowTexel;      // the window origin's texel
+uniform ivec2 uCoarseTexel;      // the coarser window's origin texel
+uniform ivec2 uCoarseOffset;     // this window's origin in the coarser window, its cells
+uniform vec2 uWindowOffset;      // the window origin minus the camera, metres (x, y)
+uniform float uSpacing;          // metres between this ring's samples
+uniform float uHeightBase;       // the map's height offset minus the camera's height, metres
+uniform vec2 uViewer;            // the viewer in this ring's samples from the window origin
+uniform float uBlendStart;       // (n - 1) / 2 - w - 1
+uniform float uBlendWidth;       // w
+
+out vec3 vRelative;
+out vec3 vNormal;
+out vec2 vFineUv;
+out vec2 vCoarseUv;
+out float vBlend;
+
+float fine(ivec2 local)
+{
+    ivec2 p = clamp(local, ivec2(0), ivec2(uSamples - 1));
+    return texelFetch(uHeights, ivec3((uWindowTexel + p) % uSamples, uRing), 0).r;
+}
+
+float coarseAt(ivec2 c)
+{
+    return texelFetch(uHeights, ivec3((uCoarseTexel + clamp(c, ivec2(0), ivec2(uSamples - 1))) % uSamples, uRing + 1),
+                      0).r;
+}
+
+// The coarser ring's surface at this ring's sample `local` (bilinear: exact at even samples, the mean of two
+// or four at odd ones), and its gradient (metres per metre) from its cell.
+float coarse(ivec2 local, out vec2 gradient)
+{
+    ivec2 c = uCoarseOffset + (local >> 1);
+    ivec2 odd = local & 1;
+    float h00 = coarseAt(c), h10 = coarseAt(c + ivec2(1, 0)), h01 = coarseAt(c + ivec2(0, 1)),
+          h11 = coarseAt(c + ivec2(1, 1));
+    vec2 f = 0.5 * vec2(odd);
+    gradient = vec2(mix(h10 - h00, h11 - h01, f.y), mix(h01 - h00, h11 - h10, f.x)) / (2.0 * uSpacing);
+    return mix(mix(h00, h10, f.x), mix(h01, h11, f.x), f.y);
+}
+
+void main()
+{
+    ivec2 local = uPieceOrigin + aGrid;
+    float own = fine(local);
+    vec2 ownGradient = vec2(fine(local + ivec2(1, 0)) - fine(local - ivec2(1, 0)),
+                            fine(local + ivec2(0, 1)) - fine(local - ivec2(0, 1))) / (2.0 * uSpacing);
+    float alpha = 0.0;
+    float height = own;
+    vec2 gradient = ownGradient;
+    if (uHasCoarser != 0) {
+        vec2 d = abs(vec2(local) - uViewer);
+        alpha = clamp((max(d.x, d.y) - uBlendStart) / uBlendWidth, 0.0, 1.0);
+        vec2 coarseGradient;
+        float below = coarse(local, coarseGradient);
+        height = mix(own, below, alpha);
+        gradient = mix(ownGradient, coarseGradient, alpha);
+    }
+    vNormal = normalize(vec3(-gradient, 1.0));
+    vRelative = vec3(uWindowOffset + vec2(local) * uSpacing, uHeightBase + height);
+    vFineUv = (vec2(uWindowTexel + local) + 0.5) / float(uSamples);
+    vCoarseUv = (vec2(uCoarseTexel + uCoarseOffset) + 0.5 * vec2(local) + 0.5) / float(uSamples);
+    vBlend = alpha;
+    gl_Position = uViewProjection * vec4(vRelative, 1.0);
+}

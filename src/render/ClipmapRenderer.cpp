@@ -1,0 +1,278 @@
+// Seed 002's GPU geometry clipmap drawing (ClipmapRenderer.h).
+#include "render/ClipmapRenderer.h"
+
+#include "core/Aabb.h"
+#include "core/Check.h"
+#include "core/Frustum.h"
+
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/mat4x4.hpp>
+
+#include <algorithm>
+#include <vector>
+
+namespace terrain {
+
+namespace {
+
+void setUpLayers(const gl::Texture& texture, GLenum internalFormat, GLenum format, GLenum type, int n, int layers,
+                 GLint filter)
+{
+    glBindTexture(GL_TEXTURE_2D_ARRAY, texture.name());
+    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, static_cast<GLint>(internalFormat), n, n, layers, 0, format, type, nullptr);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
+    // Toroidal addressing: a texel's neighbour across the texture's edge is the next sample of the window.
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_REPEAT);
+}
+
+}  // namespace
+
+Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::filesystem::path& shaderDirectory,
+                                                                   const MapHeader& header, const ClipmapLayout& layout)
+{
+    std::unique_ptr<ClipmapRenderer> r(new ClipmapRenderer(header));
+    auto program = ShaderProgram::load(shaderDirectory, "clipmap");
+    TERRAIN_TRY(program);
+    r->mProgram = std::move(program.value());
+    auto sky = Sky::create(shaderDirectory);
+    TERRAIN_TRY(sky);
+    r->mSky = std::move(sky.value());
+    const int n = layout.samples();
+    r->mSamples = n;
+    r->mHeights = gl::Texture::create();
+    r->mColour = gl::Texture::create();
+    setUpLayers(r->mHeights, GL_R32F, GL_RED, GL_FLOAT, n, layout.ringCount(), GL_NEAREST);
+    setUpLayers(r->mColour, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
+    r->mTextureBytes = static_cast<std::size_t>(n) * n * layout.ringCount() * 8;
+    r->mProgram.use();
+    glUniform1i(r->mProgram.uniform("uHeights"), 0);
+    glUniform1i(r->mProgram.uniform("uColour"), 1);
+    glUniform1i(r->mProgram.uniform("uSamples"), n);
+
+    // The perimeter's zero-area triangles: (2k, 2k + 1, 2k + 2) along each side.
+    std::vector<GLint> vertices;
+    auto side = [&](int x0, int y0, int dx, int dy) {
+        for (int k = 0; k + 2 < n; k += 2) {
+            for (int t = 0; t < 3; ++t) {
+                vertices.push_back(x0 + dx * (k + t));
+                vertices.push_back(y0 + dy * (k + t));
+            }
+        }
+    };
+    side(0, 0, 1, 0);
+    side(n - 1, 0, 0, 1);
+    side(n - 1, n - 1, -1, 0);
+    side(0, n - 1, 0, -1);
+    std::vector<std::uint32_t> indices(vertices.size() / 2);
+    for (std::size_t i = 0; i < indices.size(); ++i) {
+        indices[i] = static_cast<std::uint32_t>(i);
+    }
+    Mesh& m = r->mPerimeter;
+    m.vao = gl::VertexArray::create();
+    m.vertices = gl::Buffer::create();
+    m.indices = gl::Buffer::create();
+    glBindVertexArray(m.vao.name());
+    glBindBuffer(GL_ARRAY_BUFFER, m.vertices.name());
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GLint)), vertices.data(),
+                 GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribIPointer(0, 2, GL_INT, 0, nullptr);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.indices.name());
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
+                 indices.data(), GL_STATIC_DRAW);
+    m.count = static_cast<GLsizei>(indices.size());
+    glBindVertexArray(0);
+    return r;
+}
+
+const ClipmapRenderer::Mesh& ClipmapRenderer::footprint(std::int64_t w, std::int64_t h)
+{
+    auto it = mFootprints.find({w, h});
+    if (it != mFootprints.end()) {
+        return it->second;
+    }
+    std::vector<GLint> vertices;
+    for (std::int64_t j = 0; j <= h; ++j) {
+        for (std::int64_t i = 0; i <= w; ++i) {
+            vertices.push_back(static_cast<GLint>(i));
+            vertices.push_back(static_cast<GLint>(j));
+        }
+    }
+    std::vector<std::uint32_t> indices;
+    auto at = [w](std::int64_t i, std::int64_t j) { return static_cast<std::uint32_t>(j * (w + 1) + i); };
+    for (std::int64_t j = 0; j < h; ++j) {
+        for (std::int64_t i = 0; i < w; ++i) {
+            // South-west to north-east diagonal, as the quadtree's template (quadtree/TemplateTriangulation.h).
+            indices.insert(indices.end(), {at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+            indices.insert(indices.end(), {at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+    }
+    Mesh m;
+    m.vao = gl::VertexArray::create();
+    m.vertices = gl::Buffer::create();
+    m.indices = gl::Buffer::create();
+    glBindVertexArray(m.vao.name());
+    glBindBuffer(GL_ARRAY_BUFFER, m.vertices.name());
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GLint)), vertices.data(),
+                 GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribIPointer(0, 2, GL_INT, 0, nullptr);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.indices.name());
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
+                 indices.data(), GL_STATIC_DRAW);
+    glBindVertexArray(0);
+    m.count = static_cast<GLsizei>(indices.size());
+    m.triangles = static_cast<std::uint64_t>(w * h * 2);
+    return mFootprints.emplace(std::pair{w, h}, std::move(m)).first->second;
+}
+
+void ClipmapRenderer::upload(ClipmapTerrain& terrain, int ring, ClipmapStats& stats)
+{
+    const int n = mSamples;
+    const ClipmapRing& data = terrain.ring(ring);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, n);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    for (const LatticeRect& rect : terrain.takeChanged(ring)) {
+        // The rectangle's texels, split where they wrap around the texture's edges.
+        const int tx = toroidalTexel(rect.x0, n), ty = toroidalTexel(rect.y0, n);
+        const int w = static_cast<int>(rect.x1 - rect.x0), h = static_cast<int>(rect.y1 - rect.y0);
+        const int xs[2][2] = {{tx, std::min(w, n - tx)}, {0, w - std::min(w, n - tx)}};
+        const int ys[2][2] = {{ty, std::min(h, n - ty)}, {0, h - std::min(h, n - ty)}};
+        for (const auto& [y, rows] : ys) {
+            for (const auto& [x, columns] : xs) {
+                if (rows <= 0 || columns <= 0) {
+                    continue;
+                }
+                const std::size_t first = static_cast<std::size_t>(y) * n + x;
+                glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
+                glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, x, y, ring, columns, rows, 1, GL_RED, GL_FLOAT,
+                                data.heights.data() + first);
+                glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
+                glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, x, y, ring, columns, rows, 1, GL_RGBA, GL_UNSIGNED_BYTE,
+                                data.colour.data() + first * 4);
+                stats.uploadedSamples += static_cast<std::size_t>(rows) * static_cast<std::size_t>(columns);
+            }
+        }
+    }
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+}
+
+ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& terrain, int firstRing,
+                                   const Camera& camera, const SceneStyle& style)
+{
+    TERRAIN_EXPECTS(layout.samples() == mSamples && terrain.ringCount() == layout.ringCount(),
+                    "the layout and terrain must be the renderer's");
+    ClipmapStats stats;
+    for (int ring = 0; ring < layout.ringCount(); ++ring) {
+        upload(terrain, ring, stats);
+    }
+    glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
+    glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
+    glClearDepth(1.0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    if (style.drawSky) {
+        mSky.draw(camera, style);
+    }
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDisable(GL_CULL_FACE);
+    glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
+    mProgram.use();
+    const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
+    glUniformMatrix4fv(mProgram.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
+    glUniform1f(mProgram.uniform("uHeightBase"), static_cast<float>(mHeader.heightOffset - camera.position.z));
+    const glm::vec3 sun = glm::normalize(style.sunDirection);
+    glUniform3fv(mProgram.uniform("uSunDirection"), 1, glm::value_ptr(sun));
+    glUniform3fv(mProgram.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
+    glUniform3fv(mProgram.uniform("uAmbient"), 1, glm::value_ptr(style.ambient));
+    glUniform3fv(mProgram.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
+    glUniform1f(mProgram.uniform("uHazeDistance"), style.hazeDistance);
+    glUniform1i(mProgram.uniform("uWireframe"), style.wireframe ? 1 : 0);
+    const double s0 = mHeader.sampleSpacing;
+    const double vx0 = mHeader.originX + mHeader.validX0 * s0, vy0 = mHeader.originY + mHeader.validY0 * s0;
+    const double vx1 = mHeader.originX + (mHeader.validX0 + mHeader.validWidth - 1.0) * s0;
+    const double vy1 = mHeader.originY + (mHeader.validY0 + mHeader.validHeight - 1.0) * s0;
+    const double slack = 1e-3 * s0;
+    glUniform4f(mProgram.uniform("uValidRect"), static_cast<float>(vx0 - camera.position.x - slack),
+                static_cast<float>(vy0 - camera.position.y - slack),
+                static_cast<float>(vx1 - camera.position.x + slack),
+                static_cast<float>(vy1 - camera.position.y + slack));
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
+    const Frustum frustum = Frustum::fromCamera(camera);
+    const int n = mSamples;
+    const double w = layout.transitionWidth();
+    for (int ring = firstRing; ring < layout.ringCount(); ++ring) {
+        const ClipmapWindow& win = layout.window(ring);
+        const bool coarser = ring + 1 < layout.ringCount();
+        const double s = layout.spacing(ring);
+        const double x0 = layout.worldX(ring, static_cast<double>(win.x0));
+        const double y0 = layout.worldY(ring, static_cast<double>(win.y0));
+        glUniform1i(mProgram.uniform("uRing"), ring);
+        glUniform1i(mProgram.uniform("uHasCoarser"), coarser ? 1 : 0);
+        glUniform2i(mProgram.uniform("uWindowTexel"), toroidalTexel(win.x0, n), toroidalTexel(win.y0, n));
+        if (coarser) {
+            const ClipmapWindow& up = layout.window(ring + 1);
+            glUniform2i(mProgram.uniform("uCoarseTexel"), toroidalTexel(up.x0, n), toroidalTexel(up.y0, n));
+            glUniform2i(mProgram.uniform("uCoarseOffset"), static_cast<GLint>(win.x0 / 2 - up.x0),
+                        static_cast<GLint>(win.y0 / 2 - up.y0));
+        }
+        glUniform2f(mProgram.uniform("uWindowOffset"), static_cast<float>(x0 - camera.position.x),
+                    static_cast<float>(y0 - camera.position.y));
+        glUniform1f(mProgram.uniform("uSpacing"), static_cast<float>(s));
+        glUniform2f(mProgram.uniform("uViewer"), static_cast<float>((camera.position.x - x0) / s),
+                    static_cast<float>((camera.position.y - y0) / s));
+        glUniform1f(mProgram.uniform("uBlendStart"), static_cast<float>((n - 1) / 2.0 - w - 1.0));
+        glUniform1f(mProgram.uniform("uBlendWidth"), static_cast<float>(w));
+        // The ring's heights, with the coarser ring's it may blend to.
+        const ClipmapRing& data = terrain.ring(ring);
+        double zLo = data.zMin, zHi = data.zMax;
+        if (coarser) {
+            zLo = std::min<double>(zLo, terrain.ring(ring + 1).zMin);
+            zHi = std::max<double>(zHi, terrain.ring(ring + 1).zMax);
+        }
+        // Pieces of the ring the finer ring drawn does not cover (the finest drawn ring: all of its window).
+        std::vector<ClipmapPiece> pieces = layout.pieces(ring);
+        if (ring == firstRing && ring > 0) {
+            // The rings below firstRing are not drawn: fill the hole with this ring's own cells.
+            const LatticeRect hole = layout.hole(ring);
+            pieces.push_back({ClipmapPieceKind::kBlock, hole});
+        }
+        bool drewRing = false;
+        for (const ClipmapPiece& piece : pieces) {
+            Aabb box;
+            box.lo = {x0 + static_cast<double>(piece.cells.x0) * s, y0 + static_cast<double>(piece.cells.y0) * s,
+                      mHeader.heightOffset + zLo};
+            box.hi = {x0 + static_cast<double>(piece.cells.x1) * s, y0 + static_cast<double>(piece.cells.y1) * s,
+                      mHeader.heightOffset + zHi};
+            const bool outside = box.hi.x < vx0 || box.lo.x > vx1 || box.hi.y < vy0 || box.lo.y > vy1;
+            if (outside || !frustum.intersects(box)) {
+                ++stats.culledPieces;
+                continue;
+            }
+            const Mesh& mesh = footprint(piece.cells.x1 - piece.cells.x0, piece.cells.y1 - piece.cells.y0);
+            glUniform2i(mProgram.uniform("uPieceOrigin"), static_cast<GLint>(piece.cells.x0),
+                        static_cast<GLint>(piece.cells.y0));
+            glBindVertexArray(mesh.vao.name());
+            glDrawElements(GL_TRIANGLES, mesh.count, GL_UNSIGNED_INT, nullptr);
+            stats.triangles += mesh.triangles;
+            ++stats.pieces;
+            drewRing = true;
+        }
+        if (drewRing && coarser) {
+            glUniform2i(mProgram.uniform("uPieceOrigin"), 0, 0);
+            glBindVertexArray(mPerimeter.vao.name());
+            glDrawElements(GL_TRIANGLES, mPerimeter.count, GL_UNSIGNED_INT, nullptr);
+        }
+        stats.rings += drewRing ? 1 : 0;
+    }
+    glBindVertexArray(0);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    return stats;
+}
+
+}  // namespace terrain

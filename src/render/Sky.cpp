@@ -1,0 +1,36 @@
+#include "render/Sky.h"
+
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/mat4x4.hpp>
+
+namespace terrain {
+
+Expected<Sky> Sky::create(const std::filesystem::path& shaderDirectory)
+{
+    auto program = ShaderProgram::load(shaderDirectory, "sky");
+    TERRAIN_TRY(program);
+    Sky sky;
+    sky.mProgram = std::move(program.value());
+    sky.mEmptyVao = gl::VertexArray::create();
+    return sky;
+}
+
+void Sky::draw(const Camera& camera, const SceneStyle& style) const
+{
+    const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
+    const glm::mat4 inverse = glm::inverse(viewProjection);
+    mProgram.use();
+    glUniformMatrix4fv(mProgram.uniform("uInverseViewProjection"), 1, GL_FALSE, glm::value_ptr(inverse));
+    glUniform3fv(mProgram.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
+    glUniform3fv(mProgram.uniform("uZenithColour"), 1, glm::value_ptr(style.zenithColour));
+    const glm::vec3 sun = glm::normalize(style.sunDirection);
+    glUniform3fv(mProgram.uniform("uSunDirection"), 1, glm::value_ptr(sun));
+    glUniform3fv(mProgram.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
+    glDepthMask(GL_FALSE);
+    glDisable(GL_DEPTH_TEST);
+    glBindVertexArray(mEmptyVao.name());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthMask(GL_TRUE);
+}
+
+}  // namespace terrain

@@ -1,0 +1,44 @@
+// The sky behind the terrain (shaders/sky.vert, sky.frag): one full-screen triangle shaded from the haze
+// colour at the horizon to the zenith colour, with the sun. Both renderers draw it first (the quadtree's
+// TerrainRenderer and the clipmap's ClipmapRenderer), with depth writes off.
+#pragma once
+
+#include "core/Camera.h"
+#include "core/Expected.h"
+#include "render/GlObjects.h"
+#include "render/ShaderProgram.h"
+
+#include <glm/vec3.hpp>
+
+#include <filesystem>
+
+namespace terrain {
+
+/// How the scene looks (config options draw_sky, sun_*, haze_distance, clear_color, wireframe).
+struct SceneStyle {
+    glm::vec3 sunDirection{0.5f, -0.5f, 0.7f};  ///< towards the sun; normalised by the renderer
+    glm::vec3 sunColour{1.0f, 0.95f, 0.85f};
+    glm::vec3 ambient{0.35f, 0.4f, 0.5f};
+    glm::vec3 hazeColour{0.68f, 0.76f, 0.86f};
+    glm::vec3 zenithColour{0.25f, 0.45f, 0.8f};
+    glm::vec3 clearColour{0.68f, 0.76f, 0.86f};
+    float hazeDistance = 60000.0f;  ///< metres
+    bool drawSky = true;
+    bool wireframe = false;
+    bool geomorph = true;  ///< false: every node at its own detail, morph factor 1 (shows popping)
+};
+
+class Sky {
+public:
+    Sky() = default;
+    /// Loads the sky program from `shaderDirectory`. Needs a current GL context.
+    static Expected<Sky> create(const std::filesystem::path& shaderDirectory);
+    /// Draws the sky for `camera` (leaves depth testing off and depth writes on).
+    void draw(const Camera& camera, const SceneStyle& style) const;
+
+private:
+    ShaderProgram mProgram;
+    gl::VertexArray mEmptyVao;  ///< the full-screen triangle needs no attributes
+};
+
+}  // namespace terrain
