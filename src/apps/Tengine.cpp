@@ -581,13 +581,22 @@ FrameStats updateClipmap(Scene& scene, const Camera& camera, bool video)
     const ResidentNodeLookup resident = [&streamer](const NodeId& id) { return streamer.node(id); };
     const auto entered = layout.moveTo(camera.position.x, camera.position.y);
     // The ground below from the rings as they are (the finest one covers the viewer).
-    const double ground =
-        scene.header().heightOffset + clipmap.heightAt(layout, 0, camera.position.x, camera.position.y);
-    scene.clipmapFirstRing = layout.finestActiveRing(std::max(0.0, camera.position.z - ground));
+    auto firstRing = [&] {
+        const double ground =
+            scene.header().heightOffset + clipmap.heightAt(layout, 0, camera.position.x, camera.position.y);
+        return layout.finestActiveRing(std::max(0.0, camera.position.z - ground));
+    };
+    scene.clipmapFirstRing = firstRing();
     FrameStats stats = streamer.updateFor(clipmap.wanted(layout, scene.clipmapFirstRing));
     clipmap.update(layout, entered, resident);
     const std::vector<std::vector<LatticeRect>> none(static_cast<std::size_t>(layout.ringCount()));
-    for (int round = 0; video && round < 64 && stats.requested > stats.deferred; ++round) {
+    for (int round = 0; video && round < 64; ++round) {
+        // The rings just filled may put the ground nearer than it seemed (the first frame's were empty).
+        const int first = firstRing();
+        if (stats.requested <= stats.deferred && first == scene.clipmapFirstRing) {
+            break;
+        }
+        scene.clipmapFirstRing = first;
         const std::size_t synthesized = stats.synthesized + streamer.drain().synthesized;
         stats = streamer.updateFor(clipmap.wanted(layout, scene.clipmapFirstRing));
         stats.synthesized += synthesized;

@@ -245,6 +245,70 @@ TEST_F(TengineGLTest, TessellationHasNoHolesOneDrawAndFewerTriangles)
 
 /// Hardware without tessellation shaders (here: Mesa told to offer OpenGL 3.3 only) draws chunks instead of
 /// failing, and says so in one line.
+/// lod_mode = clipmap (seed 002, issue 17): no holes along the flight, identical frames run to run, the cache
+/// within its size and the ring data a fixed size (memory bounded by the clipmap, not the path).
+TEST_F(TengineGLTest, ClipmapModeHasNoHolesAndIdenticalFrames)
+{
+    expectNoHolesAlongTheFlight({"lod_mode=clipmap"});
+    test::ScratchDir a, b;
+    const std::vector<std::string> settings = {"frames_per_second=2", "lod_mode=clipmap", "worker_threads=2"};
+    auto run = video(a.path(), settings);
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    ASSERT_EQ(video(b.path(), settings).exitCode, 0);
+    for (int f = 0; f <= 16; ++f) {
+        Image first = frame(a.path(), f), second = frame(b.path(), f);
+        ASSERT_EQ(first.pixels.size(), second.pixels.size());
+        EXPECT_TRUE(first.pixels == second.pixels) << "frame " << f << " differs";
+    }
+    // 255 x 255 samples, 8 bytes each on the CPU and on the GPU, for levels 0 to the finest.
+    EXPECT_NE(run.output.find("clipmap: "), std::string::npos) << run.output;
+    const auto rows = readCsv(a.path() / "frames.csv");
+    ASSERT_EQ(rows.size(), 17u);
+    for (const auto& row : rows) {
+        EXPECT_LE(row.at("cache_nodes"), 1024.0);
+        EXPECT_GT(row.at("triangles"), 0.0);
+    }
+}
+
+/// A close low look with small clipmaps (n = 15: rings of 14 cells, so the transitions of seven rings are in
+/// view, from 5.6 m spacing out) shows no seam where rings meet: no pixel of the terrain shows the clear colour.
+TEST_F(TengineGLTest, ClipmapRingsMeetWithoutSeamsUpClose)
+{
+    test::ScratchDir frames;
+    const std::filesystem::path close = frames.path() / "close.path";
+    {
+        std::ofstream out(close);
+        out << "0 51000 51000 3760 215 -55\n"
+               "1 51013 51020 3752 200 -40\n";
+    }
+    const std::vector<std::string> settings = {"camera_path=" + close.string(),
+                                               "frames_per_second=4",
+                                               "lod_mode=clipmap",
+                                               "clipmap_samples=15",
+                                               "draw_sky=false",
+                                               "draw_user_interface=false",
+                                               "clear_color=1,0,1",
+                                               "haze_distance=0"};
+    auto run = video(frames.path(), settings, detailMap());
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    auto mapFile = MapFile::open(detailMap(), ReaderKind::Stream);
+    ASSERT_TRUE(mapFile.ok());
+    const MapHeader& header = (*mapFile)->header();
+    const double zMin = header.heightOf((*mapFile)->directory().front().minCode);
+    auto path = CameraPath::load(close);
+    ASSERT_TRUE(path.ok());
+    for (int f = 0; f <= 4; ++f) {
+        const Image image = frame(frames.path(), f);
+        const Holes h = holesIn(image, frameCamera(*path, f / 4.0, image), header, zMin);
+        EXPECT_GT(h.checked, image.width * image.height / 2) << "frame " << f << " should look at the ground";
+        EXPECT_EQ(h.holes, 0) << "frame " << f << ": " << h.holes << " pixels show the clear colour, first at ("
+                              << h.firstX << ", " << h.firstY << ")";
+    }
+    const auto rows = readCsv(frames.path() / "frames.csv");
+    ASSERT_FALSE(rows.empty());
+    EXPECT_GT(rows.front().at("deepest_level"), 4.0) << "rings below the map's data (dynamic levels) drawn";
+}
+
 TEST_F(TengineGLTest, WithoutTessellationShadersTheTessellationModeFallsBackToChunks)
 {
     test::ScratchDir frames;
