@@ -331,9 +331,8 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
         scene->visibility = std::make_unique<NodeVisibility>(o.visibilityHiddenFrames);
     }
     if (o.clipmap) {
-        if (o.visibilityLod || o.videoMeasureErrorEvery > 0) {
-            log("warning: lod_mode = clipmap draws no quadtree selection: visibility_lod and video_measure_error_every "
-                "have no effect");
+        if (o.visibilityLod) {
+            log("warning: lod_mode = clipmap draws no quadtree selection: visibility_lod has no effect");
         }
         scene->tessellation = false;
         scene->visibility.reset();
@@ -398,7 +397,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
         scene->streamer->onEvict(
             [renderer = scene->renderer.get()](const NodeData& node) { renderer->release(node.id); });
     }
-    if (o.videoMeasureErrorEvery > 0 && !o.clipmap) {
+    if (o.videoMeasureErrorEvery > 0) {
         // The reference nodes are the viewer's without the tessellation errors they do not need.
         scene->referenceSource = std::make_unique<TerrainNodeSource>(
             *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing});
@@ -415,6 +414,16 @@ Expected<FrameError> measureShownError(Scene& scene, const Camera& camera, const
 {
     const DepthSurface surface(TerrainRenderer::readDepth(camera.viewportWidth, camera.viewportHeight),
                                camera.viewportWidth, camera.viewportHeight, camera);
+    if (scene.clipmap) {
+        // lod_mode = clipmap: the rings' surface as drawn, against the same reference (issue 17).
+        MeasuredVisibility visibility;
+        visibility.shows = [&surface](const glm::dvec3& point) { return surface.shows(point); };
+        return scene.meter->measureSurface(
+            [&scene](double x, double y) {
+                return scene.clipmap->drawnHeight(*scene.clipmapLayout, scene.clipmapFirstRing, x, y);
+            },
+            camera, visibility);
+    }
     const TerrainStreamer& streamer = *scene.streamer;
     LodSelection atOwnDetail;
     const LodSelection* drawn = &streamer.selection();

@@ -215,6 +215,58 @@ double ClipmapTerrain::heightAt(const ClipmapLayout& layout, int ring, double x,
            fy * ((1 - fx) * at(i, j + 1) + fx * at(i + 1, j + 1));
 }
 
+std::optional<double> ClipmapTerrain::ringSurface(const ClipmapLayout& layout, int ring, double x, double y) const
+{
+    const int n = mSamples;
+    const ClipmapWindow& w = layout.window(ring);
+    const double s = layout.spacing(ring);
+    const double gx = (x - layout.worldX(ring, 0.0)) / s - static_cast<double>(w.x0);
+    const double gy = (y - layout.worldY(ring, 0.0)) / s - static_cast<double>(w.y0);
+    if (!(gx >= 0.0 && gy >= 0.0 && gx <= n - 1.0 && gy <= n - 1.0)) {
+        return std::nullopt;
+    }
+    const ClipmapRing& own = mRings[static_cast<std::size_t>(ring)];
+    const bool coarser = ring + 1 < ringCount();
+    auto sample = [&](const ClipmapRing& data, std::int64_t ax, std::int64_t ay) {
+        return double{data.heights[static_cast<std::size_t>(toroidalTexel(ay, n)) * n + toroidalTexel(ax, n)]};
+    };
+    // A vertex as the vertex program makes it.
+    auto vertex = [&](std::int64_t li, std::int64_t lj) {
+        const std::int64_t ax = w.x0 + li, ay = w.y0 + lj;
+        const double z = sample(own, ax, ay);
+        if (!coarser) {
+            return z;
+        }
+        const double alpha = layout.blend(ring, static_cast<double>(ax), static_cast<double>(ay));
+        const ClipmapRing& up = mRings[static_cast<std::size_t>(ring + 1)];
+        const std::int64_t cx = ax >> 1, cy = ay >> 1;
+        const double fx = (ax & 1) ? 0.5 : 0.0, fy = (ay & 1) ? 0.5 : 0.0;
+        const double below = (1 - fy) * ((1 - fx) * sample(up, cx, cy) + fx * sample(up, cx + 1, cy)) +
+                             fy * ((1 - fx) * sample(up, cx, cy + 1) + fx * sample(up, cx + 1, cy + 1));
+        return z + alpha * (below - z);
+    };
+    const auto i = static_cast<std::int64_t>(std::min(std::floor(gx), n - 2.0));
+    const auto j = static_cast<std::int64_t>(std::min(std::floor(gy), n - 2.0));
+    const double fx = gx - static_cast<double>(i), fy = gy - static_cast<double>(j);
+    const double v00 = vertex(i, j), v11 = vertex(i + 1, j + 1);
+    if (fx >= fy) {
+        const double v10 = vertex(i + 1, j);
+        return v00 + fx * (v10 - v00) + fy * (v11 - v10);
+    }
+    const double v01 = vertex(i, j + 1);
+    return v00 + fy * (v01 - v00) + fx * (v11 - v01);
+}
+
+std::optional<double> ClipmapTerrain::drawnHeight(const ClipmapLayout& layout, int firstRing, double x, double y) const
+{
+    for (int ring = firstRing; ring < ringCount(); ++ring) {
+        if (auto z = ringSurface(layout, ring, x, y)) {
+            return z;
+        }
+    }
+    return std::nullopt;
+}
+
 std::vector<NodeId> ClipmapTerrain::wanted(const ClipmapLayout& layout, int firstRing) const
 {
     std::vector<NodeId> ids;

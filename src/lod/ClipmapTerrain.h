@@ -10,6 +10,7 @@
 #include "lod/NodeData.h"
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <unordered_map>
 #include <vector>
@@ -43,6 +44,15 @@ public:
     /// The surface of ring `ring` at world (x, y) metres, bilinear between its samples (metres above the map's
     /// offset); the position is clamped to the ring's window.
     double heightAt(const ClipmapLayout& layout, int ring, double x, double y) const;
+
+    /// The surface ring `ring` draws at world (x, y) metres, as shaders/clipmap.vert makes it: each vertex's
+    /// height blended towards the coarser ring's bilinear surface by its transition weight, linear on the
+    /// triangles of its cells (south-west to north-east diagonals). Metres above the map's offset; empty
+    /// outside the ring's window.
+    std::optional<double> ringSurface(const ClipmapLayout& layout, int ring, double x, double y) const;
+    /// The drawn surface at (x, y) with rings `firstRing` and coarser drawn: the finest drawn ring whose window
+    /// holds the point (ClipmapRenderer draws each ring where the finer one does not). Empty outside them all.
+    std::optional<double> drawnHeight(const ClipmapLayout& layout, int firstRing, double x, double y) const;
 
     int ringCount() const { return static_cast<int>(mRings.size()); }
     const ClipmapRing& ring(int ring) const { return mRings[static_cast<std::size_t>(ring)]; }

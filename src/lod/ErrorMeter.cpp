@@ -329,6 +329,62 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
     return out;
 }
 
+Expected<FrameError> ErrorMeter::measureSurface(const DrawnSurface& drawn, const Camera& camera,
+                                                const MeasuredVisibility& visibility)
+{
+    camera.expectValid();
+    const View view(mHeader, mExtent, camera);
+    const int n = view.n;
+    if (!mRoot) {
+        auto root = mSource.loadRoot();
+        TERRAIN_TRY(root);
+        mRoot = std::move(root.value());
+    }
+    ++mStamp;
+    std::vector<NodePtr> leaves;
+    TERRAIN_TRY(referenceLeaves(view, mRoot, mOptions.maxDepthBelow, leaves));
+    FrameError out;
+    out.referenceNodes = leaves.size();
+    double sum = 0.0;
+    for (const NodePtr& leaf : leaves) {
+        out.deepestReference = std::max(out.deepestReference, leaf->id.level);
+        for (int j = 0; j < n; ++j) {
+            const double y = view.worldY(leaf->id, j);
+            for (int i = 0; i < n; ++i) {
+                const double x = view.worldX(leaf->id, i);
+                const std::optional<double> z = drawn(x, y);
+                if (!z) {
+                    continue;
+                }
+                const double ref = view.sample(*leaf, i, j);
+                const double px = view.projector.pixels(x, y, view.offset + *z, ref - *z);
+                if (px < 0.0 || (visibility.shows && !visibility.shows(glm::dvec3(x, y, view.offset + *z)))) {
+                    continue;
+                }
+                out.pixels.push_back(static_cast<float>(px));
+                sum += px;
+                if (px > out.maxPixels || out.points == 0) {
+                    out.maxPixels = px;
+                    out.maxMetres = std::abs(ref - *z);
+                    out.worstNode = leaf->id;
+                    out.worstX = x;
+                    out.worstY = y;
+                }
+                ++out.points;
+            }
+        }
+    }
+    trimCache();
+    if (out.points > 0) {
+        out.meanPixels = sum / static_cast<double>(out.points);
+        std::vector<float> sorted = out.pixels;
+        const auto at = static_cast<std::size_t>(0.99 * static_cast<double>(sorted.size() - 1));
+        std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(at), sorted.end());
+        out.p99Pixels = sorted[at];
+    }
+    return out;
+}
+
 Expected<OracleSelection> ErrorMeter::oracle(const Camera& camera, double tauPixels, int blocks)
 {
     TERRAIN_EXPECTS(tauPixels > 0.0, "tau must be > 0 pixels");

@@ -23,6 +23,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -119,6 +120,17 @@ public:
     /// the measurement would buy, per node (B = 1) or per block. Errors: a node that cannot be loaded (file
     /// and node named).
     Expected<OracleSelection> oracle(const Camera& camera, double tauPixels, int blocks = 0);
+
+    /// The height (metres above the map's offset) another method draws at world (x, y), or nothing where it
+    /// draws nothing: lod_mode = clipmap's surface (ClipmapTerrain::drawnHeight).
+    using DrawnSurface = std::function<std::optional<double>(double x, double y)>;
+    /// Measures a frame drawn by another method than the quadtree selection (issue 17: geometry clipmaps)
+    /// against the same reference: the reference refined from the root as for measure() (static leaves, then
+    /// dynamic nodes until they converge), at every vertex of its leaves in view. Exact where the drawn
+    /// triangles nest with the leaves' (clipmap rings use the quadtree's grids), the points in between not
+    /// measured otherwise. FrameError's node figures stay 0. Errors: a reference node that cannot be loaded.
+    Expected<FrameError> measureSurface(const DrawnSurface& drawn, const Camera& camera,
+                                        const MeasuredVisibility& visibility = {});
 
     /// Reference groups made so far (statistics).
     std::uint64_t groupsMade() const { return mGroupsMade; }

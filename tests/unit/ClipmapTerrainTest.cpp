@@ -120,6 +120,56 @@ TEST_F(ClipmapTerrainTest, SettledRingsHoldTheirNodesSamplesAlongAFlight)
     }
 }
 
+TEST_F(ClipmapTerrainTest, DrawnSurfaceIsContinuousWhereRingsMeet)
+{
+    // On each ring's perimeter its surface (blended all the way to the coarser ring) is the coarser ring's own
+    // surface there: the shader's geometry (ClipmapTerrain::ringSurface) meets without a step.
+    TerrainNodeSource source(*mMap, {});
+    StreamerOptions options;
+    options.cacheSize = 400;
+    options.workers = 0;
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 4, 0);
+    ClipmapTerrain terrain(layout, 17, 17);
+    settle(layout, terrain, **streamer, 261.3, 247.9);
+    int checked = 0;
+    double largestStep = 0.0;
+    for (int r = 0; r + 1 < layout.ringCount(); ++r) {
+        const ClipmapWindow& w = layout.window(r);
+        for (int k = 0; k < 400; ++k) {
+            // A point on the perimeter, anywhere along it (between vertices too).
+            const double t = (31 - 1) * test::unitNoise(21, k, r);
+            const int side = k % 4;
+            const double gx = static_cast<double>(w.x0) + (side == 0 ? t : side == 1 ? 30.0 : side == 2 ? t : 0.0);
+            const double gy = static_cast<double>(w.y0) + (side == 0 ? 0.0 : side == 1 ? t : side == 2 ? 30.0 : t);
+            const double x = layout.worldX(r, gx), y = layout.worldY(r, gy);
+            const auto fine = terrain.ringSurface(layout, r, x, y);
+            const auto coarse = terrain.ringSurface(layout, r + 1, x, y);
+            ASSERT_TRUE(fine && coarse) << r;
+            largestStep = std::max(largestStep, std::abs(*fine - *coarse));
+            ++checked;
+            // Just inside, the drawn surface is this ring's.
+            const double ix = layout.worldX(r, static_cast<double>(w.x0) + 15.0),
+                         iy = layout.worldY(r, static_cast<double>(w.y0) + 15.0);
+            EXPECT_EQ(terrain.drawnHeight(layout, r, ix, iy), terrain.ringSurface(layout, r, ix, iy));
+        }
+    }
+    EXPECT_EQ(checked, 4 * 400);
+    EXPECT_LT(largestStep, 1e-3) << "metres between rings on a perimeter";
+    // And the blend is not idle: inside the transition region a ring differs from its own samples somewhere.
+    const ClipmapWindow& w0 = layout.window(0);
+    double blended = 0.0;
+    for (int k = 0; k < 30; ++k) {
+        const double x = layout.worldX(0, static_cast<double>(w0.x0) + k),
+                     y = layout.worldY(0, static_cast<double>(w0.y0) + 1.0);
+        const std::size_t t =
+            static_cast<std::size_t>(toroidalTexel(w0.y0 + 1, 31)) * 31 + toroidalTexel(w0.x0 + k, 31);
+        blended = std::max(blended, std::abs(*terrain.ringSurface(layout, 0, x, y) - terrain.ring(0).heights[t]));
+    }
+    EXPECT_GT(blended, 0.01);
+}
+
 TEST_F(ClipmapTerrainTest, MissingNodesAreUpsampledFromTheCoarserRingUntilTheyArrive)
 {
     TerrainNodeSource source(*mMap, {});

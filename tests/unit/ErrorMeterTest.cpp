@@ -536,6 +536,42 @@ TEST_F(ErrorMeterStaticTest, MaximumIsTheBruteForceMaximumOverTheInputGrid)
     }
 }
 
+/// measureSurface (issue 17: another method's surface, e.g. clipmaps): every in-view vertex of the reference (here
+/// the input grid) against the drawn height there, the same maximum as brute force over the input.
+TEST_F(ErrorMeterStaticTest, ASurfaceDrawnByAnotherMethodIsMeasuredAtEveryReferenceVertex)
+{
+    const double size = header().nodeSizeAt(0);
+    const Camera camera = groundCamera(0.4 * size, 0.3 * size, 120.0, 30.0, -25.0);
+    const double offset = header().heightOffset;
+    auto plane = [](double x, double y) { return 1000.0 + 0.05 * x - 0.03 * y; };
+    ErrorMeter meter(header(), *mSource, {0.25, 1024, 16});
+    auto measured =
+        meter.measureSurface([&](double x, double y) { return std::optional<double>(plane(x, y) - offset); }, camera);
+    ASSERT_TRUE(measured.ok()) << measured.error().message;
+    const BruteProjector projector(camera);
+    BruteError brute;
+    for (int j = 0; j < kSamples; ++j) {
+        for (int i = 0; i < kSamples; ++i) {
+            const double x = worldX(i), y = worldY(j), z = plane(x, y);
+            const double px = projector.pixels(x, y, z, input(i, j) - z);
+            if (px >= 0.0) {
+                brute.add(px, x, y);
+                ++brute.points;
+            }
+        }
+    }
+    ASSERT_GT(brute.points, 1000u);
+    expectSameMaximum(measured->maxPixels, brute.maxPixels, "plane");
+    EXPECT_GE(measured->points, brute.points);  // leaf edges count once per leaf
+    EXPECT_LE(measured->points, 4 * brute.points);
+    EXPECT_EQ(measured->deepestReference, static_cast<int>(header().levels) - 1);
+    EXPECT_EQ(measured->nodes, 0u);
+    // Where nothing is drawn, nothing is measured.
+    auto nothing = meter.measureSurface([](double, double) { return std::optional<double>(); }, camera);
+    ASSERT_TRUE(nothing.ok());
+    EXPECT_EQ(nothing->points, 0u);
+}
+
 TEST_F(ErrorMeterStaticTest, MorphFactorsAreMeasured)
 {
     // With these settings levels 2 and 3 are drawn, nearly all of them morphing.
