@@ -1,7 +1,9 @@
 #version 330 core
 // Geometry clipmap fragment program (render/ClipmapRenderer.h): the ring's colour blended with the coarser
 // ring's by the vertex's transition weight (seed 002 blends textures in the transition region too), lit and
-// hazed as shaders/terrain.frag lights the quadtree's nodes. Outside the input's samples: discarded.
+// hazed as shaders/terrain.frag lights the quadtree's nodes, with the materials' detail textures (DETAIL,
+// shaders/detail.glsl) weighted by the ring's material weights, blended like the colours. Outside the
+// input's samples: discarded.
 
 in vec3 vRelative;
 in vec3 vNormal;
@@ -19,6 +21,15 @@ uniform vec3 uHazeColour;
 uniform float uHazeDistance;
 uniform vec4 uValidRect;  // camera-relative x0, y0, x1, y1 of the input's samples
 uniform int uWireframe;
+#ifdef DETAIL
+in vec2 vLocal;
+uniform sampler2DArray uMaterials;  // per ring: n x n RGBA8 material weights, toroidal
+#ifndef DETAIL_TINT_ONLY
+uniform vec4 uLayerOrigin[LAYER_COUNT];  // the window origin in repeats (xy) and turned repeats (zw), fractional
+#define LAYER_ORIGIN(k) uLayerOrigin[k]
+#endif
+#include "detail.glsl"
+#endif
 
 out vec4 fragColour;
 
@@ -36,6 +47,13 @@ void main()
     if (uHasCoarser != 0) {
         albedo = mix(albedo, texture(uColour, vec3(vCoarseUv, float(uRing + 1))).rgb, vBlend);
     }
+#ifdef DETAIL
+    vec4 materials = texture(uMaterials, vec3(vFineUv, float(uRing)));
+    if (uHasCoarser != 0) {
+        materials = mix(materials, texture(uMaterials, vec3(vCoarseUv, float(uRing + 1))), vBlend);
+    }
+    albedo *= detailFactor(vLocal, materials, length(vRelative));
+#endif
     vec3 n = normalize(vNormal);
     vec3 light = uAmbient * (0.6 + 0.4 * n.z) + uSunColour * max(dot(n, uSunDirection), 0.0);
     float haze = 1.0 - exp(-length(vRelative) / uHazeDistance);

@@ -28,6 +28,7 @@ out vec3 vNormal;
 out vec2 vFineUv;
 out vec2 vCoarseUv;
 out float vBlend;
+out vec2 vLocal;  // metres from the window origin (the detail layers count from there)
 
 float fine(ivec2 local)
 {
@@ -76,5 +77,6 @@ void main()
     vFineUv = (vec2(uWindowTexel + local) + 0.5) / float(uSamples);
     vCoarseUv = (vec2(uCoarseTexel + uCoarseOffset) + 0.5 * vec2(local) + 0.5) / float(uSamples);
     vBlend = alpha;
+    vLocal = vec2(local) * uSpacing;
     gl_Position = uViewProjection * vec4(vRelative, 1.0);
 }

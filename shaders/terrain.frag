@@ -45,55 +45,12 @@ uniform vec4 uValidRect;          // camera-relative x0, y0, x1, y1 of the input
 #endif
 uniform int uWireframe;
 #ifdef DETAIL
-// Materials' detail textures (3.4.5), so the ground up close is not a blur: gray layers of one texture
-// array, mean 0.5, multiplied over the node's colour, weighted by the vertex's material weights.
-const int kMaxLayers = 8;
-const float kDetailContrast = 0.6;
-// LAYER_COUNT (1..kMaxLayers) is defined by the renderer: a loop of constant length, unrolled. With
-// DETAIL_TINT_ONLY (nodes beyond every layer's fade) the layers are left out and only the tint applies.
+// The materials' detail textures (render/DetailLayers.h), with the node's corner in each layer's repeats.
 #ifndef DETAIL_TINT_ONLY
 flat in vec4 vLayerOrigin[LAYER_COUNT];  // the node's corner in repeats (xy) and in turned repeats (zw), fractional
+#define LAYER_ORIGIN(k) vLayerOrigin[k]
 #endif
-uniform sampler2DArray uDetail;
-uniform vec4 uLayerMaterialMask[kMaxLayers];  // which material a layer belongs to, as a one-hot vec4
-uniform float uLayerScale[kMaxLayers];   // 1 / metres per repeat
-// Each layer is sampled twice, the second time turned and scaled by this (TerrainRenderer.cpp, kDetailTurn:
-// an irrational angle and scale), and the two averaged: the sum of two lattices that share no period has none,
-// so the tile does not show as a regular pattern up close.
-uniform mat2 uDetailTurn;
-uniform vec4 uMaterialTintColumns[3];    // r, g, b of the 4 materials' tints, brightness-preserving and applied at
-                                         // kTintStrength (TerrainRenderer.cpp): the map's colours stay the base
-
-
-vec3 detailFactor()
-{
-    // Per material: the product of its layers (1 where faded out). No branch per fragment, no indexing by
-    // a varying; whole nodes beyond the fade use the DETAIL_TINT_ONLY variant. The tint applies at every
-    // distance, so the switch leaves no seam.
-    vec4 layers = vec4(1.0);
-#ifndef DETAIL_TINT_ONLY
-    {
-    float distance = length(vRelative);
-    for (int k = 0; k < LAYER_COUNT; ++k) {
-        // Gray 0.5 is neutral; kDetailContrast scales the rest, so the tile modulates the node's colour
-        // rather than replacing it. Faded out between 10 and 40 repeats away: farther, the repetition of
-        // the tile would show as a regular pattern, and the node's own texture carries what matters there.
-        float scale = uLayerScale[k];
-        vec2 p = vLocal * scale;
-        // The mean of the two samples, its contrast restored (sqrt 2: they are independent).
-        float g = 1.41421356 * (texture(uDetail, vec3(vLayerOrigin[k].xy + p, float(k))).r +
-                                texture(uDetail, vec3(vLayerOrigin[k].zw + uDetailTurn * p, float(k))).r - 1.0);
-        float amount = kDetailContrast * (1.0 - smoothstep(10.0, 40.0, distance * scale));
-        layers *= vec4(1.0) + uLayerMaterialMask[k] * (amount * g);
-    }
-    }
-#endif
-    float total = dot(vMaterials, vec4(1.0));
-    vec4 weighted = vMaterials * layers;
-    vec3 sum = vec3(dot(weighted, uMaterialTintColumns[0]), dot(weighted, uMaterialTintColumns[1]),
-                    dot(weighted, uMaterialTintColumns[2]));
-    return total > 0.0 ? sum / total : vec3(1.0);
-}
+#include "detail.glsl"
 #endif
 
 out vec4 fragColour;
@@ -134,7 +91,7 @@ void main()
     vec3 parent = texture(uColour, vec3(texelCentre(vParentOffset + 0.5 * vNodeUv), float(vSlots.y))).rgb;
     vec3 albedo = mix(parent, own, vMorph);
 #ifdef DETAIL
-    albedo *= detailFactor();
+    albedo *= detailFactor(vLocal, vMaterials, length(vRelative));
 #endif
 #ifdef NORMAL_MAP
     vec3 n = normalize(mappedNormal());

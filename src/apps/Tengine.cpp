@@ -339,13 +339,14 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
         const bool synthesis = scene->synthesizer && header.hasDetailErrors();
         const int finest = clipmapFinestLevel(o, header, synthesis);
         scene->clipmapLayout.emplace(extentOf(header), static_cast<int>(header.chunkSize), o.clipmapSamples, finest, 0);
-        scene->clipmap = std::make_unique<ClipmapTerrain>(*scene->clipmapLayout, static_cast<int>(header.chunkSize),
-                                                          static_cast<int>(header.textureSize));
-        auto clipmapRenderer = ClipmapRenderer::create(shaders, header, *scene->clipmapLayout);
+        auto clipmapRenderer = ClipmapRenderer::create(shaders, header, *scene->clipmapLayout, materials);
         if (!clipmapRenderer.ok()) {
             return fail(clipmapRenderer.error().message);
         }
         scene->clipmapRenderer = std::move(clipmapRenderer).value();
+        scene->clipmap = std::make_unique<ClipmapTerrain>(*scene->clipmapLayout, static_cast<int>(header.chunkSize),
+                                                          static_cast<int>(header.textureSize),
+                                                          scene->clipmapRenderer->drawsDetail());
         log("clipmap: " + std::to_string(scene->clipmapLayout->ringCount()) + " rings of " +
             std::to_string(o.clipmapSamples) + " x " + std::to_string(o.clipmapSamples) + " samples, levels 0 to " +
             std::to_string(finest) + " (finest spacing " + std::to_string(header.spacingAt(finest)) + " m), " +

@@ -11,7 +11,7 @@
 
 namespace terrain {
 
-ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize)
+ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize, bool materials)
     : mSamples(layout.samples()),
       mChunk(chunkSize),
       mTexture(textureSize),
@@ -22,6 +22,9 @@ ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int t
     for (ClipmapRing& ring : mRings) {
         ring.heights.assign(samples, 0.0f);
         ring.colour.assign(samples * 4, 255);
+        if (materials) {
+            ring.materials.assign(samples * 4, 0);
+        }
     }
 }
 
@@ -43,7 +46,7 @@ std::size_t ClipmapTerrain::bytes() const
 {
     std::size_t total = 0;
     for (const ClipmapRing& ring : mRings) {
-        total += ring.heights.size() * sizeof(float) + ring.colour.size();
+        total += ring.heights.size() * sizeof(float) + ring.colour.size() + ring.materials.size();
     }
     return total;
 }
@@ -96,6 +99,7 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
     const int w = windowSize(mChunk);
     const bool coarser = r + 1 < ringCount();
     const ClipmapRing* up = coarser ? &mRings[static_cast<std::size_t>(r + 1)] : nullptr;
+    const bool withMaterials = !ring.materials.empty();
     // Node lookups are per node, not per sample: the last one is kept.
     NodeId lastId{-1, 0, 0};
     NodePtr node;
@@ -108,6 +112,7 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
             }
             const std::size_t t = static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n);
             const bool haveColour = node && !node->texture.empty();
+            const bool haveMaterials = withMaterials && node && !node->materialWeights.empty();
             if (node) {
                 ring.heights[t] = node->heights.height(static_cast<std::size_t>(at.v) * w + at.u);
             }
@@ -120,12 +125,21 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                     ring.colour[t * 4 + c] = node->texture[k + c];
                 }
             }
-            if ((!node || !haveColour) && up) {
+            if (haveMaterials) {
+                const std::size_t k =
+                    (static_cast<std::size_t>(at.v - kBorder) * static_cast<std::size_t>(mChunk) + (at.u - kBorder)) *
+                    4;
+                for (int c = 0; c < 4; ++c) {
+                    ring.materials[t * 4 + c] = node->materialWeights[k + c];
+                }
+            }
+            if ((!node || !haveColour || (withMaterials && !haveMaterials)) && up) {
                 // The coarser ring's bilinear value at this point (its window holds it: windows nest).
                 const std::int64_t cx = gx >> 1, cy = gy >> 1;
                 const std::int64_t dx = gx & 1, dy = gy & 1;
                 float h = 0.0f;
                 float rgb[3] = {0.0f, 0.0f, 0.0f};
+                float weights[4] = {0.0f, 0.0f, 0.0f, 0.0f};
                 for (std::int64_t j = 0; j <= dy; ++j) {
                     for (std::int64_t i = 0; i <= dx; ++i) {
                         const float weight = (dx ? 0.5f : 1.0f) * (dy ? 0.5f : 1.0f);
@@ -135,13 +149,19 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                         for (int c = 0; c < 3; ++c) {
                             rgb[c] += weight * up->colour[u * 4 + c];
                         }
+                        for (int c = 0; c < 4 && withMaterials; ++c) {
+                            weights[c] += weight * up->materials[u * 4 + c];
+                        }
                     }
                 }
                 if (!node) {
                     ring.heights[t] = h;
                 }
-                for (int c = 0; c < 3; ++c) {
+                for (int c = 0; c < 3 && !haveColour; ++c) {
                     ring.colour[t * 4 + c] = static_cast<std::uint8_t>(std::lround(rgb[c]));
+                }
+                for (int c = 0; c < 4 && withMaterials && !haveMaterials; ++c) {
+                    ring.materials[t * 4 + c] = static_cast<std::uint8_t>(std::lround(weights[c]));
                 }
             }
             if (!node) {

@@ -3,7 +3,7 @@
 // ones synthesized: the quadtree's own synthesis, so both LOD modes show the same terrain). A sample whose
 // node is not resident yet is upsampled from the coarser ring (bilinear: seed 002's prediction without the
 // residual) and filled again once the node arrives. What changed is kept as rectangles for the renderer to
-// upload. Memory: 8 bytes per sample per ring, fixed by n and the ring count.
+// upload. Memory: 8 bytes per sample per ring (12 with material weights), fixed by n and the ring count.
 #pragma once
 
 #include "lod/ClipmapLayout.h"
@@ -19,17 +19,19 @@ namespace terrain {
 
 /// One ring's samples, toroidal: sample (gx, gy) of the window at texel (gx mod n, gy mod n), row-major.
 struct ClipmapRing {
-    std::vector<float> heights;        ///< metres above the map's height offset (as NodeData::heights)
-    std::vector<std::uint8_t> colour;  ///< RGBA8 (alpha 255), the nodes' textures at the samples
-    std::vector<LatticeRect> changed;  ///< level-grid samples changed since the renderer last took them
-    float zMin = 0.0f, zMax = 0.0f;    ///< over the window
+    std::vector<float> heights;           ///< metres above the map's height offset (as NodeData::heights)
+    std::vector<std::uint8_t> colour;     ///< RGBA8 (alpha 255), the nodes' textures at the samples
+    std::vector<std::uint8_t> materials;  ///< RGBA8, the nodes' 4 material weights at the samples; or empty
+    std::vector<LatticeRect> changed;     ///< level-grid samples changed since the renderer last took them
+    float zMin = 0.0f, zMax = 0.0f;       ///< over the window
     std::unordered_map<std::uint64_t, NodeId> upsampled;  ///< nodes (by key) whose samples are upsampled for now
 };
 
 class ClipmapTerrain {
 public:
     /// Rings of `layout` (its size and count), nodes of `chunkSize` samples with `textureSize` texels a side.
-    ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize);
+    /// With `materials`, the rings keep the nodes' material weights too (for the detail textures).
+    ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize, bool materials = false);
 
     /// After layout.moveTo() returned `entered`: fills the samples that entered each window and fills again
     /// the samples of nodes that became resident since they were upsampled (and, below a ring that changed,

@@ -5,10 +5,12 @@
 #include "core/Check.h"
 #include "core/Frustum.h"
 
+#include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
 
 #include <algorithm>
+#include <string>
 #include <vector>
 
 namespace terrain {
@@ -30,12 +32,26 @@ void setUpLayers(const gl::Texture& texture, GLenum internalFormat, GLenum forma
 }  // namespace
 
 Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::filesystem::path& shaderDirectory,
-                                                                   const MapHeader& header, const ClipmapLayout& layout)
+                                                                   const MapHeader& header, const ClipmapLayout& layout,
+                                                                   const MaterialSet* materials)
 {
     std::unique_ptr<ClipmapRenderer> r(new ClipmapRenderer(header));
-    auto program = ShaderProgram::load(shaderDirectory, "clipmap");
-    TERRAIN_TRY(program);
-    r->mProgram = std::move(program.value());
+    if (materials) {
+        auto layers = DetailLayers::create(*materials);
+        TERRAIN_TRY(layers);
+        r->mDetail = std::move(layers).value();
+    }
+    std::vector<std::string> defines = r->mDetail.defines();
+    auto near = ShaderProgram::load(shaderDirectory, "clipmap", defines);
+    TERRAIN_TRY(near);
+    r->mPrograms.push_back(std::move(near.value()));
+    if (!r->mDetail.empty()) {
+        // Pieces beyond every layer's fade are drawn without the layers' loop (as TerrainRenderer does).
+        defines.emplace_back("DETAIL_TINT_ONLY");
+        auto far = ShaderProgram::load(shaderDirectory, "clipmap", defines);
+        TERRAIN_TRY(far);
+        r->mPrograms.push_back(std::move(far.value()));
+    }
     auto sky = Sky::create(shaderDirectory);
     TERRAIN_TRY(sky);
     r->mSky = std::move(sky.value());
@@ -46,10 +62,21 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
     setUpLayers(r->mHeights, GL_R32F, GL_RED, GL_FLOAT, n, layout.ringCount(), GL_NEAREST);
     setUpLayers(r->mColour, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
     r->mTextureBytes = static_cast<std::size_t>(n) * n * layout.ringCount() * 8;
-    r->mProgram.use();
-    glUniform1i(r->mProgram.uniform("uHeights"), 0);
-    glUniform1i(r->mProgram.uniform("uColour"), 1);
-    glUniform1i(r->mProgram.uniform("uSamples"), n);
+    if (!r->mDetail.empty()) {
+        r->mMaterials = gl::Texture::create();
+        setUpLayers(r->mMaterials, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
+        r->mTextureBytes += static_cast<std::size_t>(n) * n * layout.ringCount() * 4;
+    }
+    for (const ShaderProgram& program : r->mPrograms) {
+        program.use();
+        glUniform1i(program.uniform("uHeights"), 0);
+        glUniform1i(program.uniform("uColour"), 1);
+        glUniform1i(program.uniform("uMaterials"), 3);
+        glUniform1i(program.uniform("uSamples"), n);
+        if (!r->mDetail.empty()) {
+            r->mDetail.setUniforms(program, 2);
+        }
+    }
 
     // The perimeter's zero-area triangles: (2k, 2k + 1, 2k + 2) along each side.
     std::vector<GLint> vertices;
@@ -152,6 +179,12 @@ void ClipmapRenderer::upload(ClipmapTerrain& terrain, int ring, ClipmapStats& st
                 glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
                 glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, x, y, ring, columns, rows, 1, GL_RGBA, GL_UNSIGNED_BYTE,
                                 data.colour.data() + first * 4);
+                if (mMaterials) {
+                    TERRAIN_EXPECTS(!data.materials.empty(), "with detail layers the rings keep material weights");
+                    glBindTexture(GL_TEXTURE_2D_ARRAY, mMaterials.name());
+                    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, x, y, ring, columns, rows, 1, GL_RGBA, GL_UNSIGNED_BYTE,
+                                    data.materials.data() + first * 4);
+                }
                 stats.uploadedSamples += static_cast<std::size_t>(rows) * static_cast<std::size_t>(columns);
             }
         }
@@ -179,31 +212,40 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
     glDepthFunc(GL_LESS);
     glDisable(GL_CULL_FACE);
     glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
-    mProgram.use();
     const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
-    glUniformMatrix4fv(mProgram.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
-    glUniform1f(mProgram.uniform("uHeightBase"), static_cast<float>(mHeader.heightOffset - camera.position.z));
     const glm::vec3 sun = glm::normalize(style.sunDirection);
-    glUniform3fv(mProgram.uniform("uSunDirection"), 1, glm::value_ptr(sun));
-    glUniform3fv(mProgram.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
-    glUniform3fv(mProgram.uniform("uAmbient"), 1, glm::value_ptr(style.ambient));
-    glUniform3fv(mProgram.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
-    glUniform1f(mProgram.uniform("uHazeDistance"), style.hazeDistance);
-    glUniform1i(mProgram.uniform("uWireframe"), style.wireframe ? 1 : 0);
     const double s0 = mHeader.sampleSpacing;
     const double vx0 = mHeader.originX + mHeader.validX0 * s0, vy0 = mHeader.originY + mHeader.validY0 * s0;
     const double vx1 = mHeader.originX + (mHeader.validX0 + mHeader.validWidth - 1.0) * s0;
     const double vy1 = mHeader.originY + (mHeader.validY0 + mHeader.validHeight - 1.0) * s0;
     const double slack = 1e-3 * s0;
-    glUniform4f(mProgram.uniform("uValidRect"), static_cast<float>(vx0 - camera.position.x - slack),
-                static_cast<float>(vy0 - camera.position.y - slack),
-                static_cast<float>(vx1 - camera.position.x + slack),
-                static_cast<float>(vy1 - camera.position.y + slack));
+    for (const ShaderProgram& program : mPrograms) {
+        program.use();
+        glUniformMatrix4fv(program.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
+        glUniform1f(program.uniform("uHeightBase"), static_cast<float>(mHeader.heightOffset - camera.position.z));
+        glUniform3fv(program.uniform("uSunDirection"), 1, glm::value_ptr(sun));
+        glUniform3fv(program.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
+        glUniform3fv(program.uniform("uAmbient"), 1, glm::value_ptr(style.ambient));
+        glUniform3fv(program.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
+        glUniform1f(program.uniform("uHazeDistance"), style.hazeDistance);
+        glUniform1i(program.uniform("uWireframe"), style.wireframe ? 1 : 0);
+        glUniform4f(program.uniform("uValidRect"), static_cast<float>(vx0 - camera.position.x - slack),
+                    static_cast<float>(vy0 - camera.position.y - slack),
+                    static_cast<float>(vx1 - camera.position.x + slack),
+                    static_cast<float>(vy1 - camera.position.y + slack));
+    }
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
+    if (mMaterials) {
+        glActiveTexture(GL_TEXTURE3);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mMaterials.name());
+    }
+    glActiveTexture(GL_TEXTURE0);
+    mDetail.bind(2);
     const Frustum frustum = Frustum::fromCamera(camera);
+    const double fade = mDetail.fadeDistance();
     const int n = mSamples;
     const double w = layout.transitionWidth();
     for (int ring = firstRing; ring < layout.ringCount(); ++ring) {
@@ -212,22 +254,34 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
         const double s = layout.spacing(ring);
         const double x0 = layout.worldX(ring, static_cast<double>(win.x0));
         const double y0 = layout.worldY(ring, static_cast<double>(win.y0));
-        glUniform1i(mProgram.uniform("uRing"), ring);
-        glUniform1i(mProgram.uniform("uHasCoarser"), coarser ? 1 : 0);
-        glUniform2i(mProgram.uniform("uWindowTexel"), toroidalTexel(win.x0, n), toroidalTexel(win.y0, n));
-        if (coarser) {
-            const ClipmapWindow& up = layout.window(ring + 1);
-            glUniform2i(mProgram.uniform("uCoarseTexel"), toroidalTexel(up.x0, n), toroidalTexel(up.y0, n));
-            glUniform2i(mProgram.uniform("uCoarseOffset"), static_cast<GLint>(win.x0 / 2 - up.x0),
-                        static_cast<GLint>(win.y0 / 2 - up.y0));
+        for (std::size_t p = 0; p < mPrograms.size(); ++p) {
+            const ShaderProgram& program = mPrograms[p];
+            program.use();
+            glUniform1i(program.uniform("uRing"), ring);
+            glUniform1i(program.uniform("uHasCoarser"), coarser ? 1 : 0);
+            glUniform2i(program.uniform("uWindowTexel"), toroidalTexel(win.x0, n), toroidalTexel(win.y0, n));
+            if (coarser) {
+                const ClipmapWindow& up = layout.window(ring + 1);
+                glUniform2i(program.uniform("uCoarseTexel"), toroidalTexel(up.x0, n), toroidalTexel(up.y0, n));
+                glUniform2i(program.uniform("uCoarseOffset"), static_cast<GLint>(win.x0 / 2 - up.x0),
+                            static_cast<GLint>(win.y0 / 2 - up.y0));
+            }
+            glUniform2f(program.uniform("uWindowOffset"), static_cast<float>(x0 - camera.position.x),
+                        static_cast<float>(y0 - camera.position.y));
+            glUniform1f(program.uniform("uSpacing"), static_cast<float>(s));
+            glUniform2f(program.uniform("uViewer"), static_cast<float>((camera.position.x - x0) / s),
+                        static_cast<float>((camera.position.y - y0) / s));
+            glUniform1f(program.uniform("uBlendStart"), static_cast<float>((n - 1) / 2.0 - w - 1.0));
+            glUniform1f(program.uniform("uBlendWidth"), static_cast<float>(w));
+            if (p == kNear && !mDetail.empty()) {
+                // Each layer's coordinates at the window origin, reduced to [0, 1) in double.
+                for (int k = 0; k < mDetail.count(); ++k) {
+                    const glm::vec4 origin = mDetail.origin(k, {x0, y0});
+                    glUniform4fv(program.uniform(("uLayerOrigin[" + std::to_string(k) + "]").c_str()), 1,
+                                 glm::value_ptr(origin));
+                }
+            }
         }
-        glUniform2f(mProgram.uniform("uWindowOffset"), static_cast<float>(x0 - camera.position.x),
-                    static_cast<float>(y0 - camera.position.y));
-        glUniform1f(mProgram.uniform("uSpacing"), static_cast<float>(s));
-        glUniform2f(mProgram.uniform("uViewer"), static_cast<float>((camera.position.x - x0) / s),
-                    static_cast<float>((camera.position.y - y0) / s));
-        glUniform1f(mProgram.uniform("uBlendStart"), static_cast<float>((n - 1) / 2.0 - w - 1.0));
-        glUniform1f(mProgram.uniform("uBlendWidth"), static_cast<float>(w));
         // The ring's heights, with the coarser ring's it may blend to.
         const ClipmapRing& data = terrain.ring(ring);
         double zLo = data.zMin, zHi = data.zMax;
@@ -255,7 +309,12 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
                 continue;
             }
             const Mesh& mesh = footprint(piece.cells.x1 - piece.cells.x0, piece.cells.y1 - piece.cells.y0);
-            glUniform2i(mProgram.uniform("uPieceOrigin"), static_cast<GLint>(piece.cells.x0),
+            // The detail layers' program where any of the piece lies within their fade.
+            const glm::dvec3 nearest = glm::clamp(camera.position, box.lo, box.hi);
+            const bool near = glm::distance(nearest, camera.position) < fade;
+            const ShaderProgram& program = mPrograms[near || mPrograms.size() == 1 ? kNear : kFar];
+            program.use();
+            glUniform2i(program.uniform("uPieceOrigin"), static_cast<GLint>(piece.cells.x0),
                         static_cast<GLint>(piece.cells.y0));
             glBindVertexArray(mesh.vao.name());
             glDrawElements(GL_TRIANGLES, mesh.count, GL_UNSIGNED_INT, nullptr);
@@ -264,7 +323,10 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
             drewRing = true;
         }
         if (drewRing && coarser) {
-            glUniform2i(mProgram.uniform("uPieceOrigin"), 0, 0);
+            // Zero-area triangles: any program draws them.
+            const ShaderProgram& program = mPrograms[mPrograms.size() - 1];
+            program.use();
+            glUniform2i(program.uniform("uPieceOrigin"), 0, 0);
             glBindVertexArray(mPerimeter.vao.name());
             glDrawElements(GL_TRIANGLES, mPerimeter.count, GL_UNSIGNED_INT, nullptr);
         }

@@ -6,7 +6,7 @@
 // frustum by its box, finest ring first (front to back). The vertex program blends heights and normals to
 // the coarser ring in the transition region (shaders/clipmap.vert); zero-area triangles along each ring's
 // perimeter close the T-junctions with the coarser ring exactly as the seed's degenerate triangles do.
-// Same sky, sun, haze and colours as the quadtree renderer.
+// Same sky, sun, haze, colours and materials' detail textures as the quadtree renderer.
 #pragma once
 
 #include "core/Camera.h"
@@ -14,6 +14,7 @@
 #include "lod/ClipmapLayout.h"
 #include "lod/ClipmapTerrain.h"
 #include "quadtree/MapFormat.h"
+#include "render/DetailLayers.h"
 #include "render/GlObjects.h"
 #include "render/ShaderProgram.h"
 #include "render/Sky.h"
@@ -38,14 +39,19 @@ class ClipmapRenderer {
 public:
     /// Programs from `shaderDirectory` (clipmap.vert/.frag, sky), textures for `layout`'s rings. Errors carry
     /// the GL's log.
+    /// With `materials`, their detail textures (render/DetailLayers.h) are drawn over the rings' colours,
+    /// weighted by the rings' material weights (the terrain must keep them: ClipmapTerrain's `materials`).
     static Expected<std::unique_ptr<ClipmapRenderer>> create(const std::filesystem::path& shaderDirectory,
-                                                             const MapHeader& header, const ClipmapLayout& layout);
+                                                             const MapHeader& header, const ClipmapLayout& layout,
+                                                             const MaterialSet* materials = nullptr);
 
     /// Uploads what `terrain` changed, then clears, draws the sky and rings `firstRing` to the coarsest for
     /// `camera` (layout placed for it by moveTo).
     ClipmapStats draw(const ClipmapLayout& layout, ClipmapTerrain& terrain, int firstRing, const Camera& camera,
                       const SceneStyle& style);
 
+    /// True when it draws the materials' detail textures (the rings must keep material weights).
+    bool drawsDetail() const { return !mDetail.empty(); }
     /// GPU bytes of the ring layers (fixed by n and the ring count).
     std::size_t textureBytes() const { return mTextureBytes; }
 
@@ -64,10 +70,16 @@ private:
 
     MapHeader mHeader;
     int mSamples = 0;
-    ShaderProgram mProgram;
+    /// [kNear] with the materials' detail layers (or the only one without), [kFar] without the layers'
+    /// loop, for footprints beyond every layer's fade.
+    std::vector<ShaderProgram> mPrograms;
+    static constexpr std::size_t kNear = 0;
+    static constexpr std::size_t kFar = 1;
+    DetailLayers mDetail;
     Sky mSky;
-    gl::Texture mHeights;  ///< GL_TEXTURE_2D_ARRAY R32F, a layer per ring
-    gl::Texture mColour;   ///< GL_TEXTURE_2D_ARRAY RGBA8, a layer per ring
+    gl::Texture mHeights;    ///< GL_TEXTURE_2D_ARRAY R32F, a layer per ring
+    gl::Texture mColour;     ///< GL_TEXTURE_2D_ARRAY RGBA8, a layer per ring
+    gl::Texture mMaterials;  ///< GL_TEXTURE_2D_ARRAY RGBA8 material weights, a layer per ring; none without layers
     std::map<std::pair<std::int64_t, std::int64_t>, Mesh> mFootprints;
     Mesh mPerimeter;  ///< zero-area triangles (a, midpoint, b) along a window's perimeter
     std::size_t mTextureBytes = 0;

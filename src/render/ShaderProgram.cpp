@@ -19,6 +19,46 @@ Expected<std::string> readText(const std::filesystem::path& path)
     return text.str();
 }
 
+}  // namespace
+
+Expected<std::string> readShaderFile(const std::filesystem::path& file)
+{
+    auto text = readText(file);
+    TERRAIN_TRY(text);
+    std::istringstream lines(*text);
+    std::string out, line;
+    int number = 0;
+    while (std::getline(lines, line)) {
+        ++number;
+        const auto first = line.find_first_not_of(" \t");
+        if (first == std::string::npos || line.compare(first, 8, "#include") != 0) {
+            out += line + "\n";
+            continue;
+        }
+        const auto open = line.find('"', first + 8);
+        const auto close = open == std::string::npos ? open : line.find('"', open + 1);
+        if (close == std::string::npos || close == open + 1 ||
+            line.find_first_not_of(" \t", close + 1) != std::string::npos) {
+            return makeError(file.string(), ":", number, ": #include needs one quoted file name, as #include \"name\"");
+        }
+        const std::filesystem::path included = file.parent_path() / line.substr(open + 1, close - open - 1);
+        auto inner = readText(included);
+        if (!inner.ok()) {
+            return makeError(file.string(), ":", number, ": ", inner.error().message);
+        }
+        if (inner->find("#include") != std::string::npos) {
+            return makeError(included.string(), ": included from ", file.string(), ":", number,
+                             ", and includes another file (one level only)");
+        }
+        // The included lines count from 1; after them the file's own numbering resumes.
+        out += "#line 1\n" + *inner + (inner->empty() || inner->back() == '\n' ? "" : "\n") + "#line " +
+               std::to_string(number + 1) + "\n";
+    }
+    return out;
+}
+
+namespace {
+
 /// Inserts the defines after the #version line (which must come first in GLSL).
 std::string withDefines(const std::string& source, const std::vector<std::string>& defines)
 {
@@ -117,9 +157,9 @@ Expected<ShaderProgram> ShaderProgram::fromSource(const std::string& name, const
 Expected<ShaderProgram> ShaderProgram::load(const std::filesystem::path& directory, const std::string& name,
                                             const std::vector<std::string>& defines)
 {
-    auto vertex = readText(directory / (name + ".vert"));
+    auto vertex = readShaderFile(directory / (name + ".vert"));
     TERRAIN_TRY(vertex);
-    auto fragment = readText(directory / (name + ".frag"));
+    auto fragment = readShaderFile(directory / (name + ".frag"));
     TERRAIN_TRY(fragment);
     return fromSource((directory / name).string(), *vertex, *fragment, defines);
 }
@@ -133,7 +173,7 @@ Expected<ShaderProgram> ShaderProgram::loadTessellation(const std::filesystem::p
     for (auto [type, file] :
          {std::pair{GL_VERTEX_SHADER, vertex + ".vert"}, std::pair{GL_TESS_CONTROL_SHADER, name + ".tesc"},
           std::pair{GL_TESS_EVALUATION_SHADER, name + ".tese"}, std::pair{GL_FRAGMENT_SHADER, name + ".frag"}}) {
-        auto text = readText(directory / file);
+        auto text = readShaderFile(directory / file);
         TERRAIN_TRY(text);
         stages.push_back({static_cast<GLenum>(type), (directory / file).string(), std::move(text).value()});
     }

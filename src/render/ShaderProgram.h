@@ -1,5 +1,5 @@
 // GLSL programs from the files in shaders/ (docs/design.md, "GL code": shaders are real files; variants by prepending
-// #defines; a compile or link failure returns the info log as an error).
+// #defines, shared code by `#include "name"`; a compile or link failure returns the info log as an error).
 #pragma once
 
 #include "core/Expected.h"
@@ -11,6 +11,11 @@
 #include <vector>
 
 namespace terrain {
+
+/// A shader file's text with each `#include "name"` line replaced by the named file's text (from the same
+/// directory; one level: an included file includes nothing), `#line` directives keeping the driver's line
+/// numbers those of each file. Errors name the file and line. Needs no GL.
+Expected<std::string> readShaderFile(const std::filesystem::path& file);
 
 class ShaderProgram {
 public:

@@ -21,44 +21,6 @@ namespace terrain {
 
 namespace {
 
-/// The turn and scale of each detail layer's second sample (shaders/terrain.frag, uDetailTurn): 0.955 rad and
-/// 0.755, neither a rational multiple of the tile's period nor of a right angle, so the two lattices share no
-/// period and their sum does not tile.
-const glm::dmat2 kDetailTurn = 0.7548776662 * glm::dmat2(std::cos(0.9553166181), std::sin(0.9553166181),
-                                                         -std::sin(0.9553166181), std::cos(0.9553166181));
-
-struct DetailLayer {
-    Image image;
-    int material = 0;
-    double size = 1.0;  ///< metres per repeat
-};
-
-Expected<std::vector<DetailLayer>> loadDetailLayers(const MaterialSet& materials, int maxLayers)
-{
-    std::vector<DetailLayer> layers;
-    for (std::size_t m = 0; m < materials.materials().size(); ++m) {
-        const Material& material = materials.materials()[m];
-        double size = material.detailTextureSize;
-        for (const auto& file : material.detailTextures) {
-            if (static_cast<int>(layers.size()) == maxLayers) {
-                return makeError(material.file, ": too many detail textures (the materials may have ", maxLayers,
-                                 " in all)");
-            }
-            auto image = readPngImage(file, 1);
-            TERRAIN_TRY(image);
-            if (!layers.empty() &&
-                (image->width != layers.front().image.width || image->height != layers.front().image.height)) {
-                return makeError(file.string(), ": detail texture is ", image->width, "x", image->height,
-                                 " but the first one is ", layers.front().image.width, "x", layers.front().image.height,
-                                 " (all detail textures share one size)");
-            }
-            layers.push_back({std::move(image).value(), static_cast<int>(m), size});
-            size /= 4.0;
-        }
-    }
-    return layers;
-}
-
 /// A texture array of `layers` layers of size x size texels, one mip level, uninitialised, left bound to
 /// GL_TEXTURE_2D_ARRAY: one of the node pools.
 gl::Texture createLayers(GLenum internalFormat, int size, GLsizei layers, GLenum format, GLenum type, GLint filter)
@@ -116,14 +78,12 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         return makeError("quad_cache_size ", slots, " is more nodes than this GPU's texture arrays hold (",
                          "GL_MAX_ARRAY_TEXTURE_LAYERS ", maxLayers, "): the node pools keep one layer per node");
     }
-    std::vector<DetailLayer> layers;
     if (materials) {
-        TERRAIN_EXPECTS(materials->materials().size() <= 4, "at most 4 materials");
-        auto loaded = loadDetailLayers(*materials, kMaxDetailLayers);
-        TERRAIN_TRY(loaded);
-        layers = std::move(loaded).value();
+        auto layers = DetailLayers::create(*materials);
+        TERRAIN_TRY(layers);
+        r->mDetail = std::move(layers).value();
     }
-    r->mNodeTexels = 3 + static_cast<int>(layers.size());
+    r->mNodeTexels = 3 + r->mDetail.count();
     const bool padded = header.validWidth < header.gridSize() || header.validHeight < header.gridSize();
     std::vector<std::string> defines;
     if (padded) {
@@ -134,9 +94,8 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     if (r->mNormalTexels > 0) {
         defines.emplace_back("NORMAL_MAP");
     }
-    if (!layers.empty()) {
-        defines.emplace_back("DETAIL");
-        defines.emplace_back("LAYER_COUNT " + std::to_string(layers.size()));
+    for (std::string& define : r->mDetail.defines()) {
+        defines.push_back(std::move(define));
     }
     r->mPixelCounts = pools.pixelCounts;
     if (r->mPixelCounts) {
@@ -169,7 +128,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     auto terrain = loadProgram(defines);
     TERRAIN_TRY(terrain);
     r->mPrograms.push_back(std::move(terrain.value()));
-    if (!layers.empty()) {
+    if (!r->mDetail.empty()) {
         // Nodes beyond every layer's fade are drawn by the variant without the detail texture loop: llvmpipe
         // runs a loop or branch for every fragment even where no fragment needs it (measured on the demo at
         // 1280 x 720: about 40 ms a frame with one program and a per-node branch).
@@ -190,54 +149,9 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         glUniform1i(program.uniform("uBlocks"), r->mBlocks);
         glUniform1i(program.uniform("uBlockQuads"), kTessellationBlockQuads);
     }
-    if (!layers.empty()) {
-        const int w = layers.front().image.width, h = layers.front().image.height;
-        r->mDetail = gl::Texture::create();
-        glBindTexture(GL_TEXTURE_2D_ARRAY, r->mDetail.name());
-        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-        glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R8, w, h, static_cast<GLsizei>(layers.size()), 0, GL_RED,
-                     GL_UNSIGNED_BYTE, nullptr);
-        for (std::size_t k = 0; k < layers.size(); ++k) {
-            glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, static_cast<GLint>(k), w, h, 1, GL_RED, GL_UNSIGNED_BYTE,
-                            layers[k].image.pixels.data());
-        }
-        glGenerateMipmap(GL_TEXTURE_2D_ARRAY);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_REPEAT);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_REPEAT);
-        for (const DetailLayer& layer : layers) {
-            r->mLayerSize.push_back(layer.size);
-        }
-        r->mCoarsestLayer = *std::max_element(r->mLayerSize.begin(), r->mLayerSize.end());
-        glm::vec4 tintColumns[3] = {glm::vec4(1.0f), glm::vec4(1.0f), glm::vec4(1.0f)};
-        for (std::size_t m = 0; m < materials->materials().size(); ++m) {
-            const auto& t = materials->materials()[m].tint;
-            glm::vec3 tint(t[0], t[1], t[2]);
-            const float luminance = glm::dot(tint, glm::vec3(0.2126f, 0.7152f, 0.0722f));
-            tint = luminance > 0.0f ? tint / luminance : glm::vec3(1.0f);
-            // A third of the tint: the map's colours (from -t or prep's height colouring) stay the base and
-            // the material only shifts them, so a grass tint does not paint a dry valley green.
-            constexpr float kTintStrength = 0.35f;
-            tint = glm::mix(glm::vec3(1.0f), tint, kTintStrength);
-            for (int c = 0; c < 3; ++c) {
-                tintColumns[c][static_cast<int>(m)] = tint[c];
-            }
-        }
+    if (!r->mDetail.empty()) {
         for (ShaderProgram& program : r->mPrograms) {
-            program.use();
-            for (std::size_t k = 0; k < layers.size(); ++k) {
-                std::string index = "[";
-                index += std::to_string(k);
-                index += ']';
-                glm::vec4 mask(0.0f);
-                mask[layers[k].material] = 1.0f;
-                glUniform4fv(program.uniform(("uLayerMaterialMask" + index).c_str()), 1, glm::value_ptr(mask));
-                glUniform1f(program.uniform(("uLayerScale" + index).c_str()), static_cast<float>(1.0 / layers[k].size));
-            }
-            glUniform4fv(program.uniform("uMaterialTintColumns"), 3, glm::value_ptr(tintColumns[0]));
-            const glm::mat2 turn(kDetailTurn);
-            glUniformMatrix2fv(program.uniform("uDetailTurn"), 1, GL_FALSE, glm::value_ptr(turn));
+            r->mDetail.setUniforms(program, 2);
         }
     }
     auto sky = Sky::create(shaderDirectory);
@@ -338,7 +252,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     }
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    if (!layers.empty()) {
+    if (!r->mDetail.empty()) {
         r->mWeights = createLayers(GL_RGBA4, n, layersOf, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4, GL_NEAREST);
         r->mSlotBytes.weights = static_cast<std::size_t>(n) * n * sizeof(std::uint16_t);
     }
@@ -536,7 +450,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     // fades each layer out by 40 repeats away; the coarsest fades last), which the second draw takes.
     const int texels = mNodeTexels;
     const bool split = mPrograms.size() > 1;
-    const double fade = kDetailFadeRepeats * mCoarsestLayer;
+    const double fade = mDetail.fadeDistance();
     mConstants.assign(selection.nodes.size() * static_cast<std::size_t>(texels) * 4, 0.0f);
     std::size_t count = 0;
     std::size_t nearCount = 0;
@@ -571,19 +485,13 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
             c[8] = (selected.id.x & 1) ? 0.5f : 0.0f;
             c[9] = (selected.id.y & 1) ? 0.5f : 0.0f;
             if (split && near) {
-                // The node's corner in repeats of each layer, reduced to [0, 1) in double: texture
-                // coordinates stay small and exact however far from the origin the node is.
+                // The node's corner in repeats of each layer (and of its turned copy), reduced to [0, 1).
                 const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(camera.position);
-                // The same for the layer's turned copy (kDetailTurn).
-                for (std::size_t k = 0; k < mLayerSize.size(); ++k) {
-                    const glm::dvec2 repeats = corner / mLayerSize[k];
-                    const glm::dvec2 fraction = repeats - glm::floor(repeats);
-                    const glm::dvec2 turned = kDetailTurn * repeats;
-                    const glm::dvec2 turnedFraction = turned - glm::floor(turned);
-                    c[12 + 4 * k] = static_cast<float>(fraction.x);
-                    c[13 + 4 * k] = static_cast<float>(fraction.y);
-                    c[14 + 4 * k] = static_cast<float>(turnedFraction.x);
-                    c[15 + 4 * k] = static_cast<float>(turnedFraction.y);
+                for (int k = 0; k < mDetail.count(); ++k) {
+                    const glm::vec4 origin = mDetail.origin(k, corner);
+                    for (int i = 0; i < 4; ++i) {
+                        c[12 + 4 * k + i] = origin[i];
+                    }
                 }
             }
             if (mTessellation) {
@@ -670,10 +578,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
-    if (mDetail) {
-        glActiveTexture(GL_TEXTURE2);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mDetail.name());
-    }
+    mDetail.bind(2);
     if (mWeights) {
         glActiveTexture(GL_TEXTURE3);
         glBindTexture(GL_TEXTURE_2D_ARRAY, mWeights.name());

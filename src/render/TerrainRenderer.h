@@ -10,6 +10,7 @@
 #include "lod/NodeData.h"
 #include "lod/TessellationLevels.h"
 #include "quadtree/MapFormat.h"
+#include "render/DetailLayers.h"
 #include "render/GlObjects.h"
 #include "render/ShaderProgram.h"
 #include "render/Sky.h"
@@ -85,18 +86,13 @@ public:
     /// Loads the shaders from `shaderDirectory`, builds the template mesh for `header`'s chunk size with the
     /// zigzag order for `vertexCacheSize`, and allocates the node pools: `pools.slots` nodes' heights,
     /// normals, colour textures and material weights in texture arrays. With
-    /// `materials`, their detail textures are drawn over the nodes' colours, blended by the nodes' material
-    /// weights (NodeData::materialWeights): material m's k-th detail_texture repeats every
-    /// detail_texture_size / 4^k metres (a finer layer of the same ground). All detail textures must have the
-    /// same size (they share one texture array); at most kMaxDetailLayers. Errors name the file, or the GL
-    /// limit that the slots exceed. Needs a current GL context.
+    /// `materials`, their detail textures (render/DetailLayers.h) are drawn over the nodes' colours, blended by
+    /// the nodes' material weights (NodeData::materialWeights). Errors name the file, or the GL limit that the
+    /// slots exceed. Needs a current GL context.
     static Expected<std::unique_ptr<TerrainRenderer>> create(const std::filesystem::path& shaderDirectory,
                                                              const MapHeader& header, int vertexCacheSize,
                                                              const PoolOptions& pools,
                                                              const MaterialSet* materials = nullptr);
-
-    /// Detail texture layers the shader blends (shaders/terrain.frag, kMaxLayers).
-    static constexpr int kMaxDetailLayers = 8;
 
     /// Clears, draws the sky and every node of `selection` (made for `camera`) in one instanced draw (two
     /// with detail layers: nodes beyond every layer's fade go in a second one, drawn by a program without
@@ -152,7 +148,6 @@ private:
     std::vector<ShaderProgram> mPrograms;
     static constexpr std::size_t kNear = 0;
     static constexpr std::size_t kFar = 1;
-    double mCoarsestLayer = 0.0;  ///< metres per repeat of the detail layer that fades out last
     Sky mSky;
     gl::VertexArray mTemplateVao;
     gl::Buffer mTemplateVertices;
@@ -160,10 +155,7 @@ private:
     GLsizei mIndexCount = 0;
     GLenum mIndexType = GL_UNSIGNED_INT;
     std::uint64_t mTrianglesPerNode = 0;
-    gl::Texture mDetail;             ///< GL_TEXTURE_2D_ARRAY of the detail layers, or none
-    std::vector<double> mLayerSize;  ///< metres per repeat of each detail layer
-    /// Repeats of a detail layer beyond which the fragment shader has faded it out (terrain.frag).
-    static constexpr double kDetailFadeRepeats = 40.0;
+    DetailLayers mDetail;  ///< the materials' detail textures (none without)
 
     // The pools: one layer per slot in each texture array.
     gl::Texture mHeights;                            ///< GL_R16 (quantizeHeightsR16), (N + 2)^2 per layer

@@ -309,6 +309,58 @@ TEST_F(TengineGLTest, ClipmapRingsMeetWithoutSeamsUpClose)
     EXPECT_GT(rows.front().at("deepest_level"), 4.0) << "rings below the map's data (dynamic levels) drawn";
 }
 
+/// lod_mode = clipmap draws the materials' detail textures as the quadtree does (render/DetailLayers.h): the
+/// same low view with the shipped materials and with copies that lack their detail_texture lines (the same
+/// synthesis, the same ring heights) differs on the near ground by fine-grained contrast, the textures' grain.
+TEST_F(TengineGLTest, ClipmapModeDrawsTheMaterialsDetailTextures)
+{
+    test::ScratchDir plainMaterials;
+    std::vector<std::filesystem::path> plain;
+    for (const auto& file : detailMaterials()) {
+        std::ifstream in(file);
+        std::ofstream out(plainMaterials.path() / file.filename());
+        for (std::string line; std::getline(in, line);) {
+            if (line.rfind("detail_texture", 0) != 0) {
+                out << line << "\n";
+            }
+        }
+        plain.push_back(plainMaterials.path() / file.filename());
+    }
+    // The last detail_materials setting counts: lowDetailFlight's are the shipped ones.
+    auto render = [&](const std::filesystem::path& frames, const std::vector<std::filesystem::path>& materials) {
+        std::vector<std::string> settings = {"video_frames=1", "draw_user_interface=false", "lod_mode=clipmap"};
+        settings = lowDetailFlight(settings);
+        if (!materials.empty()) {
+            settings.push_back("detail_materials=" + materials[0].string() + ", " + materials[1].string());
+        }
+        auto run = video(frames, settings, detailMap());
+        EXPECT_EQ(run.exitCode, 0) << run.output;
+        return frame(frames, 0);
+    };
+    test::ScratchDir with, without;
+    const Image textured = render(with.path(), {});
+    const Image smooth = render(without.path(), plain);
+    ASSERT_EQ(textured.pixels.size(), smooth.pixels.size());
+    // Grain: the mean absolute difference between horizontal neighbours over the lowest quarter (the ground
+    // nearest the camera, where every layer shows).
+    auto grain = [](const Image& image) {
+        double sum = 0.0;
+        std::size_t count = 0;
+        for (int y = image.height * 3 / 4; y < image.height; ++y) {
+            for (int x = 1; x < image.width; ++x) {
+                for (int c = 0; c < 3; ++c) {
+                    sum += std::abs(int(image.pixel(x, y)[c]) - int(image.pixel(x - 1, y)[c]));
+                    ++count;
+                }
+            }
+        }
+        return sum / static_cast<double>(count);
+    };
+    const double withGrain = grain(textured), withoutGrain = grain(smooth);
+    std::printf("clipmap near-ground grain: %.3f with detail textures, %.3f without\n", withGrain, withoutGrain);
+    EXPECT_GT(withGrain, 1.5 * withoutGrain) << "the detail textures must show on the near ground";
+}
+
 TEST_F(TengineGLTest, WithoutTessellationShadersTheTessellationModeFallsBackToChunks)
 {
     test::ScratchDir frames;

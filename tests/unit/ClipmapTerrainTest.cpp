@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+
 namespace terrain {
 namespace {
 
@@ -216,9 +218,11 @@ TEST_F(ClipmapTerrainTest, RingsBelowTheStaticLevelsHoldTheSynthesizedNodes)
     auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
     ASSERT_TRUE(streamer.ok()) << streamer.error().message;
     ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 6, 0);  // two levels of dynamic nodes
-    ClipmapTerrain terrain(layout, 17, 17);
+    ClipmapTerrain terrain(layout, 17, 17, /*materials=*/true);
+    EXPECT_EQ(terrain.bytes(), std::size_t{7} * 31 * 31 * 12);
     settle(layout, terrain, **streamer, 130.0, 170.0);
     EXPECT_EQ(terrain.upsampledNodes(), 0u);
+    int materialMismatches = 0;
     const int n = 31, w = windowSize(17);
     for (int r = 0; r < 2; ++r) {
         const ClipmapWindow& win = layout.window(r);
@@ -234,8 +238,91 @@ TEST_F(ClipmapTerrainTest, RingsBelowTheStaticLevelsHoldTheSynthesizedNodes)
                     terrain.ring(r).heights[static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n)],
                     node->heights.height(k))
                     << "ring " << r << " (" << gx << ", " << gy << ")";
+                // The node's material weights at the sample (what the detail textures are weighted by).
+                ASSERT_EQ(node->materialWeights.size(), std::size_t{17} * 17 * 4);
+                const std::size_t t = static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n);
+                const std::size_t m = (static_cast<std::size_t>(gy - std::int64_t{id.y} * 16) * 17 +
+                                       static_cast<std::size_t>(gx - std::int64_t{id.x} * 16)) *
+                                      4;
+                for (int c = 0; c < 4; ++c) {
+                    materialMismatches += terrain.ring(r).materials[t * 4 + c] != node->materialWeights[m + c];
+                }
             }
         }
+    }
+    EXPECT_EQ(materialMismatches, 0);
+    // Both materials show somewhere (the weights are not all one material, nor all zero).
+    std::array<int, 2> seen = {0, 0};
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        for (std::size_t t = 0; t < terrain.ring(r).materials.size(); t += 4) {
+            seen[0] += terrain.ring(r).materials[t] > 0;
+            seen[1] += terrain.ring(r).materials[t + 1] > 0;
+        }
+    }
+    std::printf("samples with grass %d, with rock %d\n", seen[0], seen[1]);
+    EXPECT_GT(seen[0], 0);
+    EXPECT_GT(seen[1], 0);
+}
+
+TEST_F(ClipmapTerrainTest, MemoryIsBoundedByTheClipmapSizeOverALongFlight)
+{
+    // Issue 17: memory bounded by the clipmap, not by the path. A window of n samples meets at most
+    // (n - 1) / (N - 1) + 2 nodes a side, so at most (that / 2 + 1)^2 sibling groups of its level; the coarser
+    // rings hold every ancestor. A cache of exactly that many groups (plus the root) serves the whole flight:
+    // every window settles with nothing upsampled (a smaller cache would refuse a wanted group: the cache never
+    // overfills, NodeCache.h), the rings' bytes never change, and what the rings keep
+    // for the renderer (changed rectangles, upsampled nodes) does not pile up.
+    const auto synthesizer = test::grassAndRockSynthesizer(17);
+    TerrainNodeSource source(*mMap, {synthesizer.get(), 0.05});
+    const int n = 31, finest = 6;  // two levels of dynamic nodes below the map's four
+    const std::size_t nodesASide = (n - 1) / 16 + 2;
+    const std::size_t groupsPerRing = (nodesASide / 2 + 1) * (nodesASide / 2 + 1);
+    const std::size_t bound = 1 + 4 * groupsPerRing * static_cast<std::size_t>(finest);  // level 0: the root
+    StreamerOptions options;
+    options.cacheSize = bound;
+    options.workers = 0;
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    ClipmapLayout layout(extentOf(mMap->header()), 17, n, finest, 0);
+    ClipmapTerrain terrain(layout, 17, 17);
+    const std::size_t bytes = terrain.bytes();
+    EXPECT_EQ(bytes, std::size_t{finest + 1} * n * n * 8);
+    // A long flight: three laps of a figure of eight over the whole terrain (5.9 km in 3 to 10 m steps).
+    std::size_t largestCache = 0, largestWanted = 0, evictionsBefore = 0;
+    constexpr int steps = 900;
+    auto at = [](int s) {
+        const double t = 6.0 * 3.14159265358979 * s / steps;
+        return std::pair{256.0 + 230.0 * std::sin(t), 256.0 + 200.0 * std::sin(2.0 * t)};
+    };
+    for (int s = 0; s <= steps; ++s) {
+        const auto [x, y] = at(s);
+        const int rounds = settle(layout, terrain, **streamer, x, y);
+        ASSERT_LT(rounds, 100) << "step " << s << ": the windows never settled in a cache of " << bound;
+        ASSERT_EQ(terrain.upsampledNodes(), 0u) << "step " << s << ": a wanted node did not fit";
+        const std::vector<NodeId> wanted = terrain.wanted(layout);
+        largestWanted = std::max(largestWanted, wanted.size());
+        largestCache = std::max(largestCache, (*streamer)->cache().size());
+        for (int r = 0; r < layout.ringCount(); ++r) {
+            EXPECT_LE(terrain.takeChanged(r).size(), 64u) << "step " << s << " ring " << r;
+        }
+        EXPECT_EQ(terrain.bytes(), bytes);
+        if (s == steps / 3) {
+            evictionsBefore = (*streamer)->cache().evictions();
+        }
+    }
+    std::printf("long flight: largest working set %zu nodes (bound %zu), cache %zu nodes (bound %zu), %llu evictions\n",
+                largestWanted, nodesASide * nodesASide * static_cast<std::size_t>(finest) + 1, largestCache, bound,
+                static_cast<unsigned long long>((*streamer)->cache().evictions()));
+    EXPECT_LE(largestWanted, nodesASide * nodesASide * static_cast<std::size_t>(finest) + 1);
+    // The flight did move the working set: later laps evict (and reload) what the first one loaded.
+    EXPECT_GT((*streamer)->cache().evictions(), evictionsBefore);
+    // And after the whole flight the rings hold what a fresh clipmap at the last position holds.
+    ClipmapLayout freshLayout(extentOf(mMap->header()), 17, n, finest, 0);
+    ClipmapTerrain fresh(freshLayout, 17, 17);
+    settle(freshLayout, fresh, **streamer, at(steps).first, at(steps).second);
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        EXPECT_EQ(fresh.ring(r).heights, terrain.ring(r).heights) << "ring " << r;
+        EXPECT_EQ(fresh.ring(r).colour, terrain.ring(r).colour) << "ring " << r;
     }
 }
 

@@ -1,0 +1,137 @@
+// Detail texture layers of the materials (DetailLayers.h).
+#include "render/DetailLayers.h"
+
+#include "core/Check.h"
+#include "heightfield/Image.h"
+
+#include <glm/glm.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace terrain {
+
+namespace {
+
+/// The turn and scale of each detail layer's second sample (shaders/detail.glsl, uDetailTurn): 0.955 rad and
+/// 0.755, neither a rational multiple of the tile's period nor of a right angle, so the two lattices share no
+/// period and their sum does not tile.
+const glm::dmat2 kDetailTurn = 0.7548776662 * glm::dmat2(std::cos(0.9553166181), std::sin(0.9553166181),
+                                                         -std::sin(0.9553166181), std::cos(0.9553166181));
+
+}  // namespace
+
+Expected<DetailLayers> DetailLayers::create(const MaterialSet& materials)
+{
+    TERRAIN_EXPECTS(materials.materials().size() <= 4, "at most 4 materials");
+    DetailLayers d;
+    std::vector<Image> images;
+    for (std::size_t m = 0; m < materials.materials().size(); ++m) {
+        const Material& material = materials.materials()[m];
+        double size = material.detailTextureSize;
+        for (const auto& file : material.detailTextures) {
+            if (static_cast<int>(images.size()) == kMaxLayers) {
+                return makeError(material.file, ": too many detail textures (the materials may have ", kMaxLayers,
+                                 " in all)");
+            }
+            auto image = readPngImage(file, 1);
+            TERRAIN_TRY(image);
+            if (!images.empty() && (image->width != images.front().width || image->height != images.front().height)) {
+                return makeError(file.string(), ": detail texture is ", image->width, "x", image->height,
+                                 " but the first one is ", images.front().width, "x", images.front().height,
+                                 " (all detail textures share one size)");
+            }
+            images.push_back(std::move(image).value());
+            d.mSizes.push_back(size);
+            d.mMaterial.push_back(static_cast<int>(m));
+            size /= 4.0;
+        }
+    }
+    for (glm::vec4& column : d.mTintColumns) {
+        column = glm::vec4(1.0f);
+    }
+    for (std::size_t m = 0; m < materials.materials().size(); ++m) {
+        const auto& t = materials.materials()[m].tint;
+        glm::vec3 tint(t[0], t[1], t[2]);
+        const float luminance = glm::dot(tint, glm::vec3(0.2126f, 0.7152f, 0.0722f));
+        tint = luminance > 0.0f ? tint / luminance : glm::vec3(1.0f);
+        // A third of the tint: the map's colours (from -t or prep's height colouring) stay the base and
+        // the material only shifts them, so a grass tint does not paint a dry valley green.
+        constexpr float kTintStrength = 0.35f;
+        tint = glm::mix(glm::vec3(1.0f), tint, kTintStrength);
+        for (int c = 0; c < 3; ++c) {
+            d.mTintColumns[c][static_cast<int>(m)] = tint[c];
+        }
+    }
+    if (images.empty()) {
+        return d;
+    }
+    const int w = images.front().width, h = images.front().height;
+    d.mTexture = gl::Texture::create();
+    glBindTexture(GL_TEXTURE_2D_ARRAY, d.mTexture.name());
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R8, w, h, static_cast<GLsizei>(images.size()), 0, GL_RED, GL_UNSIGNED_BYTE,
+                 nullptr);
+    for (std::size_t k = 0; k < images.size(); ++k) {
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, static_cast<GLint>(k), w, h, 1, GL_RED, GL_UNSIGNED_BYTE,
+                        images[k].pixels.data());
+    }
+    glGenerateMipmap(GL_TEXTURE_2D_ARRAY);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    return d;
+}
+
+double DetailLayers::fadeDistance() const
+{
+    return empty() ? 0.0 : kFadeRepeats * *std::max_element(mSizes.begin(), mSizes.end());
+}
+
+std::vector<std::string> DetailLayers::defines() const
+{
+    if (empty()) {
+        return {};
+    }
+    return {"DETAIL", "LAYER_COUNT " + std::to_string(mSizes.size())};
+}
+
+void DetailLayers::setUniforms(const ShaderProgram& program, int unit) const
+{
+    program.use();
+    glUniform1i(program.uniform("uDetail"), unit);
+    for (std::size_t k = 0; k < mSizes.size(); ++k) {
+        const std::string index = "[" + std::to_string(k) + "]";
+        glm::vec4 mask(0.0f);
+        mask[mMaterial[k]] = 1.0f;
+        glUniform4fv(program.uniform(("uLayerMaterialMask" + index).c_str()), 1, glm::value_ptr(mask));
+        glUniform1f(program.uniform(("uLayerScale" + index).c_str()), static_cast<float>(1.0 / mSizes[k]));
+    }
+    glUniform4fv(program.uniform("uMaterialTintColumns"), 3, glm::value_ptr(mTintColumns[0]));
+    const glm::mat2 turn(kDetailTurn);
+    glUniformMatrix2fv(program.uniform("uDetailTurn"), 1, GL_FALSE, glm::value_ptr(turn));
+}
+
+void DetailLayers::bind(int unit) const
+{
+    if (mTexture) {
+        glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mTexture.name());
+        glActiveTexture(GL_TEXTURE0);
+    }
+}
+
+glm::vec4 DetailLayers::origin(int k, glm::dvec2 corner) const
+{
+    const glm::dvec2 repeats = corner / mSizes[static_cast<std::size_t>(k)];
+    const glm::dvec2 fraction = repeats - glm::floor(repeats);
+    const glm::dvec2 turned = kDetailTurn * repeats;
+    const glm::dvec2 turnedFraction = turned - glm::floor(turned);
+    return {static_cast<float>(fraction.x), static_cast<float>(fraction.y), static_cast<float>(turnedFraction.x),
+            static_cast<float>(turnedFraction.y)};
+}
+
+}  // namespace terrain

@@ -1,0 +1,56 @@
+// The materials' detail textures (paper 3.4.5) on the GPU, shared by both LOD modes' renderers: gray tiles in one
+// texture array, material m's k-th detail_texture repeating every detail_texture_size / 4^k metres (a finer
+// layer of the same ground), multiplied over the terrain's colour by the material weights
+// (shaders/detail.glsl). Each layer is sampled twice, the second time turned and scaled (kDetailTurn), so the
+// tile shows no regular pattern; each fades out by kFadeRepeats of its repeats from the viewer.
+#pragma once
+
+#include "core/Expected.h"
+#include "render/GlObjects.h"
+#include "render/ShaderProgram.h"
+#include "synthesis/Material.h"
+
+#include <glm/vec2.hpp>
+#include <glm/vec4.hpp>
+
+#include <vector>
+
+namespace terrain {
+
+class DetailLayers {
+public:
+    /// At most this many layers in all (shaders/detail.glsl, kMaxLayers).
+    static constexpr int kMaxLayers = 8;
+    /// Repeats of a layer beyond which the fragment program has faded it out (shaders/detail.glsl).
+    static constexpr double kFadeRepeats = 40.0;
+
+    /// Loads every material's detail textures (all of one size; at most kMaxLayers; at most 4 materials) into a
+    /// texture array. Errors name the file. Materials without detail textures give no layers (empty()).
+    static Expected<DetailLayers> create(const MaterialSet& materials);
+
+    bool empty() const { return mSizes.empty(); }
+    int count() const { return static_cast<int>(mSizes.size()); }
+    /// Metres per repeat of each layer.
+    const std::vector<double>& sizes() const { return mSizes; }
+    /// Metres from the viewer beyond which every layer has faded out (only the tint applies).
+    double fadeDistance() const;
+    /// The shader defines of a program drawing the layers: DETAIL and LAYER_COUNT (none when empty()).
+    std::vector<std::string> defines() const;
+
+    /// Sets `program`'s uniforms for the layers (uDetail on texture unit `unit`, masks, scales, tints, turn).
+    void setUniforms(const ShaderProgram& program, int unit) const;
+    /// Binds the texture array to texture unit `unit`.
+    void bind(int unit) const;
+    /// Layer k's texture coordinates at world point `corner` (metres), reduced to [0, 1) in double: xy of the
+    /// plain sample, zw of the turned one. Programs add local metres times the layer's scale to it, so texture
+    /// coordinates stay small and exact however far from the origin the point is.
+    glm::vec4 origin(int k, glm::dvec2 corner) const;
+
+private:
+    gl::Texture mTexture;
+    std::vector<double> mSizes;
+    std::vector<int> mMaterial;      ///< the material each layer belongs to
+    glm::vec4 mTintColumns[3] = {};  ///< r, g, b of the materials' tints (brightness-preserving, kTintStrength)
+};
+
+}  // namespace terrain
