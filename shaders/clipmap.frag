@@ -2,8 +2,8 @@
 // Geometry clipmap fragment program (render/ClipmapRenderer.h): the ring's colour blended with the coarser
 // ring's by the vertex's transition weight (seed 002 blends textures in the transition region too), lit and
 // hazed as shaders/terrain.frag lights the quadtree's nodes, with the materials' detail textures (DETAIL,
-// shaders/detail.glsl) weighted by the ring's material weights, blended like the colours. Outside the
-// input's samples: discarded.
+// shaders/detail.glsl) weighted by the ring's material weights, and with NORMAL_MAP by the rings' normal maps,
+// both blended like the colours. Outside the input's samples: discarded.
 
 in vec3 vRelative;
 in vec3 vNormal;
@@ -21,6 +21,12 @@ uniform vec3 uHazeColour;
 uniform float uHazeDistance;
 uniform vec4 uValidRect;  // camera-relative x0, y0, x1, y1 of the input's samples
 uniform int uWireframe;
+#ifdef NORMAL_MAP
+// The nodes' normal maps (synthesis/NormalMap.h) on the rings' texels: finer shading than the rings' triangles.
+in vec2 vNormalUv;
+in vec2 vCoarseNormalUv;
+uniform sampler2DArray uNormals;  // per ring: (r n)^2 unit normals (x, y), toroidal
+#endif
 #ifdef DETAIL
 in vec2 vLocal;
 uniform sampler2DArray uMaterials;  // per ring: n x n RGBA8 material weights, toroidal
@@ -54,7 +60,15 @@ void main()
     }
     albedo *= detailFactor(vLocal, materials, length(vRelative));
 #endif
+#ifdef NORMAL_MAP
+    vec2 nxy = texture(uNormals, vec3(vNormalUv, float(uRing))).xy;
+    if (uHasCoarser != 0) {
+        nxy = mix(nxy, texture(uNormals, vec3(vCoarseNormalUv, float(uRing + 1))).xy, vBlend);
+    }
+    vec3 n = normalize(vec3(nxy, sqrt(max(1.0 - dot(nxy, nxy), 0.0))));
+#else
     vec3 n = normalize(vNormal);
+#endif
     vec3 light = uAmbient * (0.6 + 0.4 * n.z) + uSunColour * max(dot(n, uSunDirection), 0.0);
     float haze = 1.0 - exp(-length(vRelative) / uHazeDistance);
     fragColour = vec4(mix(albedo * light, uHazeColour, haze), 1.0);

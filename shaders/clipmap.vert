@@ -29,6 +29,11 @@ out vec2 vFineUv;
 out vec2 vCoarseUv;
 out float vBlend;
 out vec2 vLocal;  // metres from the window origin (the detail layers count from there)
+#ifdef NORMAL_MAP
+uniform float uNormalTexelsPerCell;  // r: the normal layers have r n texels a side, sample g at texel r g
+out vec2 vNormalUv;
+out vec2 vCoarseNormalUv;
+#endif
 
 float fine(ivec2 local)
 {
@@ -78,5 +83,10 @@ void main()
     vCoarseUv = (vec2(uCoarseTexel + uCoarseOffset) + 0.5 * vec2(local) + 0.5) / float(uSamples);
     vBlend = alpha;
     vLocal = vec2(local) * uSpacing;
+#ifdef NORMAL_MAP
+    float side = uNormalTexelsPerCell * float(uSamples);
+    vNormalUv = (uNormalTexelsPerCell * vec2(uWindowTexel + local) + 0.5) / side;
+    vCoarseNormalUv = (uNormalTexelsPerCell * (vec2(uCoarseTexel + uCoarseOffset) + 0.5 * vec2(local)) + 0.5) / side;
+#endif
     gl_Position = uViewProjection * vec4(vRelative, 1.0);
 }

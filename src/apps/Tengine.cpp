@@ -339,14 +339,18 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
         const bool synthesis = scene->synthesizer && header.hasDetailErrors();
         const int finest = clipmapFinestLevel(o, header, synthesis);
         scene->clipmapLayout.emplace(extentOf(header), static_cast<int>(header.chunkSize), o.clipmapSamples, finest, 0);
-        auto clipmapRenderer = ClipmapRenderer::create(shaders, header, *scene->clipmapLayout, materials);
+        const int normalTexels = o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0;
+        scene->clipmap = std::make_unique<ClipmapTerrain>(
+            *scene->clipmapLayout, static_cast<int>(header.chunkSize), static_cast<int>(header.textureSize),
+            materials && std::any_of(materials->materials().begin(), materials->materials().end(),
+                                     [](const Material& m) { return !m.detailTextures.empty(); }),
+            normalTexels);
+        auto clipmapRenderer = ClipmapRenderer::create(shaders, header, *scene->clipmapLayout, materials,
+                                                       scene->clipmap->normalTexelsPerCell());
         if (!clipmapRenderer.ok()) {
             return fail(clipmapRenderer.error().message);
         }
         scene->clipmapRenderer = std::move(clipmapRenderer).value();
-        scene->clipmap = std::make_unique<ClipmapTerrain>(*scene->clipmapLayout, static_cast<int>(header.chunkSize),
-                                                          static_cast<int>(header.textureSize),
-                                                          scene->clipmapRenderer->drawsDetail());
         log("clipmap: " + std::to_string(scene->clipmapLayout->ringCount()) + " rings of " +
             std::to_string(o.clipmapSamples) + " x " + std::to_string(o.clipmapSamples) + " samples, levels 0 to " +
             std::to_string(finest) + " (finest spacing " + std::to_string(header.spacingAt(finest)) + " m), " +

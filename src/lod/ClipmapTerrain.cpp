@@ -11,13 +11,18 @@
 
 namespace terrain {
 
-ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize, bool materials)
+ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize, bool materials,
+                               int normalMapTexels)
     : mSamples(layout.samples()),
       mChunk(chunkSize),
       mTexture(textureSize),
+      mNormalTexels(normalMapTexels),
+      mNormalPerCell(normalMapTexels > 0 ? std::max(1, (normalMapTexels - 1) / (chunkSize - 1)) : 0),
       mRings(static_cast<std::size_t>(layout.ringCount()))
 {
     TERRAIN_EXPECTS(chunkSize >= 3 && textureSize >= 2, "chunks have at least 3 samples and textures 2 texels");
+    TERRAIN_EXPECTS(normalMapTexels == 0 || normalMapTexels >= 2, "a normal map has at least 2 texels a side");
+    const auto normalSide = static_cast<std::size_t>(mNormalPerCell) * static_cast<std::size_t>(mSamples);
     const auto samples = static_cast<std::size_t>(mSamples) * static_cast<std::size_t>(mSamples);
     for (ClipmapRing& ring : mRings) {
         ring.heights.assign(samples, 0.0f);
@@ -25,6 +30,8 @@ ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int t
         if (materials) {
             ring.materials.assign(samples * 4, 0);
         }
+        // Flat (0, 0, 1) until filled.
+        ring.normals.assign(normalSide * normalSide * 2, 0);
     }
 }
 
@@ -46,7 +53,7 @@ std::size_t ClipmapTerrain::bytes() const
 {
     std::size_t total = 0;
     for (const ClipmapRing& ring : mRings) {
-        total += ring.heights.size() * sizeof(float) + ring.colour.size() + ring.materials.size();
+        total += ring.heights.size() * sizeof(float) + ring.colour.size() + ring.materials.size() + ring.normals.size();
     }
     return total;
 }
@@ -83,6 +90,12 @@ LatticeRect nodeRegion(const NodeId& id, int chunk)
     r.x1 = id.x == last ? kFar : r.x1;
     r.y1 = id.y == last ? kFar : r.y1;
     return r;
+}
+
+/// a / b rounded down (b > 0).
+std::int64_t floorDiv(std::int64_t a, std::int64_t b)
+{
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
 }
 
 }  // namespace
@@ -169,7 +182,65 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
             }
         }
     }
+    if (mNormalPerCell > 0) {
+        fillNormals(layout, r, rect, resident);
+    }
     ring.changed.push_back(rect);
+}
+
+void ClipmapTerrain::fillNormals(const ClipmapLayout& layout, int r, const LatticeRect& rect,
+                                 const ResidentNodeLookup& resident)
+{
+    // Each sample's block of q x q texels (the cell north-east of it); a texel takes its node's normal map
+    // texel there (nearest when the maps have fewer texels than the node has cells), or, where the node is
+    // not resident, the mean of the coarser ring's texels around the same point.
+    const int q = mNormalPerCell;
+    const int side = q * mSamples;
+    const int level = layout.window(r).level;
+    const int cells = mChunk - 1;
+    const int mapCells = mNormalTexels - 1;
+    ClipmapRing& ring = mRings[static_cast<std::size_t>(r)];
+    const ClipmapRing* up = r + 1 < ringCount() ? &mRings[static_cast<std::size_t>(r + 1)] : nullptr;
+    NodeId lastId{-1, 0, 0};
+    NodePtr node;
+    for (std::int64_t ty = rect.y0 * q; ty < rect.y1 * q; ++ty) {
+        for (std::int64_t tx = rect.x0 * q; tx < rect.x1 * q; ++tx) {
+            const std::int64_t gx = floorDiv(tx, q), gy = floorDiv(ty, q);  // windows reach past the terrain
+            const std::int64_t fx = tx - gx * q, fy = ty - gy * q;
+            const NodeSample at = nodeSampleAt(level, gx, gy, mChunk);
+            if (!(at.id == lastId)) {
+                lastId = at.id;
+                node = resident(at.id);
+            }
+            const std::size_t t =
+                (static_cast<std::size_t>(toroidalTexel(ty, side)) * side + toroidalTexel(tx, side)) * 2;
+            if (node && !node->normalMap.empty()) {
+                // Position in the node's cells, then in its map's texels (clamped: outside the terrain).
+                const double px = (at.u - kBorder) + static_cast<double>(fx) / q;
+                const double py = (at.v - kBorder) + static_cast<double>(fy) / q;
+                const int mx = std::clamp(static_cast<int>(std::lround(px * mapCells / cells)), 0, mapCells);
+                const int my = std::clamp(static_cast<int>(std::lround(py * mapCells / cells)), 0, mapCells);
+                const std::size_t k = (static_cast<std::size_t>(my) * mNormalTexels + mx) * 2;
+                ring.normals[t] = node->normalMap[k];
+                ring.normals[t + 1] = node->normalMap[k + 1];
+            } else if (up) {
+                // The coarser ring's texel grid has the same q per (coarser) cell: this point is at texel t / 2.
+                int sum[2] = {0, 0};
+                int count = 0;
+                for (std::int64_t j = ty >> 1; j <= (ty + 1) >> 1; ++j) {
+                    for (std::int64_t i = tx >> 1; i <= (tx + 1) >> 1; ++i) {
+                        const std::size_t u =
+                            (static_cast<std::size_t>(toroidalTexel(j, side)) * side + toroidalTexel(i, side)) * 2;
+                        sum[0] += up->normals[u];
+                        sum[1] += up->normals[u + 1];
+                        ++count;
+                    }
+                }
+                ring.normals[t] = static_cast<std::int8_t>(sum[0] / count);
+                ring.normals[t + 1] = static_cast<std::int8_t>(sum[1] / count);
+            }
+        }
+    }
 }
 
 void ClipmapTerrain::update(const ClipmapLayout& layout, const std::vector<std::vector<LatticeRect>>& entered,

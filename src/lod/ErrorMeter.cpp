@@ -45,6 +45,18 @@ bool descends(const NodeId& node, const NodeId& ancestor)
     return k >= 0 && (node.x >> k) == ancestor.x && (node.y >> k) == ancestor.y;
 }
 
+/// The mean (from `sum` of the points' errors) and 99th percentile of `out`'s measured points.
+void summarize(FrameError& out, double sum)
+{
+    if (out.points > 0) {
+        out.meanPixels = sum / static_cast<double>(out.points);
+        std::vector<float> sorted = out.pixels;
+        const auto at = static_cast<std::size_t>(0.99 * static_cast<double>(sorted.size() - 1));
+        std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(at), sorted.end());
+        out.p99Pixels = sorted[at];
+    }
+}
+
 }  // namespace
 
 VerticalSegmentProjector::VerticalSegmentProjector(const Camera& camera)
@@ -319,13 +331,7 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
             out.refinedWithinTau += r.worst <= tauPixels ? 1 : 0;
         }
     }
-    if (out.points > 0) {
-        out.meanPixels = sum / static_cast<double>(out.points);
-        std::vector<float> sorted = out.pixels;
-        const auto at = static_cast<std::size_t>(0.99 * static_cast<double>(sorted.size() - 1));
-        std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(at), sorted.end());
-        out.p99Pixels = sorted[at];
-    }
+    summarize(out, sum);
     return out;
 }
 
@@ -375,13 +381,7 @@ Expected<FrameError> ErrorMeter::measureSurface(const DrawnSurface& drawn, const
         }
     }
     trimCache();
-    if (out.points > 0) {
-        out.meanPixels = sum / static_cast<double>(out.points);
-        std::vector<float> sorted = out.pixels;
-        const auto at = static_cast<std::size_t>(0.99 * static_cast<double>(sorted.size() - 1));
-        std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(at), sorted.end());
-        out.p99Pixels = sorted[at];
-    }
+    summarize(out, sum);
     return out;
 }
 

@@ -31,9 +31,31 @@ void setUpLayers(const gl::Texture& texture, GLenum internalFormat, GLenum forma
 
 }  // namespace
 
+ClipmapRenderer::Mesh ClipmapRenderer::makeMesh(const std::vector<GLint>& vertices,
+                                                const std::vector<std::uint32_t>& indices)
+{
+    Mesh m;
+    m.vao = gl::VertexArray::create();
+    m.vertices = gl::Buffer::create();
+    m.indices = gl::Buffer::create();
+    glBindVertexArray(m.vao.name());
+    glBindBuffer(GL_ARRAY_BUFFER, m.vertices.name());
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GLint)), vertices.data(),
+                 GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribIPointer(0, 2, GL_INT, 0, nullptr);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.indices.name());
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
+                 indices.data(), GL_STATIC_DRAW);
+    glBindVertexArray(0);
+    m.count = static_cast<GLsizei>(indices.size());
+    return m;
+}
+
 Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::filesystem::path& shaderDirectory,
                                                                    const MapHeader& header, const ClipmapLayout& layout,
-                                                                   const MaterialSet* materials)
+                                                                   const MaterialSet* materials,
+                                                                   int normalTexelsPerCell)
 {
     std::unique_ptr<ClipmapRenderer> r(new ClipmapRenderer(header));
     if (materials) {
@@ -42,6 +64,9 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
         r->mDetail = std::move(layers).value();
     }
     std::vector<std::string> defines = r->mDetail.defines();
+    if (normalTexelsPerCell > 0) {
+        defines.emplace_back("NORMAL_MAP");
+    }
     auto near = ShaderProgram::load(shaderDirectory, "clipmap", defines);
     TERRAIN_TRY(near);
     r->mPrograms.push_back(std::move(near.value()));
@@ -67,8 +92,17 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
         setUpLayers(r->mMaterials, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
         r->mTextureBytes += static_cast<std::size_t>(n) * n * layout.ringCount() * 4;
     }
+    r->mNormalPerCell = normalTexelsPerCell;
+    if (normalTexelsPerCell > 0) {
+        const int side = normalTexelsPerCell * n;
+        r->mNormals = gl::Texture::create();
+        setUpLayers(r->mNormals, GL_RG8_SNORM, GL_RG, GL_BYTE, side, layout.ringCount(), GL_LINEAR);
+        r->mTextureBytes += static_cast<std::size_t>(side) * side * layout.ringCount() * 2;
+    }
     for (const ShaderProgram& program : r->mPrograms) {
         program.use();
+        glUniform1i(program.uniform("uNormals"), 4);
+        glUniform1f(program.uniform("uNormalTexelsPerCell"), static_cast<float>(normalTexelsPerCell));
         glUniform1i(program.uniform("uHeights"), 0);
         glUniform1i(program.uniform("uColour"), 1);
         glUniform1i(program.uniform("uMaterials"), 3);
@@ -96,21 +130,7 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
     for (std::size_t i = 0; i < indices.size(); ++i) {
         indices[i] = static_cast<std::uint32_t>(i);
     }
-    Mesh& m = r->mPerimeter;
-    m.vao = gl::VertexArray::create();
-    m.vertices = gl::Buffer::create();
-    m.indices = gl::Buffer::create();
-    glBindVertexArray(m.vao.name());
-    glBindBuffer(GL_ARRAY_BUFFER, m.vertices.name());
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GLint)), vertices.data(),
-                 GL_STATIC_DRAW);
-    glEnableVertexAttribArray(0);
-    glVertexAttribIPointer(0, 2, GL_INT, 0, nullptr);
-    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.indices.name());
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
-                 indices.data(), GL_STATIC_DRAW);
-    m.count = static_cast<GLsizei>(indices.size());
-    glBindVertexArray(0);
+    r->mPerimeter = makeMesh(vertices, indices);
     return r;
 }
 
@@ -136,21 +156,7 @@ const ClipmapRenderer::Mesh& ClipmapRenderer::footprint(std::int64_t w, std::int
             indices.insert(indices.end(), {at(i, j), at(i + 1, j + 1), at(i, j + 1)});
         }
     }
-    Mesh m;
-    m.vao = gl::VertexArray::create();
-    m.vertices = gl::Buffer::create();
-    m.indices = gl::Buffer::create();
-    glBindVertexArray(m.vao.name());
-    glBindBuffer(GL_ARRAY_BUFFER, m.vertices.name());
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GLint)), vertices.data(),
-                 GL_STATIC_DRAW);
-    glEnableVertexAttribArray(0);
-    glVertexAttribIPointer(0, 2, GL_INT, 0, nullptr);
-    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.indices.name());
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
-                 indices.data(), GL_STATIC_DRAW);
-    glBindVertexArray(0);
-    m.count = static_cast<GLsizei>(indices.size());
+    Mesh m = makeMesh(vertices, indices);
     m.triangles = static_cast<std::uint64_t>(w * h * 2);
     return mFootprints.emplace(std::pair{w, h}, std::move(m)).first->second;
 }
@@ -159,37 +165,46 @@ void ClipmapRenderer::upload(ClipmapTerrain& terrain, int ring, ClipmapStats& st
 {
     const int n = mSamples;
     const ClipmapRing& data = terrain.ring(ring);
-    glPixelStorei(GL_UNPACK_ROW_LENGTH, n);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    for (const LatticeRect& rect : terrain.takeChanged(ring)) {
-        // The rectangle's texels, split where they wrap around the texture's edges.
-        const int tx = toroidalTexel(rect.x0, n), ty = toroidalTexel(rect.y0, n);
-        const int w = static_cast<int>(rect.x1 - rect.x0), h = static_cast<int>(rect.y1 - rect.y0);
-        const int xs[2][2] = {{tx, std::min(w, n - tx)}, {0, w - std::min(w, n - tx)}};
-        const int ys[2][2] = {{ty, std::min(h, n - ty)}, {0, h - std::min(h, n - ty)}};
+    // One layer's texels of lattice rectangle [x0, x1) x [y0, y1) of a toroidal side x side grid, split where
+    // they wrap around the texture's edges; `texels` points at the layer's texel (0, 0).
+    auto layer = [ring](const gl::Texture& texture, int side, std::int64_t x0, std::int64_t y0, std::int64_t x1,
+                        std::int64_t y1, GLenum format, GLenum type, const void* texels, std::size_t texelBytes) {
+        glBindTexture(GL_TEXTURE_2D_ARRAY, texture.name());
+        glPixelStorei(GL_UNPACK_ROW_LENGTH, side);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+        const int tx = toroidalTexel(x0, side), ty = toroidalTexel(y0, side);
+        const int w = static_cast<int>(x1 - x0), h = static_cast<int>(y1 - y0);
+        const int xs[2][2] = {{tx, std::min(w, side - tx)}, {0, w - std::min(w, side - tx)}};
+        const int ys[2][2] = {{ty, std::min(h, side - ty)}, {0, h - std::min(h, side - ty)}};
         for (const auto& [y, rows] : ys) {
             for (const auto& [x, columns] : xs) {
-                if (rows <= 0 || columns <= 0) {
-                    continue;
+                if (rows > 0 && columns > 0) {
+                    const std::size_t first = (static_cast<std::size_t>(y) * side + x) * texelBytes;
+                    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, x, y, ring, columns, rows, 1, format, type,
+                                    static_cast<const std::uint8_t*>(texels) + first);
                 }
-                const std::size_t first = static_cast<std::size_t>(y) * n + x;
-                glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
-                glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, x, y, ring, columns, rows, 1, GL_RED, GL_FLOAT,
-                                data.heights.data() + first);
-                glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
-                glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, x, y, ring, columns, rows, 1, GL_RGBA, GL_UNSIGNED_BYTE,
-                                data.colour.data() + first * 4);
-                if (mMaterials) {
-                    TERRAIN_EXPECTS(!data.materials.empty(), "with detail layers the rings keep material weights");
-                    glBindTexture(GL_TEXTURE_2D_ARRAY, mMaterials.name());
-                    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, x, y, ring, columns, rows, 1, GL_RGBA, GL_UNSIGNED_BYTE,
-                                    data.materials.data() + first * 4);
-                }
-                stats.uploadedSamples += static_cast<std::size_t>(rows) * static_cast<std::size_t>(columns);
             }
         }
+    };
+    TERRAIN_EXPECTS(!mMaterials || !data.materials.empty(), "with detail layers the rings keep material weights");
+    TERRAIN_EXPECTS(!mNormals || terrain.normalTexelsPerCell() == mNormalPerCell,
+                    "with normal maps the rings keep them at the renderer's texels a cell");
+    for (const LatticeRect& rect : terrain.takeChanged(ring)) {
+        layer(mHeights, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RED, GL_FLOAT, data.heights.data(), 4);
+        layer(mColour, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RGBA, GL_UNSIGNED_BYTE, data.colour.data(), 4);
+        if (mMaterials) {
+            layer(mMaterials, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RGBA, GL_UNSIGNED_BYTE, data.materials.data(),
+                  4);
+        }
+        if (mNormals) {
+            const int q = mNormalPerCell;
+            layer(mNormals, q * n, rect.x0 * q, rect.y0 * q, rect.x1 * q, rect.y1 * q, GL_RG, GL_BYTE,
+                  data.normals.data(), 2);
+        }
+        stats.uploadedSamples += static_cast<std::size_t>(rect.area());
     }
     glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
 }
 
 ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& terrain, int firstRing,
@@ -241,6 +256,10 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
     if (mMaterials) {
         glActiveTexture(GL_TEXTURE3);
         glBindTexture(GL_TEXTURE_2D_ARRAY, mMaterials.name());
+    }
+    if (mNormals) {
+        glActiveTexture(GL_TEXTURE4);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mNormals.name());
     }
     glActiveTexture(GL_TEXTURE0);
     mDetail.bind(2);

@@ -23,6 +23,7 @@
 #include <map>
 #include <memory>
 #include <utility>
+#include <vector>
 
 namespace terrain {
 
@@ -41,17 +42,18 @@ public:
     /// the GL's log.
     /// With `materials`, their detail textures (render/DetailLayers.h) are drawn over the rings' colours,
     /// weighted by the rings' material weights (the terrain must keep them: ClipmapTerrain's `materials`).
+    /// With `normalTexelsPerCell` > 0 the rings' normal maps light the terrain (ClipmapTerrain's, that many
+    /// texels a cell), blended to the coarser ring's like the colours; else the vertex normals of the heights.
     static Expected<std::unique_ptr<ClipmapRenderer>> create(const std::filesystem::path& shaderDirectory,
                                                              const MapHeader& header, const ClipmapLayout& layout,
-                                                             const MaterialSet* materials = nullptr);
+                                                             const MaterialSet* materials = nullptr,
+                                                             int normalTexelsPerCell = 0);
 
     /// Uploads what `terrain` changed, then clears, draws the sky and rings `firstRing` to the coarsest for
     /// `camera` (layout placed for it by moveTo).
     ClipmapStats draw(const ClipmapLayout& layout, ClipmapTerrain& terrain, int firstRing, const Camera& camera,
                       const SceneStyle& style);
 
-    /// True when it draws the materials' detail textures (the rings must keep material weights).
-    bool drawsDetail() const { return !mDetail.empty(); }
     /// GPU bytes of the ring layers (fixed by n and the ring count).
     std::size_t textureBytes() const { return mTextureBytes; }
 
@@ -64,6 +66,8 @@ private:
         std::uint64_t triangles = 0;
     };
     explicit ClipmapRenderer(const MapHeader& header) : mHeader(header) {}
+    /// A vertex array of integer grid vertices (x, y) and triangle indices.
+    static Mesh makeMesh(const std::vector<GLint>& vertices, const std::vector<std::uint32_t>& indices);
     /// The footprint of w x h cells (made the first time it is asked for).
     const Mesh& footprint(std::int64_t w, std::int64_t h);
     void upload(ClipmapTerrain& terrain, int ring, ClipmapStats& stats);
@@ -79,6 +83,8 @@ private:
     Sky mSky;
     gl::Texture mHeights;    ///< GL_TEXTURE_2D_ARRAY R32F, a layer per ring
     gl::Texture mColour;     ///< GL_TEXTURE_2D_ARRAY RGBA8, a layer per ring
+    gl::Texture mNormals;    ///< GL_TEXTURE_2D_ARRAY RG8_SNORM normal maps, (r n)^2 a ring; none without normal maps
+    int mNormalPerCell = 0;  ///< r
     gl::Texture mMaterials;  ///< GL_TEXTURE_2D_ARRAY RGBA8 material weights, a layer per ring; none without layers
     std::map<std::pair<std::int64_t, std::int64_t>, Mesh> mFootprints;
     Mesh mPerimeter;  ///< zero-area triangles (a, midpoint, b) along a window's perimeter

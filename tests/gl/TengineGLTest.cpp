@@ -309,10 +309,12 @@ TEST_F(TengineGLTest, ClipmapRingsMeetWithoutSeamsUpClose)
     EXPECT_GT(rows.front().at("deepest_level"), 4.0) << "rings below the map's data (dynamic levels) drawn";
 }
 
-/// lod_mode = clipmap draws the materials' detail textures as the quadtree does (render/DetailLayers.h): the
-/// same low view with the shipped materials and with copies that lack their detail_texture lines (the same
-/// synthesis, the same ring heights) differs on the near ground by fine-grained contrast, the textures' grain.
-TEST_F(TengineGLTest, ClipmapModeDrawsTheMaterialsDetailTextures)
+/// lod_mode = clipmap draws the materials' detail textures and the nodes' normal maps as the quadtree does
+/// (render/DetailLayers.h, dynamic_texture_size): the same low view with the shipped materials and with copies
+/// that lack their detail_texture lines (the same synthesis, the same ring heights) differs on the near
+/// ground by fine-grained contrast, the textures' grain; without the textures, the normal maps add shading
+/// finer than the rings' triangles (against dynamic_texture_size = 0, lit by vertex normals).
+TEST_F(TengineGLTest, ClipmapModeDrawsTheMaterialsDetailTexturesAndNormalMaps)
 {
     test::ScratchDir plainMaterials;
     std::vector<std::filesystem::path> plain;
@@ -327,8 +329,9 @@ TEST_F(TengineGLTest, ClipmapModeDrawsTheMaterialsDetailTextures)
         plain.push_back(plainMaterials.path() / file.filename());
     }
     // The last detail_materials setting counts: lowDetailFlight's are the shipped ones.
-    auto render = [&](const std::filesystem::path& frames, const std::vector<std::filesystem::path>& materials) {
-        std::vector<std::string> settings = {"video_frames=1", "draw_user_interface=false", "lod_mode=clipmap"};
+    auto render = [&](const std::filesystem::path& frames, const std::vector<std::filesystem::path>& materials,
+                      std::string more = "video_frames=1") {
+        std::vector<std::string> settings = {"video_frames=1", "draw_user_interface=false", "lod_mode=clipmap", more};
         settings = lowDetailFlight(settings);
         if (!materials.empty()) {
             settings.push_back("detail_materials=" + materials[0].string() + ", " + materials[1].string());
@@ -337,9 +340,10 @@ TEST_F(TengineGLTest, ClipmapModeDrawsTheMaterialsDetailTextures)
         EXPECT_EQ(run.exitCode, 0) << run.output;
         return frame(frames, 0);
     };
-    test::ScratchDir with, without;
+    test::ScratchDir with, without, unmapped;
     const Image textured = render(with.path(), {});
     const Image smooth = render(without.path(), plain);
+    const Image flat = render(unmapped.path(), plain, "dynamic_texture_size=0");
     ASSERT_EQ(textured.pixels.size(), smooth.pixels.size());
     // Grain: the mean absolute difference between horizontal neighbours over the lowest quarter (the ground
     // nearest the camera, where every layer shows).
@@ -358,7 +362,11 @@ TEST_F(TengineGLTest, ClipmapModeDrawsTheMaterialsDetailTextures)
     };
     const double withGrain = grain(textured), withoutGrain = grain(smooth);
     std::printf("clipmap near-ground grain: %.3f with detail textures, %.3f without\n", withGrain, withoutGrain);
-    EXPECT_GT(withGrain, 1.5 * withoutGrain) << "the detail textures must show on the near ground";
+    EXPECT_GT(withGrain, 1.4 * withoutGrain) << "the detail textures must show on the near ground";
+    const double flatGrain = grain(flat);
+    std::printf("clipmap near-ground grain without detail textures: %.3f with normal maps, %.3f without\n",
+                withoutGrain, flatGrain);
+    EXPECT_GT(withoutGrain, 1.2 * flatGrain) << "the normal maps must shade the near ground finer";
 }
 
 TEST_F(TengineGLTest, WithoutTessellationShadersTheTessellationModeFallsBackToChunks)

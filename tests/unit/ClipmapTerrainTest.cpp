@@ -7,6 +7,7 @@
 #include "MapTestSupport.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
+#include "synthesis/NormalMap.h"
 
 #include <gtest/gtest.h>
 
@@ -29,6 +30,17 @@ protected:
         auto tree = test::decodeTree(*mMap);
         ASSERT_TRUE(tree.ok()) << tree.error().message;
         mTree = std::move(tree.value());
+    }
+
+    /// A streamer over `source` loading inline (in drain()), with a cache of `cacheSize` nodes; null on failure.
+    std::unique_ptr<TerrainStreamer> inlineStreamer(TerrainNodeSource& source, std::size_t cacheSize) const
+    {
+        StreamerOptions options;
+        options.cacheSize = cacheSize;
+        options.workers = 0;
+        auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+        EXPECT_TRUE(streamer.ok()) << streamer.error().message;
+        return streamer.ok() ? std::move(streamer).value() : nullptr;
     }
 
     /// Moves to (x, y) and loads until the windows want nothing more; returns the rounds it took.
@@ -93,11 +105,8 @@ protected:
 TEST_F(ClipmapTerrainTest, SettledRingsHoldTheirNodesSamplesAlongAFlight)
 {
     TerrainNodeSource source(*mMap, {});
-    StreamerOptions options;
-    options.cacheSize = 400;
-    options.workers = 0;
-    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
-    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    auto streamer = inlineStreamer(source, 400);
+    ASSERT_TRUE(streamer);
     ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 4, 0);
     ClipmapTerrain terrain(layout, 17, 17);
     EXPECT_EQ(terrain.bytes(), std::size_t{5} * 31 * 31 * 8);
@@ -105,7 +114,7 @@ TEST_F(ClipmapTerrainTest, SettledRingsHoldTheirNodesSamplesAlongAFlight)
     const std::pair<double, double> flight[] = {{200, 300}, {203, 301}, {211, 290}, {260, 250},
                                                 {20, 500},  {-30, 530}, {400, 100}, {401.5, 99}};
     for (auto [x, y] : flight) {
-        const int rounds = settle(layout, terrain, **streamer, x, y);
+        const int rounds = settle(layout, terrain, *streamer, x, y);
         EXPECT_LT(rounds, 100) << "at " << x << ", " << y;
         EXPECT_EQ(terrain.upsampledNodes(), 0u) << "every static node the windows want exists";
         for (int r = 0; r < layout.ringCount(); ++r) {
@@ -115,7 +124,7 @@ TEST_F(ClipmapTerrainTest, SettledRingsHoldTheirNodesSamplesAlongAFlight)
     // A fresh clipmap at the last position holds the same bits: the toroidal updates lose nothing.
     ClipmapLayout freshLayout(extentOf(mMap->header()), 17, 31, 4, 0);
     ClipmapTerrain fresh(freshLayout, 17, 17);
-    settle(freshLayout, fresh, **streamer, flight[std::size(flight) - 1].first, flight[std::size(flight) - 1].second);
+    settle(freshLayout, fresh, *streamer, flight[std::size(flight) - 1].first, flight[std::size(flight) - 1].second);
     for (int r = 0; r < layout.ringCount(); ++r) {
         EXPECT_EQ(fresh.ring(r).heights, terrain.ring(r).heights) << "ring " << r;
         EXPECT_EQ(fresh.ring(r).colour, terrain.ring(r).colour) << "ring " << r;
@@ -127,14 +136,11 @@ TEST_F(ClipmapTerrainTest, DrawnSurfaceIsContinuousWhereRingsMeet)
     // On each ring's perimeter its surface (blended all the way to the coarser ring) is the coarser ring's own
     // surface there: the shader's geometry (ClipmapTerrain::ringSurface) meets without a step.
     TerrainNodeSource source(*mMap, {});
-    StreamerOptions options;
-    options.cacheSize = 400;
-    options.workers = 0;
-    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
-    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    auto streamer = inlineStreamer(source, 400);
+    ASSERT_TRUE(streamer);
     ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 4, 0);
     ClipmapTerrain terrain(layout, 17, 17);
-    settle(layout, terrain, **streamer, 261.3, 247.9);
+    settle(layout, terrain, *streamer, 261.3, 247.9);
     int checked = 0;
     double largestStep = 0.0;
     for (int r = 0; r + 1 < layout.ringCount(); ++r) {
@@ -175,13 +181,11 @@ TEST_F(ClipmapTerrainTest, DrawnSurfaceIsContinuousWhereRingsMeet)
 TEST_F(ClipmapTerrainTest, MissingNodesAreUpsampledFromTheCoarserRingUntilTheyArrive)
 {
     TerrainNodeSource source(*mMap, {});
-    StreamerOptions options;
-    options.workers = 0;
-    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
-    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    auto streamer = inlineStreamer(source, StreamerOptions{}.cacheSize);
+    ASSERT_TRUE(streamer);
     ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 2, 0);
     ClipmapTerrain terrain(layout, 17, 17);
-    const ResidentNodeLookup lookup = [&](const NodeId& id) { return (*streamer)->node(id); };
+    const ResidentNodeLookup lookup = [&](const NodeId& id) { return streamer->node(id); };
     terrain.update(layout, layout.moveTo(250.0, 260.0), lookup);
     // Only the root is resident: rings 1 and 0 are the root's surface, bilinearly upsampled.
     EXPECT_GT(terrain.upsampledNodes(), 0u);
@@ -201,7 +205,7 @@ TEST_F(ClipmapTerrainTest, MissingNodesAreUpsampledFromTheCoarserRingUntilTheyAr
                 << gx << ", " << gy;
         }
     }
-    settle(layout, terrain, **streamer, 250.0, 260.0);
+    settle(layout, terrain, *streamer, 250.0, 260.0);
     EXPECT_EQ(terrain.upsampledNodes(), 0u);
     for (int r = 0; r < layout.ringCount(); ++r) {
         expectStaticRing(layout, terrain, r);
@@ -212,15 +216,12 @@ TEST_F(ClipmapTerrainTest, RingsBelowTheStaticLevelsHoldTheSynthesizedNodes)
 {
     const auto synthesizer = test::grassAndRockSynthesizer(17);
     TerrainNodeSource source(*mMap, {synthesizer.get(), 0.05});
-    StreamerOptions options;
-    options.cacheSize = 600;
-    options.workers = 0;
-    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
-    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    auto streamer = inlineStreamer(source, 600);
+    ASSERT_TRUE(streamer);
     ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 6, 0);  // two levels of dynamic nodes
     ClipmapTerrain terrain(layout, 17, 17, /*materials=*/true);
     EXPECT_EQ(terrain.bytes(), std::size_t{7} * 31 * 31 * 12);
-    settle(layout, terrain, **streamer, 130.0, 170.0);
+    settle(layout, terrain, *streamer, 130.0, 170.0);
     EXPECT_EQ(terrain.upsampledNodes(), 0u);
     int materialMismatches = 0;
     const int n = 31, w = windowSize(17);
@@ -229,7 +230,7 @@ TEST_F(ClipmapTerrainTest, RingsBelowTheStaticLevelsHoldTheSynthesizedNodes)
         for (std::int64_t gy = win.y0; gy < win.y0 + n; ++gy) {
             for (std::int64_t gx = win.x0; gx < win.x0 + n; ++gx) {
                 const NodeId id{win.level, static_cast<std::uint32_t>(gx / 16), static_cast<std::uint32_t>(gy / 16)};
-                NodePtr node = (*streamer)->node(id);
+                NodePtr node = streamer->node(id);
                 ASSERT_TRUE(node) << id.toString();
                 ASSERT_FALSE(node->isStatic);
                 const auto k = static_cast<std::size_t>(gy - std::int64_t{id.y} * 16 + kBorder) * w +
@@ -264,6 +265,59 @@ TEST_F(ClipmapTerrainTest, RingsBelowTheStaticLevelsHoldTheSynthesizedNodes)
     EXPECT_GT(seen[1], 0);
 }
 
+TEST_F(ClipmapTerrainTest, RingsHoldTheNodesNormalMapsAtTheirTexels)
+{
+    // dynamic_texture_size 32 on nodes of 16 cells: maps of 33 texels, 2 a cell. Every texel of every ring's
+    // window is its node's normal map texel at the same point (static rings too: their nodes get maps).
+    const auto synthesizer = test::grassAndRockSynthesizer(17);
+    DetailPolicy policy{synthesizer.get(), 0.05};
+    policy.normalMapSize = 32;
+    TerrainNodeSource source(*mMap, policy);
+    auto streamer = inlineStreamer(source, 600);
+    ASSERT_TRUE(streamer);
+    const int n = 31;
+    ClipmapLayout layout(extentOf(mMap->header()), 17, n, 5, 0);
+    ClipmapTerrain terrain(layout, 17, 17, false, normalMapTexels(32));
+    ASSERT_EQ(terrain.normalTexelsPerCell(), 2);
+    EXPECT_EQ(terrain.bytes(), std::size_t{6} * n * n * (8 + 2 * 4));
+    settle(layout, terrain, *streamer, 140.0, 90.0);
+    ASSERT_EQ(terrain.upsampledNodes(), 0u);
+    const int side = 2 * n;
+    int checked = 0, mismatches = 0, tilted = 0;
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        const ClipmapWindow& win = layout.window(r);
+        const std::int64_t last = std::int64_t{16} << win.level;
+        for (std::int64_t ty = 2 * win.y0; ty <= 2 * (win.y0 + n - 1); ++ty) {
+            for (std::int64_t tx = 2 * win.x0; tx <= 2 * (win.x0 + n - 1); ++tx) {
+                if (tx < 0 || ty < 0 || tx > 2 * last || ty > 2 * last) {
+                    continue;  // outside the terrain: clamped
+                }
+                // The node holding texel (tx, ty): east / north one on shared edges but the last.
+                const auto nx = static_cast<std::uint32_t>(std::min<std::int64_t>(tx / 32, (1 << win.level) - 1));
+                const auto ny = static_cast<std::uint32_t>(std::min<std::int64_t>(ty / 32, (1 << win.level) - 1));
+                NodePtr node = streamer->node({win.level, nx, ny});
+                ASSERT_TRUE(node && node->normalMap.size() == std::size_t{33} * 33 * 2);
+                const std::size_t k = (static_cast<std::size_t>(ty - std::int64_t{ny} * 32) * 33 +
+                                       static_cast<std::size_t>(tx - std::int64_t{nx} * 32)) *
+                                      2;
+                const std::size_t t =
+                    (static_cast<std::size_t>(toroidalTexel(ty, side)) * side + toroidalTexel(tx, side)) * 2;
+                const ClipmapRing& ring = terrain.ring(r);
+                if ((ring.normals[t] != node->normalMap[k] || ring.normals[t + 1] != node->normalMap[k + 1]) &&
+                    ++mismatches <= 3) {
+                    ADD_FAILURE() << "ring " << r << " texel (" << tx << ", " << ty << ") of node "
+                                  << node->id.toString();
+                }
+                tilted += std::abs(ring.normals[t]) + std::abs(ring.normals[t + 1]) > 10;
+                ++checked;
+            }
+        }
+    }
+    EXPECT_EQ(mismatches, 0);
+    EXPECT_GT(checked, 6 * 40 * 40);
+    EXPECT_GT(tilted, checked / 10) << "the hills' normals are not all flat";
+}
+
 TEST_F(ClipmapTerrainTest, MemoryIsBoundedByTheClipmapSizeOverALongFlight)
 {
     // Issue 17: memory bounded by the clipmap, not by the path. A window of n samples meets at most
@@ -278,11 +332,8 @@ TEST_F(ClipmapTerrainTest, MemoryIsBoundedByTheClipmapSizeOverALongFlight)
     const std::size_t nodesASide = (n - 1) / 16 + 2;
     const std::size_t groupsPerRing = (nodesASide / 2 + 1) * (nodesASide / 2 + 1);
     const std::size_t bound = 1 + 4 * groupsPerRing * static_cast<std::size_t>(finest);  // level 0: the root
-    StreamerOptions options;
-    options.cacheSize = bound;
-    options.workers = 0;
-    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
-    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    auto streamer = inlineStreamer(source, bound);
+    ASSERT_TRUE(streamer);
     ClipmapLayout layout(extentOf(mMap->header()), 17, n, finest, 0);
     ClipmapTerrain terrain(layout, 17, 17);
     const std::size_t bytes = terrain.bytes();
@@ -296,30 +347,30 @@ TEST_F(ClipmapTerrainTest, MemoryIsBoundedByTheClipmapSizeOverALongFlight)
     };
     for (int s = 0; s <= steps; ++s) {
         const auto [x, y] = at(s);
-        const int rounds = settle(layout, terrain, **streamer, x, y);
+        const int rounds = settle(layout, terrain, *streamer, x, y);
         ASSERT_LT(rounds, 100) << "step " << s << ": the windows never settled in a cache of " << bound;
         ASSERT_EQ(terrain.upsampledNodes(), 0u) << "step " << s << ": a wanted node did not fit";
         const std::vector<NodeId> wanted = terrain.wanted(layout);
         largestWanted = std::max(largestWanted, wanted.size());
-        largestCache = std::max(largestCache, (*streamer)->cache().size());
+        largestCache = std::max(largestCache, streamer->cache().size());
         for (int r = 0; r < layout.ringCount(); ++r) {
             EXPECT_LE(terrain.takeChanged(r).size(), 64u) << "step " << s << " ring " << r;
         }
         EXPECT_EQ(terrain.bytes(), bytes);
         if (s == steps / 3) {
-            evictionsBefore = (*streamer)->cache().evictions();
+            evictionsBefore = streamer->cache().evictions();
         }
     }
     std::printf("long flight: largest working set %zu nodes (bound %zu), cache %zu nodes (bound %zu), %llu evictions\n",
                 largestWanted, nodesASide * nodesASide * static_cast<std::size_t>(finest) + 1, largestCache, bound,
-                static_cast<unsigned long long>((*streamer)->cache().evictions()));
+                static_cast<unsigned long long>(streamer->cache().evictions()));
     EXPECT_LE(largestWanted, nodesASide * nodesASide * static_cast<std::size_t>(finest) + 1);
     // The flight did move the working set: later laps evict (and reload) what the first one loaded.
-    EXPECT_GT((*streamer)->cache().evictions(), evictionsBefore);
+    EXPECT_GT(streamer->cache().evictions(), evictionsBefore);
     // And after the whole flight the rings hold what a fresh clipmap at the last position holds.
     ClipmapLayout freshLayout(extentOf(mMap->header()), 17, n, finest, 0);
     ClipmapTerrain fresh(freshLayout, 17, 17);
-    settle(freshLayout, fresh, **streamer, at(steps).first, at(steps).second);
+    settle(freshLayout, fresh, *streamer, at(steps).first, at(steps).second);
     for (int r = 0; r < layout.ringCount(); ++r) {
         EXPECT_EQ(fresh.ring(r).heights, terrain.ring(r).heights) << "ring " << r;
         EXPECT_EQ(fresh.ring(r).colour, terrain.ring(r).colour) << "ring " << r;
