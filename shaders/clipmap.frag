@@ -3,15 +3,20 @@
 // ring's by the vertex's transition weight (seed 002 blends textures in the transition region too), lit and
 // hazed as shaders/terrain.frag lights the quadtree's nodes, with the materials' detail textures (DETAIL,
 // shaders/detail.glsl) weighted by the ring's material weights, and with NORMAL_MAP by the rings' normal maps,
-// both blended like the colours. Outside the input's samples: discarded.
+// both blended like the colours. Where a sample's morph is under way (shaders/clipmap.vert), each of them is on
+// its way from what was drawn before (the uPrevious* layers) by the vertex's remaining fraction, in this ring and
+// in the coarser one. Outside the input's samples: discarded.
 
 in vec3 vRelative;
 in vec3 vNormal;
 in vec2 vFineUv;
 in vec2 vCoarseUv;
 in float vBlend;
+in float vRemaining;        // of this ring's morph at the fragment (0: none under way)
+in float vCoarseRemaining;  // of the coarser ring's
 
-uniform sampler2DArray uColour;  // per ring: n x n RGBA8, toroidal (REPEAT wraps it)
+uniform sampler2DArray uColour;          // per ring: n x n RGBA8, toroidal (REPEAT wraps it)
+uniform sampler2DArray uPreviousColour;  // what they were drawn as when their morph started
 uniform int uRing;
 uniform int uHasCoarser;
 uniform vec3 uSunDirection;
@@ -26,10 +31,12 @@ uniform int uWireframe;
 in vec2 vNormalUv;
 in vec2 vCoarseNormalUv;
 uniform sampler2DArray uNormals;  // per ring: (r n)^2 unit normals (x, y), toroidal
+uniform sampler2DArray uPreviousNormals;
 #endif
 #ifdef DETAIL
 in vec2 vLocal;
 uniform sampler2DArray uMaterials;  // per ring: n x n RGBA8 material weights, toroidal
+uniform sampler2DArray uPreviousMaterials;
 #ifndef DETAIL_TINT_ONLY
 uniform vec4 uLayerOrigin[LAYER_COUNT];  // the window origin in repeats (xy) and turned repeats (zw), fractional
 #define LAYER_ORIGIN(k) uLayerOrigin[k]
@@ -38,6 +45,13 @@ uniform vec4 uLayerOrigin[LAYER_COUNT];  // the window origin in repeats (xy) an
 #endif
 
 out vec4 fragColour;
+
+// A layer's texel at `uv`, `remaining` of the way back to what it was drawn as when its morph started.
+vec4 morphed(sampler2DArray current, sampler2DArray previous, vec2 uv, int layer, float remaining)
+{
+    vec4 now = texture(current, vec3(uv, float(layer)));
+    return remaining > 0.0 ? mix(now, texture(previous, vec3(uv, float(layer))), remaining) : now;
+}
 
 void main()
 {
@@ -49,21 +63,22 @@ void main()
         fragColour = vec4(0.05, 0.05, 0.05, 1.0);
         return;
     }
-    vec3 albedo = texture(uColour, vec3(vFineUv, float(uRing))).rgb;
+    vec3 albedo = morphed(uColour, uPreviousColour, vFineUv, uRing, vRemaining).rgb;
     if (uHasCoarser != 0) {
-        albedo = mix(albedo, texture(uColour, vec3(vCoarseUv, float(uRing + 1))).rgb, vBlend);
+        albedo = mix(albedo, morphed(uColour, uPreviousColour, vCoarseUv, uRing + 1, vCoarseRemaining).rgb, vBlend);
     }
 #ifdef DETAIL
-    vec4 materials = texture(uMaterials, vec3(vFineUv, float(uRing)));
+    vec4 materials = morphed(uMaterials, uPreviousMaterials, vFineUv, uRing, vRemaining);
     if (uHasCoarser != 0) {
-        materials = mix(materials, texture(uMaterials, vec3(vCoarseUv, float(uRing + 1))), vBlend);
+        materials = mix(materials, morphed(uMaterials, uPreviousMaterials, vCoarseUv, uRing + 1, vCoarseRemaining),
+                        vBlend);
     }
     albedo *= detailFactor(vLocal, materials, length(vRelative));
 #endif
 #ifdef NORMAL_MAP
-    vec2 nxy = texture(uNormals, vec3(vNormalUv, float(uRing))).xy;
+    vec2 nxy = morphed(uNormals, uPreviousNormals, vNormalUv, uRing, vRemaining).xy;
     if (uHasCoarser != 0) {
-        nxy = mix(nxy, texture(uNormals, vec3(vCoarseNormalUv, float(uRing + 1))).xy, vBlend);
+        nxy = mix(nxy, morphed(uNormals, uPreviousNormals, vCoarseNormalUv, uRing + 1, vCoarseRemaining).xy, vBlend);
     }
     vec3 n = normalize(vec3(nxy, sqrt(max(1.0 - dot(nxy, nxy), 0.0))));
 #else

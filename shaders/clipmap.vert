@@ -4,11 +4,17 @@
 // layer and blended towards the next coarser ring's surface (bilinear there) by the transition weight
 // alpha = clamp((max |p - viewer| - ((n - 1) / 2 - w - 1)) / w, 0, 1), the same for its normal, so the
 // perimeter of a ring lies exactly on the coarser ring and nothing cracks or pops as the viewer moves.
+// Samples that change in view (a node arriving where its samples were upsampled) morph over uMorphSeconds
+// from the height drawn before (uMorph: previous height, time of the change; ClipmapTerrain::drawnSample is the
+// same in C++), and the fragment program blends their colours, material weights and normals the same way.
 
 layout(location = 0) in ivec2 aGrid;  // the vertex, cells from its footprint's corner
 
 uniform mat4 uViewProjection;    // camera-relative world -> clip
 uniform sampler2DArray uHeights; // per ring: n x n metres above the map's offset, texel = sample mod n
+uniform sampler2DArray uMorph;   // per ring, the same texels: (height drawn before the change, its time in s)
+uniform float uNow;              // the clipmap's clock (ClipmapTerrain::now), seconds
+uniform float uMorphSeconds;     // > 0 (0 morphs are passed as a tiny time: every change is over)
 uniform int uSamples;            // n
 uniform int uRing;               // this ring's layer
 uniform int uHasCoarser;         // 0 for the coarsest ring (nothing to blend to)
@@ -28,6 +34,8 @@ out vec3 vNormal;
 out vec2 vFineUv;
 out vec2 vCoarseUv;
 out float vBlend;
+out float vRemaining;        // of this vertex's morph
+out float vCoarseRemaining;  // of the coarser ring's at this vertex (bilinear, as its height)
 out vec2 vLocal;  // metres from the window origin (the detail layers count from there)
 #ifdef NORMAL_MAP
 uniform float uNormalTexelsPerCell;  // r: the normal layers have r n texels a side, sample g at texel r g
@@ -35,16 +43,48 @@ out vec2 vNormalUv;
 out vec2 vCoarseNormalUv;
 #endif
 
-float fine(ivec2 local)
+// How much of a sample's change is still to come (1 when it has just changed, 0 once its morph is over).
+float remaining(ivec3 texel)
+{
+    return 1.0 - clamp((uNow - texelFetch(uMorph, texel, 0).g) / uMorphSeconds, 0.0, 1.0);
+}
+
+// A sample as drawn now: its height, or on its way there from the height drawn before.
+float drawn(ivec3 texel)
+{
+    float previous = texelFetch(uMorph, texel, 0).r;
+    float height = texelFetch(uHeights, texel, 0).r;
+    return previous + (height - previous) * (1.0 - remaining(texel));
+}
+
+ivec3 fineTexel(ivec2 local)
 {
     ivec2 p = clamp(local, ivec2(0), ivec2(uSamples - 1));
-    return texelFetch(uHeights, ivec3((uWindowTexel + p) % uSamples, uRing), 0).r;
+    return ivec3((uWindowTexel + p) % uSamples, uRing);
+}
+
+float fine(ivec2 local)
+{
+    return drawn(fineTexel(local));
+}
+
+ivec3 coarseTexel(ivec2 c)
+{
+    return ivec3((uCoarseTexel + clamp(c, ivec2(0), ivec2(uSamples - 1))) % uSamples, uRing + 1);
 }
 
 float coarseAt(ivec2 c)
 {
-    return texelFetch(uHeights, ivec3((uCoarseTexel + clamp(c, ivec2(0), ivec2(uSamples - 1))) % uSamples, uRing + 1),
-                      0).r;
+    return drawn(coarseTexel(c));
+}
+
+// The coarser ring's remaining morph at this ring's sample `local`, bilinear like its surface.
+float coarseRemaining(ivec2 local)
+{
+    ivec2 c = uCoarseOffset + (local >> 1);
+    vec2 f = 0.5 * vec2(local & 1);
+    return mix(mix(remaining(coarseTexel(c)), remaining(coarseTexel(c + ivec2(1, 0))), f.x),
+               mix(remaining(coarseTexel(c + ivec2(0, 1))), remaining(coarseTexel(c + ivec2(1, 1))), f.x), f.y);
 }
 
 // The coarser ring's surface at this ring's sample `local` (bilinear: exact at even samples, the mean of two
@@ -82,6 +122,8 @@ void main()
     vFineUv = (vec2(uWindowTexel + local) + 0.5) / float(uSamples);
     vCoarseUv = (vec2(uCoarseTexel + uCoarseOffset) + 0.5 * vec2(local) + 0.5) / float(uSamples);
     vBlend = alpha;
+    vRemaining = remaining(fineTexel(local));
+    vCoarseRemaining = uHasCoarser != 0 ? coarseRemaining(local) : 0.0;
     vLocal = vec2(local) * uSpacing;
 #ifdef NORMAL_MAP
     float side = uNormalTexelsPerCell * float(uSamples);

@@ -344,7 +344,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
             *scene->clipmapLayout, static_cast<int>(header.chunkSize), static_cast<int>(header.textureSize),
             materials && std::any_of(materials->materials().begin(), materials->materials().end(),
                                      [](const Material& m) { return !m.detailTextures.empty(); }),
-            normalTexels);
+            normalTexels, o.clipmapMorphSeconds);
         auto clipmapRenderer = ClipmapRenderer::create(shaders, header, *scene->clipmapLayout, materials,
                                                        scene->clipmap->normalTexelsPerCell());
         if (!clipmapRenderer.ok()) {
@@ -587,7 +587,7 @@ VideoRecorderOptions recorderOptions(const TengineOptions& o, std::size_t frames
 /// height above the ground, the nodes the windows want are asked for and what arrived fills the rings. In
 /// video mode it loads until the windows want nothing more (as the quadtree's rounds do): identical runs give
 /// identical frames.
-FrameStats updateClipmap(Scene& scene, const Camera& camera, bool video)
+FrameStats updateClipmap(Scene& scene, const Camera& camera, bool video, double clock)
 {
     ClipmapLayout& layout = *scene.clipmapLayout;
     ClipmapTerrain& clipmap = *scene.clipmap;
@@ -602,7 +602,7 @@ FrameStats updateClipmap(Scene& scene, const Camera& camera, bool video)
     };
     scene.clipmapFirstRing = firstRing();
     FrameStats stats = streamer.updateFor(clipmap.wanted(layout, scene.clipmapFirstRing));
-    clipmap.update(layout, entered, resident);
+    clipmap.update(layout, entered, resident, clock);
     const std::vector<std::vector<LatticeRect>> none(static_cast<std::size_t>(layout.ringCount()));
     for (int round = 0; video && round < 64; ++round) {
         // The rings just filled may put the ground nearer than it seemed (the first frame's were empty).
@@ -614,7 +614,7 @@ FrameStats updateClipmap(Scene& scene, const Camera& camera, bool video)
         const std::size_t synthesized = stats.synthesized + streamer.drain().synthesized;
         stats = streamer.updateFor(clipmap.wanted(layout, scene.clipmapFirstRing));
         stats.synthesized += synthesized;
-        clipmap.update(layout, none, resident);
+        clipmap.update(layout, none, resident, clock);
     }
     return stats;
 }
@@ -735,6 +735,8 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         const double speed = frame == 0 || step <= 0.0 ? 0.0 : glm::length(camera.position - previousPosition) / step;
         previousPosition = camera.position;
         const auto frameStart = std::chrono::steady_clock::now();
+        // Seconds on the viewer's clock, never decreasing (video mode: the frame's time).
+        const double clock = video || demo ? time : std::chrono::duration<double>(now - start).count();
         // Visibility (issue 16): the pixel counts of the frames drawn long enough ago, then what they hide.
         FrameVisibility visibility;
         double moved = 0.0;  // metres from where the depth tested against was drawn
@@ -753,7 +755,7 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
             visibility.hidden = hiddenFrom(
                 *scene->visibility, scene->occlusion ? &*scene->occlusion : nullptr, streamer.tree(),
                 [&streamer](const NodeId& id) { return streamer.childrenResident(id); }, moved);
-            visibility.time = video || demo ? time : std::chrono::duration<double>(now - start).count();
+            visibility.time = clock;
         }
         BoxOccluded occluded;
         if (scene->occlusion) {
@@ -764,7 +766,7 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         FrameStats frameStats;
         RenderStats renderStats;
         if (scene->clipmap) {
-            frameStats = updateClipmap(*scene, camera, video);
+            frameStats = updateClipmap(*scene, camera, video, clock);
             const ClipmapStats drawn = scene->clipmapRenderer->draw(*scene->clipmapLayout, *scene->clipmap,
                                                                     scene->clipmapFirstRing, camera, style);
             renderStats.triangles = drawn.triangles;

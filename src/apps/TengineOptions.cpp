@@ -502,6 +502,11 @@ std::vector<OptionSpec> makeOptionTable()
                            "(levels below the map's data are synthesized as dynamic nodes; never below "
                            "lod_minimum_spacing, nor below the data without detail_create_new_nodes).",
                            &O::clipmapFinestSpacing, above(0), "metres"));
+    t.push_back(realOption("clipmap_morph_seconds", kGroupDisplay,
+                           "With lod_mode = clipmap: where a node arrives after its samples were drawn upsampled from "
+                           "the coarser level, its heights, colours and normals morph in over this long instead of "
+                           "popping (0: at once). Video mode loads before drawing, so recordings rarely show it.",
+                           &O::clipmapMorphSeconds, atLeast(0), "seconds"));
     t.push_back(realOption("tessellation_error_share", kGroupDisplay,
                            "With render_mode = tessellation: the part of lod_error the blocks inside a node may spend; "
                            "the nodes are selected for the rest, so the drawn surface stays within lod_error.",

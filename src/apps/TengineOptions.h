@@ -76,6 +76,7 @@ struct TengineOptions {
     bool clipmap = false;                     ///< lod_mode: false quadtree, true clipmap (seed 002, issue 17)
     int clipmapSamples = 255;                 ///< clipmap_samples: n = 2^k - 1 in [15, 1023]
     double clipmapFinestSpacing = 1.0;        ///< clipmap_finest_spacing: metres, > 0
+    double clipmapMorphSeconds = 0.3;         ///< clipmap_morph_seconds: >= 0
     double tessellationShare = 0.5;           ///< tessellation_error_share: the part of tau the blocks spend
     double sunAzimuth = 135.0;                ///< sun_azimuth: degrees in [0, 360], clockwise from north
     double sunElevation = 35.0;               ///< sun_elevation: degrees in [-90, 90] above the horizon

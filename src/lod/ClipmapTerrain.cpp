@@ -5,6 +5,7 @@
 #include "quadtree/ChunkGeometry.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -12,26 +13,34 @@
 namespace terrain {
 
 ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize, bool materials,
-                               int normalMapTexels)
+                               int normalMapTexels, double morphSeconds)
     : mSamples(layout.samples()),
       mChunk(chunkSize),
       mTexture(textureSize),
       mNormalTexels(normalMapTexels),
       mNormalPerCell(normalMapTexels > 0 ? std::max(1, (normalMapTexels - 1) / (chunkSize - 1)) : 0),
+      mMorphSeconds(morphSeconds),
       mRings(static_cast<std::size_t>(layout.ringCount()))
 {
     TERRAIN_EXPECTS(chunkSize >= 3 && textureSize >= 2, "chunks have at least 3 samples and textures 2 texels");
     TERRAIN_EXPECTS(normalMapTexels == 0 || normalMapTexels >= 2, "a normal map has at least 2 texels a side");
+    TERRAIN_EXPECTS(morphSeconds >= 0.0, "the morph takes no negative time");
     const auto normalSide = static_cast<std::size_t>(mNormalPerCell) * static_cast<std::size_t>(mSamples);
     const auto samples = static_cast<std::size_t>(mSamples) * static_cast<std::size_t>(mSamples);
     for (ClipmapRing& ring : mRings) {
         ring.heights.assign(samples, 0.0f);
+        for (std::size_t i = 0; i < samples; ++i) {
+            ring.morph.insert(ring.morph.end(), {0.0f, kNoMorph});
+        }
         ring.colour.assign(samples * 4, 255);
+        ring.previousColour = ring.colour;
         if (materials) {
             ring.materials.assign(samples * 4, 0);
+            ring.previousMaterials = ring.materials;
         }
         // Flat (0, 0, 1) until filled.
         ring.normals.assign(normalSide * normalSide * 2, 0);
+        ring.previousNormals = ring.normals;
     }
 }
 
@@ -53,9 +62,27 @@ std::size_t ClipmapTerrain::bytes() const
 {
     std::size_t total = 0;
     for (const ClipmapRing& ring : mRings) {
-        total += ring.heights.size() * sizeof(float) + ring.colour.size() + ring.materials.size() + ring.normals.size();
+        total += (ring.heights.size() + ring.morph.size()) * sizeof(float) + 2 * ring.colour.size() +
+                 2 * ring.materials.size() + 2 * ring.normals.size();
     }
     return total;
+}
+
+float ClipmapTerrain::morphDone(const ClipmapRing& ring, std::size_t t) const
+{
+    // As shaders/clipmap.vert computes it, in float.
+    if (mMorphSeconds <= 0.0) {
+        return 1.0f;
+    }
+    const float since = ring.morph[2 * t + 1];
+    return std::clamp((static_cast<float>(mNow) - since) / static_cast<float>(mMorphSeconds), 0.0f, 1.0f);
+}
+
+float ClipmapTerrain::drawnSample(int ring, std::size_t t) const
+{
+    const ClipmapRing& data = mRings[static_cast<std::size_t>(ring)];
+    const float previous = data.morph[2 * t];
+    return previous + (data.heights[t] - previous) * morphDone(data, t);
 }
 
 namespace {
@@ -98,9 +125,26 @@ std::int64_t floorDiv(std::int64_t a, std::int64_t b)
     return a >= 0 ? a / b : -((-a + b - 1) / b);
 }
 
+/// fill()'s per-sample states for the normal texels, besides a restarted morph's fraction done in [0, 1].
+constexpr float kKept = -1.0f;
+constexpr float kReset = -2.0f;
+
+/// An 8-bit channel on its way from `previous` to `current`, `done` of the way (as the GL blends UNORM texels).
+std::uint8_t mixed(std::uint8_t previous, std::uint8_t current, float done)
+{
+    return static_cast<std::uint8_t>(std::lround(previous + (current - previous) * done));
+}
+
+/// The same for a normal map's SNORM channel.
+std::int8_t mixedNormal(std::int8_t previous, std::int8_t current, float done)
+{
+    return static_cast<std::int8_t>(std::lround(previous + (current - previous) * done));
+}
+
 }  // namespace
 
-void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, const ResidentNodeLookup& resident)
+void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, const ResidentNodeLookup& resident,
+                          bool morph)
 {
     const int n = mSamples;
     ClipmapRing& ring = mRings[static_cast<std::size_t>(r)];
@@ -113,6 +157,10 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
     const bool coarser = r + 1 < ringCount();
     const ClipmapRing* up = coarser ? &mRings[static_cast<std::size_t>(r + 1)] : nullptr;
     const bool withMaterials = !ring.materials.empty();
+    const bool morphs = morph && mMorphSeconds > 0.0;
+    // Per sample of `rect` (row-major), for its normal texels: how far its morph had gone when it restarted
+    // (in [0, 1]), kReset when its morph was cleared, kKept when it was left as it was.
+    std::vector<float> state(static_cast<std::size_t>(rect.area()), kKept);
     // Node lookups are per node, not per sample: the last one is kept.
     NodeId lastId{-1, 0, 0};
     NodePtr node;
@@ -126,6 +174,21 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
             const std::size_t t = static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n);
             const bool haveColour = node && !node->texture.empty();
             const bool haveMaterials = withMaterials && node && !node->materialWeights.empty();
+            // What the sample is drawn as now, before it changes: where a morph starts from.
+            const float done = morphDone(ring, t);
+            const float drawn = drawnSample(r, t);
+            std::array<std::uint8_t, 4> drawnColour{}, drawnMaterials{};
+            for (int c = 0; c < 4; ++c) {
+                drawnColour[c] = mixed(ring.previousColour[t * 4 + c], ring.colour[t * 4 + c], done);
+                drawnMaterials[c] =
+                    withMaterials ? mixed(ring.previousMaterials[t * 4 + c], ring.materials[t * 4 + c], done) : 0;
+            }
+            const float before = ring.heights[t];
+            std::array<std::uint8_t, 4> colourBefore{}, materialsBefore{};
+            std::copy_n(ring.colour.begin() + static_cast<std::ptrdiff_t>(t * 4), 4, colourBefore.begin());
+            if (withMaterials) {
+                std::copy_n(ring.materials.begin() + static_cast<std::ptrdiff_t>(t * 4), 4, materialsBefore.begin());
+            }
             if (node) {
                 ring.heights[t] = node->heights.height(static_cast<std::size_t>(at.v) * w + at.u);
             }
@@ -177,19 +240,51 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                     ring.materials[t * 4 + c] = static_cast<std::uint8_t>(std::lround(weights[c]));
                 }
             }
+            const bool changed =
+                ring.heights[t] != before ||
+                !std::equal(colourBefore.begin(), colourBefore.end(),
+                            ring.colour.begin() + static_cast<std::ptrdiff_t>(t * 4)) ||
+                (withMaterials && !std::equal(materialsBefore.begin(), materialsBefore.end(),
+                                              ring.materials.begin() + static_cast<std::ptrdiff_t>(t * 4)));
+            const std::size_t k = static_cast<std::size_t>((gy - rect.y0) * (rect.x1 - rect.x0) + (gx - rect.x0));
+            if (morphs) {
+                // Every sample of a node that arrives morphs from what is drawn (unchanged ones from themselves).
+                ring.morph[2 * t] = drawn;
+                ring.morph[2 * t + 1] = static_cast<float>(mNow);
+                std::copy(drawnColour.begin(), drawnColour.end(),
+                          ring.previousColour.begin() + static_cast<std::ptrdiff_t>(t * 4));
+                if (withMaterials) {
+                    std::copy(drawnMaterials.begin(), drawnMaterials.end(),
+                              ring.previousMaterials.begin() + static_cast<std::ptrdiff_t>(t * 4));
+                }
+                state[k] = done;
+            } else if (changed) {
+                // No morph: entered samples are new to the window (at its perimeter, where the transition blend
+                // draws the coarser ring anyway), and samples filled in the update that upsampled them were
+                // never drawn. Unchanged samples keep a morph under way (a neighbour's edge).
+                ring.morph[2 * t] = ring.heights[t];
+                ring.morph[2 * t + 1] = kNoMorph;
+                std::copy_n(ring.colour.begin() + static_cast<std::ptrdiff_t>(t * 4), 4,
+                            ring.previousColour.begin() + static_cast<std::ptrdiff_t>(t * 4));
+                if (withMaterials) {
+                    std::copy_n(ring.materials.begin() + static_cast<std::ptrdiff_t>(t * 4), 4,
+                                ring.previousMaterials.begin() + static_cast<std::ptrdiff_t>(t * 4));
+                }
+                state[k] = kReset;
+            }
             if (!node) {
-                ring.upsampled.emplace(at.id.key(), at.id);
+                ring.upsampled.emplace(at.id.key(), ClipmapRing::Upsampled{at.id, mNow});
             }
         }
     }
     if (mNormalPerCell > 0) {
-        fillNormals(layout, r, rect, resident);
+        fillNormals(layout, r, rect, resident, state);
     }
     ring.changed.push_back(rect);
 }
 
 void ClipmapTerrain::fillNormals(const ClipmapLayout& layout, int r, const LatticeRect& rect,
-                                 const ResidentNodeLookup& resident)
+                                 const ResidentNodeLookup& resident, const std::vector<float>& state)
 {
     // Each sample's block of q x q texels (the cell north-east of it); a texel takes its node's normal map
     // texel there (nearest when the maps have fewer texels than the node has cells), or, where the node is
@@ -214,6 +309,15 @@ void ClipmapTerrain::fillNormals(const ClipmapLayout& layout, int r, const Latti
             }
             const std::size_t t =
                 (static_cast<std::size_t>(toroidalTexel(ty, side)) * side + toroidalTexel(tx, side)) * 2;
+            const float sampleState =
+                state[static_cast<std::size_t>((gy - rect.y0) * (rect.x1 - rect.x0) + (gx - rect.x0))];
+            if (sampleState >= 0.0f) {
+                // Its sample's morph restarted: the texel's starts from what is drawn.
+                for (int c = 0; c < 2; ++c) {
+                    ring.previousNormals[t + c] =
+                        mixedNormal(ring.previousNormals[t + c], ring.normals[t + c], sampleState);
+                }
+            }
             if (node && !node->normalMap.empty()) {
                 // Position in the node's cells, then in its map's texels (clamped: outside the terrain).
                 const double px = (at.u - kBorder) + static_cast<double>(fx) / q;
@@ -239,14 +343,20 @@ void ClipmapTerrain::fillNormals(const ClipmapLayout& layout, int r, const Latti
                 ring.normals[t] = static_cast<std::int8_t>(sum[0] / count);
                 ring.normals[t + 1] = static_cast<std::int8_t>(sum[1] / count);
             }
+            if (sampleState == kReset) {
+                ring.previousNormals[t] = ring.normals[t];
+                ring.previousNormals[t + 1] = ring.normals[t + 1];
+            }
         }
     }
 }
 
 void ClipmapTerrain::update(const ClipmapLayout& layout, const std::vector<std::vector<LatticeRect>>& entered,
-                            const ResidentNodeLookup& resident)
+                            const ResidentNodeLookup& resident, double now)
 {
     TERRAIN_EXPECTS(static_cast<int>(entered.size()) == ringCount(), "one list of entered samples per ring");
+    TERRAIN_EXPECTS(now >= mNow, "the clipmap's clock never goes back");
+    mNow = now;
     const int n = mSamples;
     bool coarserChanged = false;
     for (int r = ringCount() - 1; r >= 0; --r) {
@@ -255,13 +365,14 @@ void ClipmapTerrain::update(const ClipmapLayout& layout, const std::vector<std::
         const LatticeRect window = windowRect(layout.window(r), n);
         // Upsampled nodes: forget those the window left; fill again those that arrived, or all of them when
         // the coarser ring they were upsampled from changed.
-        std::vector<NodeId> refill;
+        // The samples of a node upsampled at an earlier update were drawn: their change morphs.
+        std::vector<ClipmapRing::Upsampled> refill;
         for (auto it = ring.upsampled.begin(); it != ring.upsampled.end();) {
-            const NodeId id = it->second;
+            const NodeId id = it->second.id;
             if (intersect(nodeRegion(id, mChunk), window).empty()) {
                 it = ring.upsampled.erase(it);
             } else if (coarserChanged || resident(id)) {
-                refill.push_back(id);
+                refill.push_back(it->second);
                 it = ring.upsampled.erase(it);
             } else {
                 ++it;
@@ -270,15 +381,28 @@ void ClipmapTerrain::update(const ClipmapLayout& layout, const std::vector<std::
         for (const LatticeRect& rect : entered[static_cast<std::size_t>(r)]) {
             fill(layout, r, rect, resident);
         }
-        std::sort(refill.begin(), refill.end(), [](const NodeId& a, const NodeId& b) { return a.key() < b.key(); });
-        for (const NodeId& id : refill) {
-            fill(layout, r, nodeRegion(id, mChunk), resident);
+        std::sort(refill.begin(), refill.end(), [](const ClipmapRing::Upsampled& a, const ClipmapRing::Upsampled& b) {
+            return a.id.key() < b.id.key();
+        });
+        for (const ClipmapRing::Upsampled& node : refill) {
+            fill(layout, r, nodeRegion(node.id, mChunk), resident, node.since < now);
+            if (auto again = ring.upsampled.find(node.id.key()); again != ring.upsampled.end()) {
+                // Still missing (upsampled again from the coarser ring that changed): drawn since `since`.
+                again->second.since = node.since;
+            }
         }
         if (ring.changed.size() != changedBefore) {
+            // Over the heights and where morphs start (a box that holds every height drawn until they end).
             float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
             for (float h : ring.heights) {
                 lo = std::min(lo, h);
                 hi = std::max(hi, h);
+            }
+            for (std::size_t i = 0; i < ring.morph.size(); i += 2) {
+                if (now - ring.morph[i + 1] < mMorphSeconds) {
+                    lo = std::min(lo, ring.morph[i]);
+                    hi = std::max(hi, ring.morph[i]);
+                }
             }
             ring.zMin = lo;
             ring.zMax = hi;
@@ -297,10 +421,9 @@ double ClipmapTerrain::heightAt(const ClipmapLayout& layout, int ring, double x,
     const auto i = static_cast<std::int64_t>(std::min(std::floor(gx), n1 - 1.0));
     const auto j = static_cast<std::int64_t>(std::min(std::floor(gy), n1 - 1.0));
     const double fx = gx - static_cast<double>(i), fy = gy - static_cast<double>(j);
-    const ClipmapRing& data = mRings[static_cast<std::size_t>(ring)];
     auto at = [&](std::int64_t a, std::int64_t b) {
-        return double{data.heights[static_cast<std::size_t>(toroidalTexel(w.y0 + b, mSamples)) * mSamples +
-                                   toroidalTexel(w.x0 + a, mSamples)]};
+        return double{drawnSample(ring, static_cast<std::size_t>(toroidalTexel(w.y0 + b, mSamples)) * mSamples +
+                                            toroidalTexel(w.x0 + a, mSamples))};
     };
     return (1 - fy) * ((1 - fx) * at(i, j) + fx * at(i + 1, j)) +
            fy * ((1 - fx) * at(i, j + 1) + fx * at(i + 1, j + 1));
@@ -316,20 +439,19 @@ std::optional<double> ClipmapTerrain::ringSurface(const ClipmapLayout& layout, i
     if (!(gx >= 0.0 && gy >= 0.0 && gx <= n - 1.0 && gy <= n - 1.0)) {
         return std::nullopt;
     }
-    const ClipmapRing& own = mRings[static_cast<std::size_t>(ring)];
     const bool coarser = ring + 1 < ringCount();
-    auto sample = [&](const ClipmapRing& data, std::int64_t ax, std::int64_t ay) {
-        return double{data.heights[static_cast<std::size_t>(toroidalTexel(ay, n)) * n + toroidalTexel(ax, n)]};
+    auto sample = [&](int r, std::int64_t ax, std::int64_t ay) {
+        return double{drawnSample(r, static_cast<std::size_t>(toroidalTexel(ay, n)) * n + toroidalTexel(ax, n))};
     };
     // A vertex as the vertex program makes it.
     auto vertex = [&](std::int64_t li, std::int64_t lj) {
         const std::int64_t ax = w.x0 + li, ay = w.y0 + lj;
-        const double z = sample(own, ax, ay);
+        const double z = sample(ring, ax, ay);
         if (!coarser) {
             return z;
         }
         const double alpha = layout.blend(ring, static_cast<double>(ax), static_cast<double>(ay));
-        const ClipmapRing& up = mRings[static_cast<std::size_t>(ring + 1)];
+        const int up = ring + 1;
         const std::int64_t cx = ax >> 1, cy = ay >> 1;
         const double fx = (ax & 1) ? 0.5 : 0.0, fy = (ay & 1) ? 0.5 : 0.0;
         const double below = (1 - fy) * ((1 - fx) * sample(up, cx, cy) + fx * sample(up, cx + 1, cy)) +

@@ -3,14 +3,17 @@
 // ones synthesized: the quadtree's own synthesis, so both LOD modes show the same terrain). A sample whose
 // node is not resident yet is upsampled from the coarser ring (bilinear: seed 002's prediction without the
 // residual) and filled again once the node arrives. What changed is kept as rectangles for the renderer to
-// upload. Memory: 8 bytes per sample per ring (12 with material weights, plus 2 r^2 with normal maps), fixed
-// by n and the ring count.
+// upload. Upsampled samples the viewer has seen change to their node's heights over morphSeconds once it
+// arrives, from what was drawn before (heights, colours, material weights, normals: no pop as data streams in).
+// Memory: 20 bytes per sample per ring (28 with material weights, plus 4 r^2 with normal maps), fixed by n and the
+// ring count.
 #pragma once
 
 #include "lod/ClipmapLayout.h"
 #include "lod/NodeData.h"
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 #include <unordered_map>
@@ -26,38 +29,59 @@ struct ClipmapRing {
     /// The nodes' normal maps (NodeData::normalMap: x, y as RG8_SNORM) on a toroidal (r n)^2 texel grid, r texels
     /// a cell (normalTexelsPerCell), sample g's texel at r g mod r n; or empty.
     std::vector<std::int8_t> normals;
+    /// Per sample (previous, since): the height drawn before the sample last changed in view and the time it
+    /// changed (seconds, the update's clock; kNoMorph when it never did). The drawn height is
+    /// heights + (previous - heights) * (1 - clamp((now - since) / morphSeconds, 0, 1)) (drawnSample).
+    std::vector<float> morph;
+    /// What the colours, material weights and normal texels were drawn as when their sample's morph started
+    /// (same layouts; drawn as previous + (current - previous) * the morph's fraction done).
+    std::vector<std::uint8_t> previousColour;
+    std::vector<std::uint8_t> previousMaterials;
+    std::vector<std::int8_t> previousNormals;
     std::vector<LatticeRect> changed;  ///< level-grid samples changed since the renderer last took them
-    float zMin = 0.0f, zMax = 0.0f;    ///< over the window
-    std::unordered_map<std::uint64_t, NodeId> upsampled;  ///< nodes (by key) whose samples are upsampled for now
+    float zMin = 0.0f, zMax = 0.0f;    ///< over the window, heights and morphs' previous heights
+    /// A node whose samples are upsampled for now, and the update time they were first upsampled at.
+    struct Upsampled {
+        NodeId id;
+        double since = 0.0;
+    };
+    std::unordered_map<std::uint64_t, Upsampled> upsampled;  ///< by node key
 };
+
+/// ClipmapRing::morph's time of a sample that never changed in view (far in the past: its morph is over).
+inline constexpr float kNoMorph = -1e30f;
 
 class ClipmapTerrain {
 public:
     /// Rings of `layout` (its size and count), nodes of `chunkSize` samples with `textureSize` texels a side.
     /// With `materials`, the rings keep the nodes' material weights too (for the detail textures); with
     /// `normalMapTexels` > 0, the nodes' normal maps of that many texels a side (dynamic_texture_size,
-    /// normalMapTexels()), at r = max(1, (normalMapTexels - 1) / (chunkSize - 1)) texels a cell.
+    /// normalMapTexels()), at r = max(1, (normalMapTexels - 1) / (chunkSize - 1)) texels a cell. Samples that
+    /// were drawn upsampled morph to their node's heights over `morphSeconds` (clipmap_morph_seconds; 0 pops).
     ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize, bool materials = false,
-                   int normalMapTexels = 0);
+                   int normalMapTexels = 0, double morphSeconds = 0.0);
 
     /// After layout.moveTo() returned `entered`: fills the samples that entered each window and fills again
     /// the samples of nodes that became resident since they were upsampled (and, below a ring that changed,
     /// the upsampled samples of the finer rings), coarse rings first. `resident` gives a node's data or null.
+    /// `now` is the viewer's clock (seconds, never decreasing; video mode: the frame's time): a sample
+    /// upsampled at an earlier update has been drawn, so its change morphs from `now`; one upsampled and
+    /// filled at the same time (a video frame's loading rounds) was never drawn and changes at once.
     void update(const ClipmapLayout& layout, const std::vector<std::vector<LatticeRect>>& entered,
-                const ResidentNodeLookup& resident);
+                const ResidentNodeLookup& resident, double now = 0.0);
 
     /// The nodes the windows of rings `firstRing` and coarser need: each node of a ring's level whose square
     /// meets the ring's window (clamped to the terrain), coarse rings first.
     std::vector<NodeId> wanted(const ClipmapLayout& layout, int firstRing = 0) const;
 
-    /// The surface of ring `ring` at world (x, y) metres, bilinear between its samples (metres above the map's
-    /// offset); the position is clamped to the ring's window.
+    /// The surface of ring `ring` at world (x, y) metres, bilinear between its samples as drawn at the last
+    /// update's time (morphs included; metres above the map's offset); the position is clamped to the window.
     double heightAt(const ClipmapLayout& layout, int ring, double x, double y) const;
 
     /// The surface ring `ring` draws at world (x, y) metres, as shaders/clipmap.vert makes it: each vertex's
     /// height blended towards the coarser ring's bilinear surface by its transition weight, linear on the
-    /// triangles of its cells (south-west to north-east diagonals). Metres above the map's offset; empty
-    /// outside the ring's window.
+    /// triangles of its cells (south-west to north-east diagonals), at the last update's time. Metres above the
+    /// map's offset; empty outside the ring's window.
     std::optional<double> ringSurface(const ClipmapLayout& layout, int ring, double x, double y) const;
     /// The drawn surface at (x, y) with rings `firstRing` and coarser drawn: the finest drawn ring whose window
     /// holds the point (ClipmapRenderer draws each ring where the finer one does not). Empty outside them all.
@@ -73,18 +97,32 @@ public:
     std::size_t upsampledNodes() const;
     /// Bytes the rings hold.
     std::size_t bytes() const;
+    double morphSeconds() const { return mMorphSeconds; }
+    /// The time of the last update (the clock the morphs run on).
+    double now() const { return mNow; }
+    /// Ring `ring`'s sample at toroidal texel `t` as drawn now (its morph applied; shaders/clipmap.vert does
+    /// the same in float).
+    float drawnSample(int ring, std::size_t t) const;
 
 private:
-    /// Fills the samples of `rect` (level grid) of ring `r`, clipped to its window; records the change.
-    void fill(const ClipmapLayout& layout, int r, LatticeRect rect, const ResidentNodeLookup& resident);
-    /// The normal texels of the samples of `rect` (level grid, within the window) of ring `r`.
-    void fillNormals(const ClipmapLayout& layout, int r, const LatticeRect& rect, const ResidentNodeLookup& resident);
+    /// Fills the samples of `rect` (level grid) of ring `r`, clipped to its window; records the change. With
+    /// `morph`, samples whose height changes morph from the height drawn now.
+    void fill(const ClipmapLayout& layout, int r, LatticeRect rect, const ResidentNodeLookup& resident,
+              bool morph = false);
+    /// The normal texels of the samples of `rect` (level grid, within the window) of ring `r`; `state` is
+    /// fill()'s per sample of `rect`: a restarted morph's fraction done before, or whether it was reset.
+    void fillNormals(const ClipmapLayout& layout, int r, const LatticeRect& rect, const ResidentNodeLookup& resident,
+                     const std::vector<float>& state);
+    /// How far the morph of ring `ring`'s sample at texel `t` has gone now, in [0, 1].
+    float morphDone(const ClipmapRing& ring, std::size_t t) const;
 
     int mSamples;
     int mChunk;
     int mTexture;
     int mNormalTexels = 0;   ///< the nodes' normal map texels a side, 0 for none
     int mNormalPerCell = 0;  ///< r
+    double mMorphSeconds = 0.0;
+    double mNow = -std::numeric_limits<double>::infinity();  ///< no update yet
     std::vector<ClipmapRing> mRings;
 };
 

@@ -84,26 +84,38 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
     r->mSamples = n;
     r->mHeights = gl::Texture::create();
     r->mColour = gl::Texture::create();
+    r->mMorph = gl::Texture::create();
     setUpLayers(r->mHeights, GL_R32F, GL_RED, GL_FLOAT, n, layout.ringCount(), GL_NEAREST);
+    setUpLayers(r->mMorph, GL_RG32F, GL_RG, GL_FLOAT, n, layout.ringCount(), GL_NEAREST);
+    r->mPreviousColour = gl::Texture::create();
     setUpLayers(r->mColour, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
-    r->mTextureBytes = static_cast<std::size_t>(n) * n * layout.ringCount() * 8;
+    setUpLayers(r->mPreviousColour, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
+    r->mTextureBytes = static_cast<std::size_t>(n) * n * layout.ringCount() * 20;
     if (!r->mDetail.empty()) {
         r->mMaterials = gl::Texture::create();
+        r->mPreviousMaterials = gl::Texture::create();
         setUpLayers(r->mMaterials, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
-        r->mTextureBytes += static_cast<std::size_t>(n) * n * layout.ringCount() * 4;
+        setUpLayers(r->mPreviousMaterials, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
+        r->mTextureBytes += static_cast<std::size_t>(n) * n * layout.ringCount() * 8;
     }
     r->mNormalPerCell = normalTexelsPerCell;
     if (normalTexelsPerCell > 0) {
         const int side = normalTexelsPerCell * n;
         r->mNormals = gl::Texture::create();
+        r->mPreviousNormals = gl::Texture::create();
         setUpLayers(r->mNormals, GL_RG8_SNORM, GL_RG, GL_BYTE, side, layout.ringCount(), GL_LINEAR);
-        r->mTextureBytes += static_cast<std::size_t>(side) * side * layout.ringCount() * 2;
+        setUpLayers(r->mPreviousNormals, GL_RG8_SNORM, GL_RG, GL_BYTE, side, layout.ringCount(), GL_LINEAR);
+        r->mTextureBytes += static_cast<std::size_t>(side) * side * layout.ringCount() * 4;
     }
     for (const ShaderProgram& program : r->mPrograms) {
         program.use();
         glUniform1i(program.uniform("uNormals"), 4);
         glUniform1f(program.uniform("uNormalTexelsPerCell"), static_cast<float>(normalTexelsPerCell));
         glUniform1i(program.uniform("uHeights"), 0);
+        glUniform1i(program.uniform("uMorph"), 5);
+        glUniform1i(program.uniform("uPreviousColour"), 6);
+        glUniform1i(program.uniform("uPreviousMaterials"), 7);
+        glUniform1i(program.uniform("uPreviousNormals"), 8);
         glUniform1i(program.uniform("uColour"), 1);
         glUniform1i(program.uniform("uMaterials"), 3);
         glUniform1i(program.uniform("uSamples"), n);
@@ -191,15 +203,22 @@ void ClipmapRenderer::upload(ClipmapTerrain& terrain, int ring, ClipmapStats& st
                     "with normal maps the rings keep them at the renderer's texels a cell");
     for (const LatticeRect& rect : terrain.takeChanged(ring)) {
         layer(mHeights, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RED, GL_FLOAT, data.heights.data(), 4);
+        layer(mMorph, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RG, GL_FLOAT, data.morph.data(), 8);
         layer(mColour, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RGBA, GL_UNSIGNED_BYTE, data.colour.data(), 4);
+        layer(mPreviousColour, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RGBA, GL_UNSIGNED_BYTE,
+              data.previousColour.data(), 4);
         if (mMaterials) {
             layer(mMaterials, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RGBA, GL_UNSIGNED_BYTE, data.materials.data(),
                   4);
+            layer(mPreviousMaterials, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RGBA, GL_UNSIGNED_BYTE,
+                  data.previousMaterials.data(), 4);
         }
         if (mNormals) {
             const int q = mNormalPerCell;
             layer(mNormals, q * n, rect.x0 * q, rect.y0 * q, rect.x1 * q, rect.y1 * q, GL_RG, GL_BYTE,
                   data.normals.data(), 2);
+            layer(mPreviousNormals, q * n, rect.x0 * q, rect.y0 * q, rect.x1 * q, rect.y1 * q, GL_RG, GL_BYTE,
+                  data.previousNormals.data(), 2);
         }
         stats.uploadedSamples += static_cast<std::size_t>(rect.area());
     }
@@ -244,6 +263,9 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
         glUniform3fv(program.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
         glUniform1f(program.uniform("uHazeDistance"), style.hazeDistance);
         glUniform1i(program.uniform("uWireframe"), style.wireframe ? 1 : 0);
+        glUniform1f(program.uniform("uNow"), static_cast<float>(terrain.now()));
+        // A morph of no time is over at once (the shader divides by it).
+        glUniform1f(program.uniform("uMorphSeconds"), static_cast<float>(std::max(terrain.morphSeconds(), 1e-6)));
         glUniform4f(program.uniform("uValidRect"), static_cast<float>(vx0 - camera.position.x - slack),
                     static_cast<float>(vy0 - camera.position.y - slack),
                     static_cast<float>(vx1 - camera.position.x + slack),
@@ -260,6 +282,18 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
     if (mNormals) {
         glActiveTexture(GL_TEXTURE4);
         glBindTexture(GL_TEXTURE_2D_ARRAY, mNormals.name());
+    }
+    glActiveTexture(GL_TEXTURE5);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, mMorph.name());
+    glActiveTexture(GL_TEXTURE6);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, mPreviousColour.name());
+    if (mPreviousMaterials) {
+        glActiveTexture(GL_TEXTURE7);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mPreviousMaterials.name());
+    }
+    if (mPreviousNormals) {
+        glActiveTexture(GL_TEXTURE8);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, mPreviousNormals.name());
     }
     glActiveTexture(GL_TEXTURE0);
     mDetail.bind(2);

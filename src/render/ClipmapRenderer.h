@@ -1,5 +1,5 @@
 // The geometry clipmap renderer (seed 002: Asirvatham & Hoppe, GPU Gems 2 chapter 2), lod_mode = clipmap:
-// per ring an n x n elevation layer (R32F) and colour layer (RGBA8) in two texture arrays, updated
+// per ring an n x n elevation layer (R32F), morph layer (RG32F) and colour layer (RGBA8) in texture arrays, updated
 // toroidally with the samples lod/ClipmapTerrain changed (glTexSubImage3D of the rectangles, split where they
 // wrap); the rings drawn by instancing the footprints of lod/ClipmapLayout (one vertex and index buffer per
 // footprint size, SW-NE diagonals like the quadtree's template), each footprint culled against the view
@@ -81,8 +81,13 @@ private:
     static constexpr std::size_t kFar = 1;
     DetailLayers mDetail;
     Sky mSky;
-    gl::Texture mHeights;    ///< GL_TEXTURE_2D_ARRAY R32F, a layer per ring
-    gl::Texture mColour;     ///< GL_TEXTURE_2D_ARRAY RGBA8, a layer per ring
+    gl::Texture mHeights;  ///< GL_TEXTURE_2D_ARRAY R32F, a layer per ring
+    gl::Texture mMorph;    ///< GL_TEXTURE_2D_ARRAY RG32F (ClipmapRing::morph), a layer per ring
+    gl::Texture mColour;   ///< GL_TEXTURE_2D_ARRAY RGBA8, a layer per ring
+    /// ClipmapRing's previous colours, material weights and normals, as mColour, mMaterials and mNormals.
+    gl::Texture mPreviousColour;
+    gl::Texture mPreviousMaterials;
+    gl::Texture mPreviousNormals;
     gl::Texture mNormals;    ///< GL_TEXTURE_2D_ARRAY RG8_SNORM normal maps, (r n)^2 a ring; none without normal maps
     int mNormalPerCell = 0;  ///< r
     gl::Texture mMaterials;  ///< GL_TEXTURE_2D_ARRAY RGBA8 material weights, a layer per ring; none without layers

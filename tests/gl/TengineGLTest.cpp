@@ -260,7 +260,8 @@ TEST_F(TengineGLTest, ClipmapModeHasNoHolesAndIdenticalFrames)
         ASSERT_EQ(first.pixels.size(), second.pixels.size());
         EXPECT_TRUE(first.pixels == second.pixels) << "frame " << f << " differs";
     }
-    // 255 x 255 samples, 8 bytes each on the CPU and on the GPU, for levels 0 to the finest.
+    // 255 x 255 samples, 20 bytes each (heights, morphs, colours and the colours morphs start from) on the CPU and on
+    // the GPU, for levels 0 to the finest.
     EXPECT_NE(run.output.find("clipmap: "), std::string::npos) << run.output;
     const auto rows = readCsv(a.path() / "frames.csv");
     ASSERT_EQ(rows.size(), 17u);

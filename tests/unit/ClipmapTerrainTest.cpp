@@ -109,7 +109,7 @@ TEST_F(ClipmapTerrainTest, SettledRingsHoldTheirNodesSamplesAlongAFlight)
     ASSERT_TRUE(streamer);
     ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 4, 0);
     ClipmapTerrain terrain(layout, 17, 17);
-    EXPECT_EQ(terrain.bytes(), std::size_t{5} * 31 * 31 * 8);
+    EXPECT_EQ(terrain.bytes(), std::size_t{5} * 31 * 31 * 20);
     // Small steps, a jump, the edge of the terrain and beyond.
     const std::pair<double, double> flight[] = {{200, 300}, {203, 301}, {211, 290}, {260, 250},
                                                 {20, 500},  {-30, 530}, {400, 100}, {401.5, 99}};
@@ -212,6 +212,86 @@ TEST_F(ClipmapTerrainTest, MissingNodesAreUpsampledFromTheCoarserRingUntilTheyAr
     }
 }
 
+TEST_F(ClipmapTerrainTest, ArrivingNodesMorphFromTheUpsampledSurfaceTheViewerSaw)
+{
+    TerrainNodeSource source(*mMap, {});
+    auto streamer = inlineStreamer(source, StreamerOptions{}.cacheSize);
+    ASSERT_TRUE(streamer);
+    ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 2, 0);
+    constexpr double kMorph = 0.5;
+    ClipmapTerrain terrain(layout, 17, 17, false, 0, kMorph);
+    const ResidentNodeLookup lookup = [&](const NodeId& id) { return streamer->node(id); };
+    const std::vector<std::vector<LatticeRect>> none(static_cast<std::size_t>(layout.ringCount()));
+    // The drawn surface of every ring on a grid of points (as ErrorMeter and the shader see it).
+    auto surface = [&] {
+        std::vector<double> z;
+        for (int r = 0; r < layout.ringCount(); ++r) {
+            for (double y = 100.0; y <= 420.0; y += 7.3) {
+                for (double x = 90.0; x <= 410.0; x += 6.9) {
+                    z.push_back(terrain.ringSurface(layout, r, x, y).value_or(-1.0));
+                }
+            }
+        }
+        return z;
+    };
+    // Time 0: only the root is resident; the finer rings are drawn upsampled.
+    terrain.update(layout, layout.moveTo(250.0, 260.0), lookup, 0.0);
+    ASSERT_GT(terrain.upsampledNodes(), 0u);
+    const std::vector<double> seen = surface();
+    // The nodes arrive at time 1 (all loading rounds at that time).
+    for (int round = 0; round < 20 && terrain.upsampledNodes() > 0; ++round) {
+        streamer->updateFor(terrain.wanted(layout));
+        streamer->drain();
+        terrain.update(layout, none, lookup, 1.0);
+    }
+    ASSERT_EQ(terrain.upsampledNodes(), 0u);
+    // No pop: at the moment they arrive, the surface is the one drawn before.
+    const std::vector<double> arrived = surface();
+    double largest = 0.0, changing = 0.0;
+    for (std::size_t i = 0; i < seen.size(); ++i) {
+        largest = std::max(largest, std::abs(arrived[i] - seen[i]));
+    }
+    EXPECT_LT(largest, 1e-3) << "metres the surface jumped when the nodes arrived";
+    // Once the morph is over, every sample is its node's; halfway, the surface is halfway (the morph and the
+    // transition blend are both linear in the heights).
+    terrain.update(layout, none, lookup, 1.0 + 0.5 * kMorph);
+    const std::vector<double> halfway = surface();
+    terrain.update(layout, none, lookup, 1.0 + kMorph);
+    const std::vector<double> settled = surface();
+    for (std::size_t i = 0; i < seen.size(); ++i) {
+        changing = std::max(changing, std::abs(settled[i] - seen[i]));
+        EXPECT_NEAR(halfway[i], 0.5 * (arrived[i] + settled[i]), 1e-3) << "point " << i;
+    }
+    EXPECT_GT(changing, 1.0) << "the nodes change the surface by metres: the test would see a pop";
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        expectStaticRing(layout, terrain, r);
+        for (std::size_t t = 0; t < terrain.ring(r).heights.size(); ++t) {
+            ASSERT_EQ(terrain.drawnSample(r, t), terrain.ring(r).heights[t]) << "ring " << r << " texel " << t;
+        }
+    }
+
+    // Nodes that arrive while the frame that first wants them still loads (video mode's rounds, one time) were
+    // never drawn upsampled: no morph.
+    auto second = inlineStreamer(source, StreamerOptions{}.cacheSize);
+    ASSERT_TRUE(second);
+    const ResidentNodeLookup secondLookup = [&](const NodeId& id) { return second->node(id); };
+    ClipmapLayout secondLayout(extentOf(mMap->header()), 17, 31, 2, 0);
+    ClipmapTerrain fresh(secondLayout, 17, 17, false, 0, kMorph);
+    fresh.update(secondLayout, secondLayout.moveTo(250.0, 260.0), secondLookup, 2.0);
+    ASSERT_GT(fresh.upsampledNodes(), 0u);
+    for (int round = 0; round < 20 && fresh.upsampledNodes() > 0; ++round) {
+        second->updateFor(fresh.wanted(secondLayout));
+        second->drain();
+        fresh.update(secondLayout, none, secondLookup, 2.0);
+    }
+    ASSERT_EQ(fresh.upsampledNodes(), 0u);
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        for (std::size_t t = 0; t < fresh.ring(r).heights.size(); ++t) {
+            ASSERT_EQ(fresh.drawnSample(r, t), fresh.ring(r).heights[t]) << "ring " << r << " texel " << t;
+        }
+    }
+}
+
 TEST_F(ClipmapTerrainTest, RingsBelowTheStaticLevelsHoldTheSynthesizedNodes)
 {
     const auto synthesizer = test::grassAndRockSynthesizer(17);
@@ -220,7 +300,7 @@ TEST_F(ClipmapTerrainTest, RingsBelowTheStaticLevelsHoldTheSynthesizedNodes)
     ASSERT_TRUE(streamer);
     ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 6, 0);  // two levels of dynamic nodes
     ClipmapTerrain terrain(layout, 17, 17, /*materials=*/true);
-    EXPECT_EQ(terrain.bytes(), std::size_t{7} * 31 * 31 * 12);
+    EXPECT_EQ(terrain.bytes(), std::size_t{7} * 31 * 31 * 28);
     settle(layout, terrain, *streamer, 130.0, 170.0);
     EXPECT_EQ(terrain.upsampledNodes(), 0u);
     int materialMismatches = 0;
@@ -279,7 +359,7 @@ TEST_F(ClipmapTerrainTest, RingsHoldTheNodesNormalMapsAtTheirTexels)
     ClipmapLayout layout(extentOf(mMap->header()), 17, n, 5, 0);
     ClipmapTerrain terrain(layout, 17, 17, false, normalMapTexels(32));
     ASSERT_EQ(terrain.normalTexelsPerCell(), 2);
-    EXPECT_EQ(terrain.bytes(), std::size_t{6} * n * n * (8 + 2 * 4));
+    EXPECT_EQ(terrain.bytes(), std::size_t{6} * n * n * (20 + 4 * 4));
     settle(layout, terrain, *streamer, 140.0, 90.0);
     ASSERT_EQ(terrain.upsampledNodes(), 0u);
     const int side = 2 * n;
@@ -337,7 +417,7 @@ TEST_F(ClipmapTerrainTest, MemoryIsBoundedByTheClipmapSizeOverALongFlight)
     ClipmapLayout layout(extentOf(mMap->header()), 17, n, finest, 0);
     ClipmapTerrain terrain(layout, 17, 17);
     const std::size_t bytes = terrain.bytes();
-    EXPECT_EQ(bytes, std::size_t{finest + 1} * n * n * 8);
+    EXPECT_EQ(bytes, std::size_t{finest + 1} * n * n * 20);
     // A long flight: three laps of a figure of eight over the whole terrain (5.9 km in 3 to 10 m steps).
     std::size_t largestCache = 0, largestWanted = 0, evictionsBefore = 0;
     constexpr int steps = 900;
