@@ -6,7 +6,9 @@
 // frustum by its box, finest ring first (front to back). The vertex program blends heights and normals to
 // the coarser ring in the transition region (shaders/clipmap.vert); zero-area triangles along each ring's
 // perimeter close the T-junctions with the coarser ring exactly as the seed's degenerate triangles do.
-// Same sky, sun, haze, colours and materials' detail textures as the quadtree renderer.
+// Samples a node replaced while they were in view morph in (ClipmapRing::morph and the previous colour,
+// material and normal layers; clipmap_morph_seconds). Same sky, sun, haze, colours and materials' detail
+// textures as the quadtree renderer.
 #pragma once
 
 #include "core/Camera.h"
