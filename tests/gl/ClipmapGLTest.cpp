@@ -10,10 +10,8 @@
 #include "lod/ClipmapTerrain.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
-#include "quadtree/MapFile.h"
 #include "render/ClipmapRenderer.h"
 #include "render/FrameCapture.h"
-#include "render/GlWindow.h"
 
 #include <gtest/gtest.h>
 
@@ -43,19 +41,11 @@ int pixelsDiffering(const Image& a, const Image& b, int levels)
 
 TEST(ClipmapGLTest, ArrivingNodesMorphInFromWhatWasDrawnAndEndOnTheirOwnSurface)
 {
-    test::ScratchDir dir;
-    ASSERT_TRUE(test::buildDemoMap(dir / "trinidad.map").ok());
-    WindowOptions windowOptions;
-    windowOptions.width = 480;
-    windowOptions.height = 270;
-    windowOptions.visible = false;
-    auto window = GlWindow::create(windowOptions);
-    ASSERT_TRUE(window.ok()) << window.error().message;
-    auto map = MapFile::open(dir / "trinidad.map", ReaderKind::Stream);
-    ASSERT_TRUE(map.ok());
-    const MapHeader& header = (*map)->header();
+    auto scene = test::openDemoScene(480, 270);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    const MapHeader& header = (*scene)->map->header();
     const int chunk = static_cast<int>(header.chunkSize);
-    TerrainNodeSource source(**map, {});
+    TerrainNodeSource source(*(*scene)->map, {});
     StreamerOptions streamerOptions;
     streamerOptions.workers = 0;
     auto streamer = TerrainStreamer::create(source, extentOf(header), streamerOptions);
@@ -76,8 +66,8 @@ TEST(ClipmapGLTest, ArrivingNodesMorphInFromWhatWasDrawnAndEndOnTheirOwnSurface)
 
     // Over the range, looking down a slope: rings 0 to 2 fill most of the frame.
     Camera camera;
-    camera.viewportWidth = windowOptions.width;
-    camera.viewportHeight = windowOptions.height;
+    camera.viewportWidth = 480;
+    camera.viewportHeight = 270;
     camera.nearPlane = 1.0;
     camera.farPlane = 150000.0;
     camera.position = {51000.0, 51000.0, 4600.0};

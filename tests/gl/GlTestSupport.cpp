@@ -22,6 +22,24 @@ Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::fi
     return buildDetailMap(std::move(field).value(), 90.0, path, materials);
 }
 
+Expected<std::unique_ptr<DemoScene>> openDemoScene(int width, int height)
+{
+    auto scene = std::make_unique<DemoScene>();
+    const std::filesystem::path path = scene->dir / "trinidad.map";
+    TERRAIN_TRY(buildDemoMap(path));
+    WindowOptions options;
+    options.width = width;
+    options.height = height;
+    options.visible = false;
+    auto window = GlWindow::create(options);
+    TERRAIN_TRY(window);
+    scene->window = std::move(window).value();
+    auto map = MapFile::open(path, ReaderKind::Stream);
+    TERRAIN_TRY(map);
+    scene->map = std::move(map).value();
+    return scene;
+}
+
 Status buildDetailMap(HeightField field, double spacing, const std::filesystem::path& path,
                       const std::vector<std::filesystem::path>& materials)
 {

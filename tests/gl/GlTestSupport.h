@@ -2,14 +2,18 @@
 // video mode's frames.csv.
 #pragma once
 
+#include "TestSupport.h"
 #include "core/Camera.h"
 #include "core/Expected.h"
 #include "heightfield/HeightField.h"
+#include "quadtree/MapFile.h"
 #include "quadtree/MapFormat.h"
+#include "render/GlWindow.h"
 
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -37,6 +41,15 @@ Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::fi
 /// The same for any height field `field` with `spacing` metres between its samples.
 Status buildDetailMap(HeightField field, double spacing, const std::filesystem::path& path,
                       const std::vector<std::filesystem::path>& materials);
+
+/// The GL tests' usual start: the bundled terrain built into a scratch map (buildDemoMap), an invisible
+/// window of `width` x `height` whose GL context is current, and the map opened for streaming.
+struct DemoScene {
+    ScratchDir dir;
+    std::unique_ptr<GlWindow> window;
+    std::unique_ptr<MapFile> map;
+};
+Expected<std::unique_ptr<DemoScene>> openDemoScene(int width, int height);
 
 /// Rows of a video's frames.csv as maps from column name to value; empty fields (not measured) are left out.
 std::vector<std::map<std::string, double>> readCsv(const std::filesystem::path& file);

@@ -46,20 +46,13 @@ long doubleArea(const Triangle& t)
 
 TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVerticesBitForBit)
 {
-    test::ScratchDir dir;
-    ASSERT_TRUE(test::buildDemoMap(dir / "trinidad.map").ok());
-    WindowOptions windowOptions;
-    windowOptions.width = 640;
-    windowOptions.height = 360;
-    windowOptions.visible = false;
-    auto window = GlWindow::create(windowOptions);
-    ASSERT_TRUE(window.ok()) << window.error().message;
-    ASSERT_TRUE(TerrainRenderer::tessellationSupported()) << (*window)->description();
-    auto map = MapFile::open(dir / "trinidad.map", ReaderKind::Stream);
-    ASSERT_TRUE(map.ok());
-    const MapHeader& header = (*map)->header();
+    auto scene = test::openDemoScene(640, 360);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    ASSERT_TRUE(TerrainRenderer::tessellationSupported()) << (*scene)->window->description();
+    MapFile& map = *(*scene)->map;
+    const MapHeader& header = map.header();
     const int n = static_cast<int>(header.chunkSize);
-    TerrainNodeSource source(**map, {nullptr, 0.0, kTessellationBlockQuads});
+    TerrainNodeSource source(map, {nullptr, 0.0, kTessellationBlockQuads});
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = 2048;
     streamerOptions.workers = 2;
@@ -71,8 +64,8 @@ TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVertic
 
     // Low over a valley, looking along it: near blocks fine, far ones coarse, sides snapped between them.
     Camera camera;
-    camera.viewportWidth = windowOptions.width;
-    camera.viewportHeight = windowOptions.height;
+    camera.viewportWidth = 640;
+    camera.viewportHeight = 360;
     camera.nearPlane = 1.0;
     camera.farPlane = 150000.0;
     camera.position = {15000.0, 12000.0, 2496.0};
@@ -97,7 +90,7 @@ TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVertic
     // must hit the terrain shows the clear colour.
     glFinish();
     const Image image = captureFrame(camera.viewportWidth, camera.viewportHeight);
-    const double zMin = header.heightOf((*map)->directory().front().minCode);
+    const double zMin = header.heightOf(map.directory().front().minCode);
     int holes = 0, mustHit = 0;
     for (int y = 0; y < image.height; ++y) {
         for (int x = 0; x < image.width; ++x) {

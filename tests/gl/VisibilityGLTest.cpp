@@ -34,19 +34,11 @@ class VisibilityGLTest : public ::testing::TestWithParam<bool> {};
 TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchThePixelsOwned)
 {
     const bool tessellation = GetParam();
-    test::ScratchDir dir;
-    ASSERT_TRUE(test::buildDemoMap(dir / "trinidad.map").ok());
-    WindowOptions windowOptions;
-    windowOptions.width = 480;
-    windowOptions.height = 270;
-    windowOptions.visible = false;
-    auto window = GlWindow::create(windowOptions);
-    ASSERT_TRUE(window.ok()) << window.error().message;
-    ASSERT_TRUE(TerrainRenderer::pixelCountsSupported()) << (*window)->description();
-    auto map = MapFile::open(dir / "trinidad.map", ReaderKind::Stream);
-    ASSERT_TRUE(map.ok());
-    const MapHeader& header = (*map)->header();
-    TerrainNodeSource source(**map, {nullptr, 0.0, tessellation ? kTessellationBlockQuads : 0});
+    auto scene = test::openDemoScene(480, 270);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    ASSERT_TRUE(TerrainRenderer::pixelCountsSupported()) << (*scene)->window->description();
+    const MapHeader& header = (*scene)->map->header();
+    TerrainNodeSource source(*(*scene)->map, {nullptr, 0.0, tessellation ? kTessellationBlockQuads : 0});
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = 2048;
     streamerOptions.workers = 2;
@@ -62,8 +54,8 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
 
     // Low in a valley looking along it: ridges hide much of what the selection refines behind them.
     Camera camera;
-    camera.viewportWidth = windowOptions.width;
-    camera.viewportHeight = windowOptions.height;
+    camera.viewportWidth = 480;
+    camera.viewportHeight = 270;
     camera.nearPlane = 1.0;
     camera.farPlane = 150000.0;
     camera.position = {15000.0, 12000.0, 2496.0};
@@ -138,18 +130,10 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
 TEST_P(VisibilityGLTest, CountsComeTwoFramesLateInOrderAndUntakenOnesAreDropped)
 {
     const bool tessellation = GetParam();
-    test::ScratchDir dir;
-    ASSERT_TRUE(test::buildDemoMap(dir / "trinidad.map").ok());
-    WindowOptions windowOptions;
-    windowOptions.width = 160;
-    windowOptions.height = 90;
-    windowOptions.visible = false;
-    auto window = GlWindow::create(windowOptions);
-    ASSERT_TRUE(window.ok()) << window.error().message;
-    auto map = MapFile::open(dir / "trinidad.map", ReaderKind::Stream);
-    ASSERT_TRUE(map.ok());
-    const MapHeader& header = (*map)->header();
-    TerrainNodeSource source(**map, {nullptr, 0.0, tessellation ? kTessellationBlockQuads : 0});
+    auto scene = test::openDemoScene(160, 90);
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    const MapHeader& header = (*scene)->map->header();
+    TerrainNodeSource source(*(*scene)->map, {nullptr, 0.0, tessellation ? kTessellationBlockQuads : 0});
     auto streamer = TerrainStreamer::create(source, extentOf(header), {});
     ASSERT_TRUE(streamer.ok());
     PoolOptions pools;
@@ -159,8 +143,8 @@ TEST_P(VisibilityGLTest, CountsComeTwoFramesLateInOrderAndUntakenOnesAreDropped)
     ASSERT_TRUE(renderer.ok()) << renderer.error().message;
     (*streamer)->onEvict([&renderer](const NodeData& node) { (*renderer)->release(node.id); });
     Camera camera;
-    camera.viewportWidth = windowOptions.width;
-    camera.viewportHeight = windowOptions.height;
+    camera.viewportWidth = 160;
+    camera.viewportHeight = 90;
     camera.position = {20000.0, -20000.0, 9000.0};
     camera.yaw = 0.0;
     camera.pitch = -20.0 * std::numbers::pi / 180;
