@@ -46,11 +46,12 @@ uniform vec4 uLayerOrigin[LAYER_COUNT];  // the window origin in repeats (xy) an
 
 out vec4 fragColour;
 
-// A layer's texel at `uv`, `remaining` of the way back to what it was drawn as when its morph started.
+// A layer's texel at `uv`, `remaining` of the way back to what it was drawn as when its morph started. The
+// layers have no mipmaps: textureLod samples the same level inside the branch that most fragments skip.
 vec4 morphed(sampler2DArray current, sampler2DArray previous, vec2 uv, int layer, float remaining)
 {
     vec4 now = texture(current, vec3(uv, float(layer)));
-    return remaining > 0.0 ? mix(now, texture(previous, vec3(uv, float(layer))), remaining) : now;
+    return remaining > 0.0 ? mix(now, textureLod(previous, vec3(uv, float(layer)), 0.0), remaining) : now;
 }
 
 void main()

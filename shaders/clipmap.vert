@@ -13,7 +13,7 @@ layout(location = 0) in ivec2 aGrid;  // the vertex, cells from its footprint's 
 uniform mat4 uViewProjection;    // camera-relative world -> clip
 uniform sampler2DArray uHeights; // per ring: n x n metres above the map's offset, texel = sample mod n
 uniform sampler2DArray uMorph;   // per ring, the same texels: (height drawn before the change, its time in s)
-uniform float uNow;              // the clipmap's clock (ClipmapTerrain::now), seconds
+uniform float uNow;              // the clipmap's clock (ClipmapTerrain::clock), seconds
 uniform float uMorphSeconds;     // > 0 (0 morphs are passed as a tiny time: every change is over)
 uniform int uSamples;            // n
 uniform int uRing;               // this ring's layer
@@ -43,18 +43,26 @@ out vec2 vNormalUv;
 out vec2 vCoarseNormalUv;
 #endif
 
-// How much of a sample's change is still to come (1 when it has just changed, 0 once its morph is over).
-float remaining(ivec3 texel)
+// How far a sample's morph has gone (0 when it has just changed, 1 once it is over).
+float done(ivec3 texel)
 {
-    return 1.0 - clamp((uNow - texelFetch(uMorph, texel, 0).g) / uMorphSeconds, 0.0, 1.0);
+    return clamp((uNow - texelFetch(uMorph, texel, 0).g) / uMorphSeconds, 0.0, 1.0);
 }
 
-// A sample as drawn now: its height, or on its way there from the height drawn before.
+// How much of it is still to come.
+float remaining(ivec3 texel)
+{
+    return 1.0 - done(texel);
+}
+
+// A sample as drawn now: its height, or on its way there from the height drawn before (exactly the height once
+// the morph is over; ClipmapTerrain::drawnSample).
 float drawn(ivec3 texel)
 {
     float previous = texelFetch(uMorph, texel, 0).r;
     float height = texelFetch(uHeights, texel, 0).r;
-    return previous + (height - previous) * (1.0 - remaining(texel));
+    float d = done(texel);
+    return d >= 1.0 ? height : previous + (height - previous) * d;
 }
 
 ivec3 fineTexel(ivec2 local)

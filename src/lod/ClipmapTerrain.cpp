@@ -68,21 +68,23 @@ std::size_t ClipmapTerrain::bytes() const
     return total;
 }
 
-float ClipmapTerrain::morphDone(const ClipmapRing& ring, std::size_t t) const
+float ClipmapTerrain::morphDone(int ring, std::size_t t) const
 {
     // As shaders/clipmap.vert computes it, in float.
     if (mMorphSeconds <= 0.0) {
         return 1.0f;
     }
-    const float since = ring.morph[2 * t + 1];
-    return std::clamp((static_cast<float>(mNow) - since) / static_cast<float>(mMorphSeconds), 0.0f, 1.0f);
+    const float since = mRings[static_cast<std::size_t>(ring)].morph[2 * t + 1];
+    return std::clamp((clock() - since) / static_cast<float>(mMorphSeconds), 0.0f, 1.0f);
 }
 
 float ClipmapTerrain::drawnSample(int ring, std::size_t t) const
 {
     const ClipmapRing& data = mRings[static_cast<std::size_t>(ring)];
+    const float done = morphDone(ring, t);
     const float previous = data.morph[2 * t];
-    return previous + (data.heights[t] - previous) * morphDone(data, t);
+    // Exactly the height once the morph is over (previous + (h - previous) * 1 need not be h in float).
+    return done >= 1.0f ? data.heights[t] : previous + (data.heights[t] - previous) * done;
 }
 
 namespace {
@@ -144,7 +146,7 @@ std::int8_t mixedNormal(std::int8_t previous, std::int8_t current, float done)
 }  // namespace
 
 void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, const ResidentNodeLookup& resident,
-                          bool morph)
+                          Fill how)
 {
     const int n = mSamples;
     ClipmapRing& ring = mRings[static_cast<std::size_t>(r)];
@@ -157,7 +159,7 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
     const bool coarser = r + 1 < ringCount();
     const ClipmapRing* up = coarser ? &mRings[static_cast<std::size_t>(r + 1)] : nullptr;
     const bool withMaterials = !ring.materials.empty();
-    const bool morphs = morph && mMorphSeconds > 0.0;
+    const bool morphs = how == Fill::kSeen && mMorphSeconds > 0.0;
     // Per sample of `rect` (row-major), for its normal texels: how far its morph had gone when it restarted
     // (in [0, 1]), kReset when its morph was cleared, kKept when it was left as it was.
     std::vector<float> state(static_cast<std::size_t>(rect.area()), kKept);
@@ -175,7 +177,7 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
             const bool haveColour = node && !node->texture.empty();
             const bool haveMaterials = withMaterials && node && !node->materialWeights.empty();
             // What the sample is drawn as now, before it changes: where a morph starts from.
-            const float done = morphDone(ring, t);
+            const float done = morphDone(r, t);
             const float drawn = drawnSample(r, t);
             std::array<std::uint8_t, 4> drawnColour{}, drawnMaterials{};
             for (int c = 0; c < 4; ++c) {
@@ -247,10 +249,11 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                 (withMaterials && !std::equal(materialsBefore.begin(), materialsBefore.end(),
                                               ring.materials.begin() + static_cast<std::ptrdiff_t>(t * 4)));
             const std::size_t k = static_cast<std::size_t>((gy - rect.y0) * (rect.x1 - rect.x0) + (gx - rect.x0));
-            if (morphs) {
-                // Every sample of a node that arrives morphs from what is drawn (unchanged ones from themselves).
+            if (morphs && (changed || done >= 1.0f)) {
+                // A sample of a node that arrives morphs from what is drawn: changed ones, and unchanged ones
+                // from themselves (their normal texels may change); unchanged ones on their way keep going.
                 ring.morph[2 * t] = drawn;
-                ring.morph[2 * t + 1] = static_cast<float>(mNow);
+                ring.morph[2 * t + 1] = clock();
                 std::copy(drawnColour.begin(), drawnColour.end(),
                           ring.previousColour.begin() + static_cast<std::ptrdiff_t>(t * 4));
                 if (withMaterials) {
@@ -258,10 +261,11 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                               ring.previousMaterials.begin() + static_cast<std::ptrdiff_t>(t * 4));
                 }
                 state[k] = done;
-            } else if (changed) {
+            } else if (how == Fill::kEntered || (how == Fill::kUnseen && changed)) {
                 // No morph: entered samples are new to the window (at its perimeter, where the transition blend
-                // draws the coarser ring anyway), and samples filled in the update that upsampled them were
-                // never drawn. Unchanged samples keep a morph under way (a neighbour's edge).
+                // draws the coarser ring anyway; their texel may hold another sample's morph), and samples
+                // filled in the update that upsampled them were never drawn. Unchanged samples keep a morph
+                // under way (a neighbour's edge).
                 ring.morph[2 * t] = ring.heights[t];
                 ring.morph[2 * t + 1] = kNoMorph;
                 std::copy_n(ring.colour.begin() + static_cast<std::ptrdiff_t>(t * 4), 4,
@@ -355,7 +359,11 @@ void ClipmapTerrain::update(const ClipmapLayout& layout, const std::vector<std::
                             const ResidentNodeLookup& resident, double now)
 {
     TERRAIN_EXPECTS(static_cast<int>(entered.size()) == ringCount(), "one list of entered samples per ring");
-    TERRAIN_EXPECTS(now >= mNow, "the clipmap's clock never goes back");
+    TERRAIN_EXPECTS(mFirst || now >= mNow, "the clipmap's clock never goes back");
+    if (mFirst) {
+        mEpoch = now;
+        mFirst = false;
+    }
     mNow = now;
     const int n = mSamples;
     bool coarserChanged = false;
@@ -379,13 +387,13 @@ void ClipmapTerrain::update(const ClipmapLayout& layout, const std::vector<std::
             }
         }
         for (const LatticeRect& rect : entered[static_cast<std::size_t>(r)]) {
-            fill(layout, r, rect, resident);
+            fill(layout, r, rect, resident, Fill::kEntered);
         }
         std::sort(refill.begin(), refill.end(), [](const ClipmapRing::Upsampled& a, const ClipmapRing::Upsampled& b) {
             return a.id.key() < b.id.key();
         });
         for (const ClipmapRing::Upsampled& node : refill) {
-            fill(layout, r, nodeRegion(node.id, mChunk), resident, node.since < now);
+            fill(layout, r, nodeRegion(node.id, mChunk), resident, node.since < now ? Fill::kSeen : Fill::kUnseen);
             if (auto again = ring.upsampled.find(node.id.key()); again != ring.upsampled.end()) {
                 // Still missing (upsampled again from the coarser ring that changed): drawn since `since`.
                 again->second.since = node.since;
@@ -399,7 +407,7 @@ void ClipmapTerrain::update(const ClipmapLayout& layout, const std::vector<std::
                 hi = std::max(hi, h);
             }
             for (std::size_t i = 0; i < ring.morph.size(); i += 2) {
-                if (now - ring.morph[i + 1] < mMorphSeconds) {
+                if (morphDone(r, i / 2) < 1.0f) {
                     lo = std::min(lo, ring.morph[i]);
                     hi = std::max(hi, ring.morph[i]);
                 }

@@ -13,7 +13,6 @@
 #include "lod/NodeData.h"
 
 #include <cstdint>
-#include <limits>
 #include <optional>
 #include <span>
 #include <unordered_map>
@@ -30,8 +29,9 @@ struct ClipmapRing {
     /// a cell (normalTexelsPerCell), sample g's texel at r g mod r n; or empty.
     std::vector<std::int8_t> normals;
     /// Per sample (previous, since): the height drawn before the sample last changed in view and the time it
-    /// changed (seconds, the update's clock; kNoMorph when it never did). The drawn height is
-    /// heights + (previous - heights) * (1 - clamp((now - since) / morphSeconds, 0, 1)) (drawnSample).
+    /// changed (ClipmapTerrain::clock(), seconds from the first update; kNoMorph when it never did). The drawn
+    /// height is heights once done = clamp((clock - since) / morphSeconds, 0, 1) is 1, else
+    /// previous + (heights - previous) * done (drawnSample).
     std::vector<float> morph;
     /// What the colours, material weights and normal texels were drawn as when their sample's morph started
     /// (same layouts; drawn as previous + (current - previous) * the morph's fraction done).
@@ -98,23 +98,28 @@ public:
     /// Bytes the rings hold.
     std::size_t bytes() const;
     double morphSeconds() const { return mMorphSeconds; }
-    /// The time of the last update (the clock the morphs run on).
-    double now() const { return mNow; }
+    /// The clock the morphs run on: seconds from the first update to the last one, in float as the shaders
+    /// take it (uNow). Relative to the first update so that it keeps its precision however late a path starts.
+    float clock() const { return mFirst ? 0.0f : static_cast<float>(mNow - mEpoch); }
+    /// How far the morph of ring `ring`'s sample at texel `t` has gone now, in [0, 1] (as shaders/clipmap.vert).
+    float morphDone(int ring, std::size_t t) const;
     /// Ring `ring`'s sample at toroidal texel `t` as drawn now (its morph applied; shaders/clipmap.vert does
     /// the same in float).
     float drawnSample(int ring, std::size_t t) const;
 
 private:
-    /// Fills the samples of `rect` (level grid) of ring `r`, clipped to its window; records the change. With
-    /// `morph`, samples whose height changes morph from the height drawn now.
-    void fill(const ClipmapLayout& layout, int r, LatticeRect rect, const ResidentNodeLookup& resident,
-              bool morph = false);
+    /// How fill() treats the morphs of the samples it writes.
+    enum class Fill {
+        kEntered,  ///< samples new to the window: no morph, whatever the texel held before
+        kUnseen,   ///< samples never drawn as they were (upsampled in this update): changed ones at once
+        kSeen,     ///< samples drawn as they were: changed ones (and ones not morphing) morph from what is drawn
+    };
+    /// Fills the samples of `rect` (level grid) of ring `r`, clipped to its window; records the change.
+    void fill(const ClipmapLayout& layout, int r, LatticeRect rect, const ResidentNodeLookup& resident, Fill how);
     /// The normal texels of the samples of `rect` (level grid, within the window) of ring `r`; `state` is
     /// fill()'s per sample of `rect`: a restarted morph's fraction done before, or whether it was reset.
     void fillNormals(const ClipmapLayout& layout, int r, const LatticeRect& rect, const ResidentNodeLookup& resident,
                      const std::vector<float>& state);
-    /// How far the morph of ring `ring`'s sample at texel `t` has gone now, in [0, 1].
-    float morphDone(const ClipmapRing& ring, std::size_t t) const;
 
     int mSamples;
     int mChunk;
@@ -122,7 +127,9 @@ private:
     int mNormalTexels = 0;   ///< the nodes' normal map texels a side, 0 for none
     int mNormalPerCell = 0;  ///< r
     double mMorphSeconds = 0.0;
-    double mNow = -std::numeric_limits<double>::infinity();  ///< no update yet
+    bool mFirst = true;   ///< no update yet
+    double mEpoch = 0.0;  ///< the first update's time
+    double mNow = 0.0;    ///< the last update's time
     std::vector<ClipmapRing> mRings;
 };
 

@@ -263,7 +263,7 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
         glUniform3fv(program.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
         glUniform1f(program.uniform("uHazeDistance"), style.hazeDistance);
         glUniform1i(program.uniform("uWireframe"), style.wireframe ? 1 : 0);
-        glUniform1f(program.uniform("uNow"), static_cast<float>(terrain.now()));
+        glUniform1f(program.uniform("uNow"), terrain.clock());
         // A morph of no time is over at once (the shader divides by it).
         glUniform1f(program.uniform("uMorphSeconds"), static_cast<float>(std::max(terrain.morphSeconds(), 1e-6)));
         glUniform4f(program.uniform("uValidRect"), static_cast<float>(vx0 - camera.position.x - slack),

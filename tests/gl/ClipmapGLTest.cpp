@@ -100,7 +100,7 @@ TEST(ClipmapGLTest, ArrivingNodesMorphInFromWhatWasDrawnAndEndOnTheirOwnSurface)
     const Image arrived = draw(**renderer, terrain, layout);
     terrain.update(layout, none, lookup, 1.0 + 0.5 * kMorph);
     const Image halfway = draw(**renderer, terrain, layout);
-    terrain.update(layout, none, lookup, 1.0 + kMorph);
+    terrain.update(layout, none, lookup, 1.0 + 1.5 * kMorph);
     const Image over = draw(**renderer, terrain, layout);
     // The same nodes, resident before the rings are first filled: no morph at all.
     settled.update(settledLayout, settledLayout.moveTo(camera.position.x, camera.position.y), lookup, 5.0);

@@ -256,7 +256,7 @@ TEST_F(ClipmapTerrainTest, ArrivingNodesMorphFromTheUpsampledSurfaceTheViewerSaw
     // transition blend are both linear in the heights).
     terrain.update(layout, none, lookup, 1.0 + 0.5 * kMorph);
     const std::vector<double> halfway = surface();
-    terrain.update(layout, none, lookup, 1.0 + kMorph);
+    terrain.update(layout, none, lookup, 1.0 + 1.5 * kMorph);
     const std::vector<double> settled = surface();
     for (std::size_t i = 0; i < seen.size(); ++i) {
         changing = std::max(changing, std::abs(settled[i] - seen[i]));
@@ -288,6 +288,59 @@ TEST_F(ClipmapTerrainTest, ArrivingNodesMorphFromTheUpsampledSurfaceTheViewerSaw
     for (int r = 0; r < layout.ringCount(); ++r) {
         for (std::size_t t = 0; t < fresh.ring(r).heights.size(); ++t) {
             ASSERT_EQ(fresh.drawnSample(r, t), fresh.ring(r).heights[t]) << "ring " << r << " texel " << t;
+        }
+    }
+}
+
+TEST_F(ClipmapTerrainTest, ArrivingNodesColoursWeightsAndNormalsStartFromWhatWasDrawn)
+{
+    // Synthesized levels below the map (material weights) and normal maps of 2 texels a cell.
+    const auto synthesizer = test::grassAndRockSynthesizer(17);
+    DetailPolicy policy{synthesizer.get(), 0.05};
+    policy.normalMapSize = 32;
+    TerrainNodeSource source(*mMap, policy);
+    auto streamer = inlineStreamer(source, 600);
+    ASSERT_TRUE(streamer);
+    const int n = 31;
+    ClipmapLayout layout(extentOf(mMap->header()), 17, n, 6, 0);
+    constexpr double kMorph = 0.5;
+    ClipmapTerrain terrain(layout, 17, 17, /*materials=*/true, normalMapTexels(32), kMorph);
+    const ResidentNodeLookup lookup = [&](const NodeId& id) { return streamer->node(id); };
+    const std::vector<std::vector<LatticeRect>> none(static_cast<std::size_t>(layout.ringCount()));
+    // Time 0: the root alone; what every ring shows (no morph under way: the current layers).
+    terrain.update(layout, layout.moveTo(130.0, 170.0), lookup, 0.0);
+    ASSERT_GT(terrain.upsampledNodes(), 0u);
+    std::vector<ClipmapRing> seen;
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        seen.push_back(terrain.ring(r));
+    }
+    for (int round = 0; round < 20 && terrain.upsampledNodes() > 0; ++round) {
+        streamer->updateFor(terrain.wanted(layout));
+        streamer->drain();
+        terrain.update(layout, none, lookup, 1.0);
+    }
+    ASSERT_EQ(terrain.upsampledNodes(), 0u);
+    // At their arrival every sample's morph starts from what was drawn: the previous layers are the layers seen.
+    std::size_t changedColours = 0, changedWeights = 0, changedNormals = 0;
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        const ClipmapRing& ring = terrain.ring(r);
+        const ClipmapRing& before = seen[static_cast<std::size_t>(r)];
+        EXPECT_EQ(ring.previousColour, before.colour) << "ring " << r;
+        EXPECT_EQ(ring.previousMaterials, before.materials) << "ring " << r;
+        EXPECT_EQ(ring.previousNormals, before.normals) << "ring " << r;
+        changedColours += ring.colour != before.colour ? 1 : 0;
+        changedWeights += ring.materials != before.materials ? 1 : 0;
+        changedNormals += ring.normals != before.normals ? 1 : 0;
+    }
+    EXPECT_GT(changedColours, 0u) << "the nodes change colours: the test would see them pop";
+    EXPECT_GT(changedWeights, 0u);
+    EXPECT_GT(changedNormals, 0u);
+    // Once over, nothing is morphing and the current layers are drawn.
+    terrain.update(layout, none, lookup, 1.0 + 1.5 * kMorph);
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        for (std::size_t t = 0; t < terrain.ring(r).heights.size(); ++t) {
+            ASSERT_EQ(terrain.morphDone(r, t), 1.0f);
+            ASSERT_EQ(terrain.drawnSample(r, t), terrain.ring(r).heights[t]);
         }
     }
 }
