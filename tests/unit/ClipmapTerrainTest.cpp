@@ -60,6 +60,21 @@ protected:
         return 100;
     }
 
+    /// Loads, in rounds all at time `now` (as video mode's rounds of one frame), until no node of the rings is
+    /// upsampled any more; returns how many still are after 20 rounds (0 when all arrived).
+    static std::size_t loadAt(const ClipmapLayout& layout, ClipmapTerrain& terrain, TerrainStreamer& streamer,
+                              double now)
+    {
+        const ResidentNodeLookup lookup = [&streamer](const NodeId& id) { return streamer.node(id); };
+        const std::vector<std::vector<LatticeRect>> none(static_cast<std::size_t>(layout.ringCount()));
+        for (int round = 0; round < 20 && terrain.upsampledNodes() > 0; ++round) {
+            streamer.updateFor(terrain.wanted(layout));
+            streamer.drain();
+            terrain.update(layout, none, lookup, now);
+        }
+        return terrain.upsampledNodes();
+    }
+
     /// Ring `r`'s samples against the decoded static map: height and colour at every window sample (clamped to
     /// the terrain, as the clipmap reads it).
     void expectStaticRing(const ClipmapLayout& layout, const ClipmapTerrain& terrain, int r) const
@@ -239,12 +254,7 @@ TEST_F(ClipmapTerrainTest, ArrivingNodesMorphFromTheUpsampledSurfaceTheViewerSaw
     ASSERT_GT(terrain.upsampledNodes(), 0u);
     const std::vector<double> seen = surface();
     // The nodes arrive at time 1 (all loading rounds at that time).
-    for (int round = 0; round < 20 && terrain.upsampledNodes() > 0; ++round) {
-        streamer->updateFor(terrain.wanted(layout));
-        streamer->drain();
-        terrain.update(layout, none, lookup, 1.0);
-    }
-    ASSERT_EQ(terrain.upsampledNodes(), 0u);
+    ASSERT_EQ(loadAt(layout, terrain, *streamer, 1.0), 0u);
     // No pop: at the moment they arrive, the surface is the one drawn before.
     const std::vector<double> arrived = surface();
     double largest = 0.0, changing = 0.0;
@@ -279,12 +289,7 @@ TEST_F(ClipmapTerrainTest, ArrivingNodesMorphFromTheUpsampledSurfaceTheViewerSaw
     ClipmapTerrain fresh(secondLayout, 17, 17, false, 0, kMorph);
     fresh.update(secondLayout, secondLayout.moveTo(250.0, 260.0), secondLookup, 2.0);
     ASSERT_GT(fresh.upsampledNodes(), 0u);
-    for (int round = 0; round < 20 && fresh.upsampledNodes() > 0; ++round) {
-        second->updateFor(fresh.wanted(secondLayout));
-        second->drain();
-        fresh.update(secondLayout, none, secondLookup, 2.0);
-    }
-    ASSERT_EQ(fresh.upsampledNodes(), 0u);
+    ASSERT_EQ(loadAt(secondLayout, fresh, *second, 2.0), 0u);
     for (int r = 0; r < layout.ringCount(); ++r) {
         for (std::size_t t = 0; t < fresh.ring(r).heights.size(); ++t) {
             ASSERT_EQ(fresh.drawnSample(r, t), fresh.ring(r).heights[t]) << "ring " << r << " texel " << t;
@@ -314,12 +319,7 @@ TEST_F(ClipmapTerrainTest, ArrivingNodesColoursWeightsAndNormalsStartFromWhatWas
     for (int r = 0; r < layout.ringCount(); ++r) {
         seen.push_back(terrain.ring(r));
     }
-    for (int round = 0; round < 20 && terrain.upsampledNodes() > 0; ++round) {
-        streamer->updateFor(terrain.wanted(layout));
-        streamer->drain();
-        terrain.update(layout, none, lookup, 1.0);
-    }
-    ASSERT_EQ(terrain.upsampledNodes(), 0u);
+    ASSERT_EQ(loadAt(layout, terrain, *streamer, 1.0), 0u);
     // At their arrival every sample's morph starts from what was drawn: the previous layers are the layers seen.
     std::size_t changedColours = 0, changedWeights = 0, changedNormals = 0;
     for (int r = 0; r < layout.ringCount(); ++r) {
