@@ -29,8 +29,9 @@ ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int t
     const auto samples = static_cast<std::size_t>(mSamples) * static_cast<std::size_t>(mSamples);
     for (ClipmapRing& ring : mRings) {
         ring.heights.assign(samples, 0.0f);
+        ring.morph.assign(2 * samples, kNoMorph);
         for (std::size_t i = 0; i < samples; ++i) {
-            ring.morph.insert(ring.morph.end(), {0.0f, kNoMorph});
+            ring.morph[2 * i] = 0.0f;  // the height, as it starts
         }
         ring.colour.assign(samples * 4, 255);
         ring.previousColour = ring.colour;
@@ -131,16 +132,12 @@ std::int64_t floorDiv(std::int64_t a, std::int64_t b)
 constexpr float kKept = -1.0f;
 constexpr float kReset = -2.0f;
 
-/// An 8-bit channel on its way from `previous` to `current`, `done` of the way (as the GL blends UNORM texels).
-std::uint8_t mixed(std::uint8_t previous, std::uint8_t current, float done)
+/// An 8-bit channel (colour and weights UNORM, normals SNORM) on its way from `previous` to `current`, `done` of
+/// the way, as the GL blends the texels.
+template <typename Channel>
+Channel mixed(Channel previous, Channel current, float done)
 {
-    return static_cast<std::uint8_t>(std::lround(previous + (current - previous) * done));
-}
-
-/// The same for a normal map's SNORM channel.
-std::int8_t mixedNormal(std::int8_t previous, std::int8_t current, float done)
-{
-    return static_cast<std::int8_t>(std::lround(previous + (current - previous) * done));
+    return static_cast<Channel>(std::lround(previous + (current - previous) * done));
 }
 
 }  // namespace
@@ -318,8 +315,7 @@ void ClipmapTerrain::fillNormals(const ClipmapLayout& layout, int r, const Latti
             if (sampleState >= 0.0f) {
                 // Its sample's morph restarted: the texel's starts from what is drawn.
                 for (int c = 0; c < 2; ++c) {
-                    ring.previousNormals[t + c] =
-                        mixedNormal(ring.previousNormals[t + c], ring.normals[t + c], sampleState);
+                    ring.previousNormals[t + c] = mixed(ring.previousNormals[t + c], ring.normals[t + c], sampleState);
                 }
             }
             if (node && !node->normalMap.empty()) {
