@@ -254,7 +254,8 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
     });
     const double tau = o.lodError;
     // The reference nodes are the same nodes without the tessellation errors they do not need.
-    TerrainNodeSource referenceSource(map, {synthesizer->get(), o.lodMinimumSpacing});
+    // Reference surfaces: heights only (no bounds, normal maps or tessellation errors).
+    TerrainNodeSource referenceSource(map, {synthesizer->get(), o.lodMinimumSpacing, 0, 0, false});
     ErrorMeter meter(header, referenceSource, {tau / 8.0, 1024, 16});
 
     const std::size_t frames =

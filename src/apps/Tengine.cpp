@@ -403,9 +403,10 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
             [renderer = scene->renderer.get()](const NodeData& node) { renderer->release(node.id); });
     }
     if (o.videoMeasureErrorEvery > 0) {
-        // The reference nodes are the viewer's without the tessellation errors they do not need.
+        // The reference nodes are the viewer's surfaces without the bounds, normal maps and tessellation
+        // errors they do not need.
         scene->referenceSource = std::make_unique<TerrainNodeSource>(
-            *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing});
+            *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing, 0, 0, false});
         scene->meter = std::make_unique<ErrorMeter>(header, *scene->referenceSource,
                                                     ErrorMeterOptions{o.lodError / 8.0, 1024, 16});
     }

@@ -129,13 +129,17 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     data->spacing = where.spacing;
     data->heights = synthesizer.synthesizeChild(parent.heights, quadrant, where);
     data->materialWeights = synthesizer.materialWeights(data->heights, where);
-    // The synthesis model's bound from the node's own data (DetailErrorModel.h), instead of 3.4.1's "half the
-    // error of their parent"; at most the parent's / kErrorNesting, so errors nest with a geomorph range.
-    // The roughness octaves still to come below it add at most roughnessBound (triangle inequality).
-    data->deltaC = std::min(
-        parent.deltaC / kErrorNesting,
-        mErrorModel->bound(data->heights, data->materialWeights, id.level, synthesizer.nodeMaterialScales(where)) +
-            static_cast<float>(synthesizer.roughnessBound(where)));
+    // The node's children, made here once: its error is measured on them (DetailErrorModel::boundFromChildren,
+    // instead of 3.4.1's "half the error of their parent") and its normal map shades with them. At most the
+    // parent's / kErrorNesting, so errors nest with a geomorph range.
+    std::array<DualHeightMap, 4> children;
+    if (mPolicy.bounds || mPolicy.normalMapSize > 0) {
+        children = synthesizer.synthesizeChildren(data->heights, where);
+    }
+    data->deltaC = parent.deltaC / kErrorNesting;
+    if (mPolicy.bounds) {
+        data->deltaC = std::min(data->deltaC, mErrorModel->boundFromChildren(data->heights, children, where, id.level));
+    }
     data->texture = upsampleTexture(parent.texture, static_cast<int>(h.textureSize), quadrant);
     // The box: the node's base samples plus whatever displacement its descendants may add, kept inside the
     // parent's so boxes stay nested (3.2.12).
@@ -151,7 +155,9 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     data->zMin = std::clamp(h.heightOffset + lo - mDisplacementBound, parent.zMin, parent.zMax);
     data->zMax = std::clamp(h.heightOffset + hi + mDisplacementBound, data->zMin, parent.zMax);
     addTessellationErrors(*data);
-    addNormalMap(*data, where);
+    if (mPolicy.normalMapSize > 0) {
+        data->normalMap = makeNormalMap(synthesizer, data->heights, children, where, mPolicy.normalMapSize);
+    }
     return data;
 }
 

@@ -28,6 +28,11 @@ struct DetailPolicy {
     /// synthesis/NormalMap.h) of normalMapTexels(normalMapSize) texels a side, made on the loading thread
     /// with the node; 0: none (the renderer lights by vertex normals).
     int normalMapSize = 0;
+    /// Whether dynamic nodes get their error bound (DetailErrorModel::boundFromChildren: the node's four
+    /// children synthesized and measured, with the node). false: a source of reference surfaces that needs
+    /// heights only (the error meter's), whose dynamic nodes carry their parent's delta_c / kErrorNesting,
+    /// which bounds nothing; it saves four child syntheses a node where there is no normal map to share them.
+    bool bounds = true;
 };
 
 class TerrainNodeSource final : public NodeSource {

@@ -251,24 +251,57 @@ double DetailErrorModel::displacementTerm(std::span<const std::uint8_t> weights,
     return *std::max_element(sample.begin(), sample.end());
 }
 
-float DetailErrorModel::bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level,
-                              std::span<const std::vector<float>> scales) const
+float DetailErrorModel::boundFromChildren(const DualHeightMap& node, const std::array<DualHeightMap, 4>& children,
+                                          const WindowPlacement& where, int level) const
 {
-    // Per cell of the node: the subdivision's change there and the displacement's error at its corners, so
-    // the two terms add where they meet rather than each at its own worst place.
-    std::vector<float> cells;
-    nextSubdivisionChanges(heights, cells);
+    TERRAIN_EXPECTS(level >= 0 && level < NodeId::kMaxLevel, "the children's level must exist");
     const int n = mSynthesizer.chunkSize();
-    const std::vector<double> sample = sampleDisplacementErrors(weights, level, scales);
-    double worst = 0.0;
-    for (int j = 0; j + 1 < n; ++j) {
-        for (int i = 0; i + 1 < n; ++i) {
-            auto at = [&](int x, int y) { return sample[static_cast<std::size_t>(y) * n + x]; };
-            const double displacement = std::max({at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)});
-            worst = std::max(worst, kSubdivisionTail * cells[static_cast<std::size_t>(j) * (n - 1) + i] + displacement);
+    const int w = mSynthesizer.windowSize();
+    TERRAIN_EXPECTS(node.size == w && node.base.size() == static_cast<std::size_t>(w) * w,
+                    "the node's window does not match the synthesizer's chunk size");
+    const int half = (n - 1) / 2;
+    auto surface = [&](const DualHeightMap& map, int i, int j) {
+        return static_cast<double>(map.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder));
+    };
+    std::vector<double> measured(static_cast<std::size_t>(n) * n);
+    std::vector<float> changes;
+    double worst = 0.0, largest = 0.0;
+    for (int q = 0; q < 4; ++q) {
+        const DualHeightMap& child = children[static_cast<std::size_t>(q)];
+        TERRAIN_EXPECTS(child.size == w && child.base.size() == node.base.size(), "a child's window is not W x W");
+        const WindowPlacement at = childPlacement(where, q, n);
+        const int x0 = (q & 1) * half, y0 = (q >> 1) * half;
+        // Child sample (a, b) lies at node position (x0 + a / 2, y0 + b / 2), in node cell (i, j).
+        for (int b = 0; b < n; ++b) {
+            for (int a = 0; a < n; ++a) {
+                const int i = std::min(x0 + a / 2, n - 2), j = std::min(y0 + b / 2, n - 2);
+                const double fx = (x0 + a * 0.5) - i, fy = (y0 + b * 0.5) - j;
+                const double own = interpolateQuad(surface(node, i, j), surface(node, i + 1, j),
+                                                   surface(node, i, j + 1), surface(node, i + 1, j + 1), fx, fy);
+                measured[static_cast<std::size_t>(b) * n + a] = std::abs(surface(child, a, b) - own);
+                largest = std::max(largest, std::abs(own));
+            }
+        }
+        nextSubdivisionChanges(child, changes);
+        const std::vector<double> displacement = sampleDisplacementErrors(
+            mSynthesizer.materialWeights(child, at), level + 1, mSynthesizer.nodeMaterialScales(at));
+        for (int b = 0; b + 1 < n; ++b) {
+            for (int a = 0; a + 1 < n; ++a) {
+                auto corners = [&](const std::vector<double>& v) {
+                    auto get = [&](int x, int y) { return v[static_cast<std::size_t>(y) * n + x]; };
+                    return std::max({get(a, b), get(a + 1, b), get(a, b + 1), get(a + 1, b + 1)});
+                };
+                const double cell = corners(measured) +
+                                    kSubdivisionTail * changes[static_cast<std::size_t>(b) * (n - 1) + a] +
+                                    corners(displacement);
+                worst = std::max(worst, cell);
+            }
         }
     }
-    return static_cast<float>(worst);
+    // The roughness octaves' tail: the largest over the node's square, the same for every cell. The samples
+    // are floats: the node's, the children's and every later level's each round by half a unit in the last
+    // place of the largest height, and the displacement's sum once more.
+    return static_cast<float>(worst + mSynthesizer.roughnessTail(where, 1) + kFloatRounding * largest);
 }
 
 std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(
@@ -315,11 +348,8 @@ std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16
         }
         const WindowPlacement where = windowPlacement(h, id);
         s.displace(where, nullptr, 0, leaf);
-        const float bound =
-            forMap->model->bound(leaf, s.materialWeights(leaf, where), id.level, s.nodeMaterialScales(where));
-        // The roughness octaves below the leaf (all of them: none is present at its samples), added: the
-        // triangle inequality over the subdivision and materials' surface and the roughness noise.
-        return static_cast<float>(bound + s.roughnessBound(where));
+        // The leaf's children as the viewer synthesizes them below it, measured, plus the model's tail.
+        return forMap->model->boundFromChildren(leaf, s.synthesizeChildren(leaf, where), where, id.level);
     };
 }
 

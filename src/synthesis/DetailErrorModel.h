@@ -3,11 +3,19 @@
 // plus material displacement) can lie from the node's own triangulated surface. Two terms, from the node's
 // own data and its materials:
 //
-//   delta = max over the node's cells of  kSubdivisionTail * D1(cell)  +  max over the cell's corners of
-//           sum_m  w_m * E_m(level)
+//   delta = max over the children's cells of  max over the cell's corners of |child sample - node surface|
+//           + kSubdivisionTail * D1(cell) + max over the cell's corners of sum_m w_m * E_m(level + 1)
+//           + the roughness octaves' tail
 //
-// - D1: the largest change the next subdivision makes to the base (every child sample against the node's
-//   surface along the template triangulation), computed from the node's base. Later levels change it less:
+// The first term is measured on the node's four children, made on the worker thread with the node (they
+// are the samples its normal map shades with): a sample never moves at finer levels (the subdivision is
+// interpolatory, the materials' displacement depends on the position only, the roughness octaves below
+// vanish there), so at the children's samples the node's error is known exactly, and since the children's
+// triangles nest in the node's, it is exact on every cell's corners. What is left to bound is how far the
+// limit surface lies from the children's triangles inside each cell, the three terms after it:
+//
+// - D1: the largest change the next subdivision makes to the base (every grandchild sample against the
+//   child's surface along the template triangulation), computed from the children's bases. Later levels change it less:
 //   the 4-point rule's changes shrink by 1/4 per level on smooth data, so the whole tail is D1 / (1 - 1/4).
 //   (Measured on the bundled terrain with tengine-tool error --levels: the largest distance of a node from
 //   the reference is up to 1.0 D1, so 4/3 holds with margin; a contraction of only 1/2 would need 2.)
@@ -22,8 +30,12 @@
 // - w_m: material m's weight at a sample (placement, DetailSynthesizer::materialWeights): the displacement
 //   there is the weighted sum of the materials', so its error is the weighted sum of theirs.
 //
+// - the roughness octaves (RoughnessNoise::nodeTail): those the children lack, up to the noise's measured
+//   peak each, and the interpolation error of those they hold between their samples (PerlinNoise::extremes).
+//
 // The viewer computes it for every dynamic node it makes (lod/TerrainNodeSource.h) and prep for every static
-// leaf (leafDetailErrorFunction), so both follow one model; tengine-tool error measures how tight it is.
+// leaf (leafDetailErrorFunction), so both follow one model; tengine-tool error measures how tight it is, and
+// DetailBoundTest checks it against the nodes' descendants synthesized three levels down.
 #pragma once
 
 #include "synthesis/DetailSynthesizer.h"
@@ -41,6 +53,9 @@ class DetailErrorModel {
 public:
     static constexpr double kSubdivisionTail = 4.0 / 3.0;
     static constexpr double kDisplacementMargin = 1.25;
+    /// The float rounding of a node's samples and of every level's below it, relative to the largest height:
+    /// four units of 2^-24 (two samples' rounding and the displacement's sum, with a unit to spare).
+    static constexpr double kFloatRounding = 4.0 / (1 << 24);
 
     /// The model for `synthesizer` (which must outlive it) on a quadtree whose level 0 has sample spacing
     /// `rootSpacing` metres (level k: rootSpacing / 2^k). Measures the per-level changes of every material
@@ -64,11 +79,17 @@ public:
     double displacementTerm(std::span<const std::uint8_t> weights, int level,
                             std::span<const std::vector<float>> scales = {}) const;
 
-    /// The whole bound for a node at `level` with these heights and weights: the largest over the node's cells
-    /// of kSubdivisionTail x the cell's next subdivision change + the largest displacement error at its
-    /// corners (both terms where they meet, not each at its own worst place).
-    float bound(const DualHeightMap& heights, std::span<const std::uint8_t> weights, int level,
-                std::span<const std::vector<float>> scales = {}) const;
+    /// The bound of the node at `level` placed at `where` with window `node`, from its four children
+    /// (DetailSynthesizer::synthesizeChildren): over every cell of the children, the largest distance of its
+    /// corners (the children's samples: the limit surface there, for no later level moves them) from the
+    /// node's triangulated surface, measured, plus what the levels below the children can add inside the
+    /// cell: kSubdivisionTail x the children's next subdivision change there, the materials' E_m(level + 1)
+    /// at its corners weighted by placement (relative materials scaled), and the roughness octaves
+    /// (DetailSynthesizer::roughnessTail one level down); plus kFloatRounding x the largest |height|. The
+    /// children's triangles nest in the node's, so the measured part is exact over the cell and only the tail
+    /// is a model. metres.
+    float boundFromChildren(const DualHeightMap& node, const std::array<DualHeightMap, 4>& children,
+                            const WindowPlacement& where, int level) const;
 
     /// The largest E_m(level) over the materials: the displacement term of a node whose weights are unknown.
     double worstDisplacementError(int level) const;

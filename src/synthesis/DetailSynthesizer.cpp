@@ -207,11 +207,15 @@ void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightM
     }
 }
 
-double DetailSynthesizer::roughnessBound(const WindowPlacement& where) const
+double DetailSynthesizer::roughnessTail(const WindowPlacement& where, int levelsDown) const
 {
-    return mSettings.roughness ? mSettings.roughness->nodeBound(where.spacing, where.gx0 + kBorder, where.gy0 + kBorder,
-                                                                chunkSize() - 1)
-                               : 0.0;
+    TERRAIN_EXPECTS(levelsDown >= 0 && levelsDown <= 16, "levelsDown must be in [0, 16]");
+    if (!mSettings.roughness) {
+        return 0.0;
+    }
+    const int scale = 1 << levelsDown;
+    return mSettings.roughness->nodeTail(where.spacing / scale, (where.gx0 + kBorder) * scale,
+                                         (where.gy0 + kBorder) * scale, (chunkSize() - 1) * scale);
 }
 
 void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const DualHeightMap* parent, int px0, int py0,
@@ -279,6 +283,16 @@ DualHeightMap DetailSynthesizer::synthesizeChild(const DualHeightMap& parent, in
     mSubdivider->subdivide(parent.base, quadrant, child.base);
     displace(where, parent.hasDisplacement() ? &parent : nullptr, quadrant, child);
     return child;
+}
+
+std::array<DualHeightMap, 4> DetailSynthesizer::synthesizeChildren(const DualHeightMap& parent,
+                                                                   const WindowPlacement& where) const
+{
+    std::array<DualHeightMap, 4> children;
+    for (int q = 0; q < 4; ++q) {
+        children[static_cast<std::size_t>(q)] = synthesizeChild(parent, q, childPlacement(where, q, chunkSize()));
+    }
+    return children;
 }
 
 std::vector<std::uint8_t> DetailSynthesizer::materialWeights(const DualHeightMap& map,

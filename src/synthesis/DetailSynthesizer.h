@@ -24,6 +24,7 @@
 #include "synthesis/RoughnessNoise.h"
 #include "synthesis/Subdivider.h"
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -108,9 +109,10 @@ public:
     /// factor over the map for a relative one.
     double materialBound() const;
 
-    /// The most the roughness octaves not yet present in the node at `where` (RoughnessNoise::bound from
-    /// the node's level below the leaves) can add to its surface anywhere below it, metres; 0 without.
-    double roughnessBound(const WindowPlacement& where) const;
+    /// How far the roughness noise can lie anywhere in the square of the node at `where` from the template
+    /// triangulation of its values at the samples `levelsDown` levels below the node (RoughnessNoise::nodeTail):
+    /// the octaves those samples lack, and the interpolation error of those they hold. metres; 0 without.
+    double roughnessTail(const WindowPlacement& where, int levelsDown) const;
 
     /// Sets map.displacement (and with several materials map.slope) from map.base (W x W): with `parent`
     /// (a dynamic child: the parent's map, this node its child `quadrant`), the placement slopes are the
@@ -127,6 +129,9 @@ public:
 
     /// Dynamic child `quadrant` (0..3) of `parent`: base subdivided, then displace(). `where` places the child.
     DualHeightMap synthesizeChild(const DualHeightMap& parent, int quadrant, const WindowPlacement& where) const;
+    /// The four dynamic children of the node `parent` placed at `where` (synthesizeChild of quadrants 0..3,
+    /// each placed by childPlacement).
+    std::array<DualHeightMap, 4> synthesizeChildren(const DualHeightMap& parent, const WindowPlacement& where) const;
 
     /// The material weights of the node's N x N samples (border excluded), rows south to north, 4 bytes per
     /// sample: round(255 * weight of material m) for m < materials; empty when no materials are set.

@@ -26,17 +26,11 @@ int normalMapDepth(int cells, int chunkSize)
     return depth;
 }
 
-std::vector<float> surfaceBelow(const DetailSynthesizer& synthesizer, const DualHeightMap& node,
+std::vector<float> surfaceBelow(const DetailSynthesizer& synthesizer, const std::array<DualHeightMap, 4>& children,
                                 const WindowPlacement& where, int depth)
 {
-    TERRAIN_EXPECTS(depth >= 0 && depth <= kMaxNormalMapDepth, "depth must be in [0, kMaxNormalMapDepth]");
+    TERRAIN_EXPECTS(depth >= 1 && depth <= kMaxNormalMapDepth, "depth must be in [1, kMaxNormalMapDepth]");
     const int n = synthesizer.chunkSize();
-    TERRAIN_EXPECTS(node.size == windowSize(n), "the node's window does not match the synthesizer's chunk size");
-    if (depth == 0) {
-        std::vector<float> own(node.base.size());
-        node.surface(own);
-        return own;
-    }
     // Each child's surface below, one level less deep, fills its quarter of the window; where two children's
     // windows overlap (the shared edge and the borders), the sample is taken from the child it lies inside.
     const int half = (n - 1) << (depth - 1);  // cells of a child's part
@@ -45,9 +39,8 @@ std::vector<float> surfaceBelow(const DetailSynthesizer& synthesizer, const Dual
     std::vector<float> out(static_cast<std::size_t>(w) * w);
     for (int q = 0; q < 4; ++q) {
         const int qx = q & 1, qy = q >> 1;
-        const WindowPlacement at = childPlacement(where, q, n);
-        const DualHeightMap child = synthesizer.synthesizeChild(node, q, at);
-        const std::vector<float> sub = surfaceBelow(synthesizer, child, at, depth - 1);
+        const std::vector<float> sub =
+            surfaceBelow(synthesizer, children[static_cast<std::size_t>(q)], childPlacement(where, q, n), depth - 1);
         const int fx0 = qx == 0 ? 0 : half + kBorder + 1, fx1 = qx == 0 ? half + kBorder : w - 1;
         const int fy0 = qy == 0 ? 0 : half + kBorder + 1, fy1 = qy == 0 ? half + kBorder : w - 1;
         for (int fj = fy0; fj <= fy1; ++fj) {
@@ -58,6 +51,20 @@ std::vector<float> surfaceBelow(const DetailSynthesizer& synthesizer, const Dual
         }
     }
     return out;
+}
+
+std::vector<float> surfaceBelow(const DetailSynthesizer& synthesizer, const DualHeightMap& node,
+                                const WindowPlacement& where, int depth)
+{
+    TERRAIN_EXPECTS(depth >= 0 && depth <= kMaxNormalMapDepth, "depth must be in [0, kMaxNormalMapDepth]");
+    TERRAIN_EXPECTS(node.size == windowSize(synthesizer.chunkSize()),
+                    "the node's window does not match the synthesizer's chunk size");
+    if (depth == 0) {
+        std::vector<float> own(node.base.size());
+        node.surface(own);
+        return own;
+    }
+    return surfaceBelow(synthesizer, synthesizer.synthesizeChildren(node, where), where, depth);
 }
 
 namespace {
@@ -139,6 +146,18 @@ std::vector<std::int8_t> makeNormalMap(const DetailSynthesizer& synthesizer, con
     const int n = synthesizer.chunkSize();
     const int depth = normalMapDepth(cells, n);
     const std::vector<float> below = surfaceBelow(synthesizer, node, where, depth);
+    return normalMapOf(below, (n - 1) << depth, where.spacing / static_cast<double>(1 << depth), cells + 1);
+}
+
+std::vector<std::int8_t> makeNormalMap(const DetailSynthesizer& synthesizer, const DualHeightMap& node,
+                                       const std::array<DualHeightMap, 4>& children, const WindowPlacement& where,
+                                       int textureSize)
+{
+    const int cells = normalMapCells(textureSize);
+    const int n = synthesizer.chunkSize();
+    const int depth = normalMapDepth(cells, n);
+    const std::vector<float> below =
+        depth == 0 ? surfaceBelow(synthesizer, node, where, 0) : surfaceBelow(synthesizer, children, where, depth);
     return normalMapOf(below, (n - 1) << depth, where.spacing / static_cast<double>(1 << depth), cells + 1);
 }
 

@@ -20,6 +20,7 @@
 
 #include "synthesis/DetailSynthesizer.h"
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -49,12 +50,23 @@ int normalMapDepth(int cells, int chunkSize);
 std::vector<float> surfaceBelow(const DetailSynthesizer& synthesizer, const DualHeightMap& node,
                                 const WindowPlacement& where, int depth);
 
+/// surfaceBelow at `depth` >= 1 from the node's four children (DetailSynthesizer::synthesizeChildren of the
+/// node at `where`): the same samples, without synthesizing the children again.
+std::vector<float> surfaceBelow(const DetailSynthesizer& synthesizer, const std::array<DualHeightMap, 4>& children,
+                                const WindowPlacement& where, int depth);
+
 /// A node's normal map: texels x texels unit normals (x, y) as signed 8-bit normalised integers
 /// (GL_RG8_SNORM: round(127 x); z = sqrt(1 - x^2 - y^2)), rows south to north, texel (0, 0) on the node's
 /// south-west corner. From the node's window `node` placed at `where` and the synthesizer that makes its
 /// levels below (surfaceBelow at normalMapDepth).
 std::vector<std::int8_t> makeNormalMap(const DetailSynthesizer& synthesizer, const DualHeightMap& node,
                                        const WindowPlacement& where, int textureSize);
+
+/// makeNormalMap with the node's four children already made (synthesizeChildren; used where the map samples
+/// the surface below the node).
+std::vector<std::int8_t> makeNormalMap(const DetailSynthesizer& synthesizer, const DualHeightMap& node,
+                                       const std::array<DualHeightMap, 4>& children, const WindowPlacement& where,
+                                       int textureSize);
 
 /// The normal map of a surface window (W = cells + 1 + 2 kBorder samples a side at `spacing` metres, as
 /// surfaceBelow returns) on `texels` x texels texels: the part of makeNormalMap that does not synthesize.

@@ -2,9 +2,12 @@
 #include "synthesis/PerlinNoise.h"
 
 #include "core/Check.h"
+#include "quadtree/TemplateTriangulation.h"
 
 #include <algorithm>
+#include <cmath>
 #include <iterator>
+#include <vector>
 
 #if defined(__x86_64__)
 #define TERRAIN_X86 1
@@ -49,6 +52,93 @@ bool simdPathSupported(SimdPath path)
 #else
     return false;
 #endif
+}
+
+double GradientNoiseExtremes::interpolationAt(int m) const
+{
+    TERRAIN_EXPECTS(m >= 1, "the samples must be finer than the lattice");
+    if (m <= kLevels) {
+        return interpolation[static_cast<std::size_t>(m - 1)];
+    }
+    return 2.0 * interpolation[kLevels - 1] * std::ldexp(1.0, 2 * (kLevels - m));
+}
+
+const GradientNoiseExtremes& PerlinNoise::extremes()
+{
+    static const GradientNoiseExtremes kExtremes = [] {
+        // The gradients as grad() assembles them from the hash's top three bits.
+        double gradX[8], gradY[8];
+        for (std::uint32_t i = 0; i < 8; ++i) {
+            const std::uint32_t h = i << 29;
+            const std::uint32_t swap = kGradSwap & static_cast<std::uint32_t>(static_cast<std::int32_t>(h << 2) >> 31);
+            gradX[i] = std::bit_cast<float>((kGradCBits ^ swap) | ((h << 1) & kSign));
+            gradY[i] = std::bit_cast<float>((kGradCBits ^ kGradSwap ^ swap) | (h & kSign));
+        }
+        constexpr int kSteps = 64;  // grid points a cell side, minus one
+        constexpr int kSide = kSteps + 1;
+        constexpr double kH = 1.0 / kSteps;
+        double fades[kSide];
+        for (int i = 0; i < kSide; ++i) {
+            fades[i] = static_cast<double>(fade(i * kH));
+        }
+        GradientNoiseExtremes out;
+        out.peak = 0.0;
+        out.interpolation.fill(0.0);
+        double curvature = 0.0;  // the largest second difference over h^2, any direction of the grid
+        std::vector<double> p(static_cast<std::size_t>(kSide) * kSide);
+        auto at = [&](int i, int j) { return p[static_cast<std::size_t>(j) * kSide + i]; };
+        for (int c = 0; c < 8 * 8 * 8 * 8; ++c) {
+            const int g00 = c & 7, g10 = (c >> 3) & 7, g01 = (c >> 6) & 7, g11 = (c >> 9) & 7;
+            for (int j = 0; j < kSide; ++j) {
+                const double ty = j * kH, v = fades[j];
+                for (int i = 0; i < kSide; ++i) {
+                    const double tx = i * kH, u = fades[i];
+                    const double n00 = gradX[g00] * tx + gradY[g00] * ty;
+                    const double n10 = gradX[g10] * (tx - 1.0) + gradY[g10] * ty;
+                    const double n01 = gradX[g01] * tx + gradY[g01] * (ty - 1.0);
+                    const double n11 = gradX[g11] * (tx - 1.0) + gradY[g11] * (ty - 1.0);
+                    const double value = (1.0 - v) * ((1.0 - u) * n00 + u * n10) + v * ((1.0 - u) * n01 + u * n11);
+                    p[static_cast<std::size_t>(j) * kSide + i] = value;
+                    out.peak = std::max(out.peak, std::abs(value));
+                }
+            }
+            for (int j = 1; j + 1 < kSide; ++j) {
+                for (int i = 1; i + 1 < kSide; ++i) {
+                    const double centre = 2.0 * at(i, j);
+                    curvature = std::max({curvature, std::abs(at(i - 1, j) + at(i + 1, j) - centre),
+                                          std::abs(at(i, j - 1) + at(i, j + 1) - centre),
+                                          0.5 * std::abs(at(i - 1, j - 1) + at(i + 1, j + 1) - centre),
+                                          0.5 * std::abs(at(i - 1, j + 1) + at(i + 1, j - 1) - centre)});
+                }
+            }
+            for (int m = 1; m <= GradientNoiseExtremes::kLevels; ++m) {
+                const int step = kSteps >> m;  // grid points a sample cell side
+                double& worst = out.interpolation[static_cast<std::size_t>(m - 1)];
+                for (int j = 0; j < kSide; ++j) {
+                    const int j0 = std::min(j / step, (kSteps / step) - 1) * step;
+                    for (int i = 0; i < kSide; ++i) {
+                        const int i0 = std::min(i / step, (kSteps / step) - 1) * step;
+                        const double surface =
+                            interpolateQuad(at(i0, j0), at(i0 + step, j0), at(i0, j0 + step), at(i0 + step, j0 + step),
+                                            double(i - i0) / step, double(j - j0) / step);
+                        worst = std::max(worst, std::abs(at(i, j) - surface));
+                    }
+                }
+            }
+        }
+        // Between the grid's points a function exceeds its largest grid value by at most M2 d^2 / 2, d the
+        // distance to the nearest grid point (<= h / sqrt 2) and M2 its largest second derivative, here
+        // estimated from the second differences with a margin of 1.5. The interpolation error's second
+        // derivative is the noise's (the triangles are linear).
+        // With M2 = curvature / h^2 and d^2 = h^2 / 2: M2 d^2 / 2 = curvature / 4.
+        const double slack = 1.5 * curvature / 4.0;
+        out.peak += slack;
+        for (double& e : out.interpolation) {
+            e += slack;
+        }
+        return out;
+    }();
+    return kExtremes;
 }
 
 SimdPath bestSimdPath()

@@ -20,6 +20,7 @@
 // index before hashing.
 #pragma once
 
+#include <array>
 #include <bit>
 #include <cstdint>
 
@@ -48,6 +49,26 @@ struct LatticeBatch {
     alignas(32) float ty[kSize];
     alignas(32) float u[kSize];
     alignas(32) float v[kSize];
+};
+
+/// What the noise can do within one lattice cell, over every choice of its four corner gradients: the bounds
+/// of synthesized detail take these instead of the |P| <= 1 that the gradients' scale guarantees.
+struct GradientNoiseExtremes {
+    /// Levels of sampling that `interpolation` holds (the finest: 2^-kLevels cells apart).
+    static constexpr int kLevels = 4;
+    /// The largest |P| anywhere.
+    double peak = 1.0;
+    /// interpolation[m - 1]: the largest distance between P and the template triangulation
+    /// (quadtree/TemplateTriangulation.h) of its samples 2^-m cells apart, for m = 1 .. kLevels; at those
+    /// samples' lattice-aligned grid every sample cell lies inside one lattice cell.
+    std::array<double, kLevels> interpolation{};
+
+    /// interpolation[m - 1] for m in [1, kLevels]; beyond, interpolation[kLevels - 1] x 4^(kLevels - m) x 2
+    /// (the distance of a C2 function from its linear interpolant shrinks by 4 a halving of the spacing;
+    /// twice that is the margin for the fade's higher derivatives, on terms that are this small). 0 for m <= 0
+    /// (samples on the lattice or coarser: the triangles' corners are lattice points, where P is 0, but
+    /// their insides are not) is not defined: precondition m >= 1.
+    double interpolationAt(int m) const;
 };
 
 class PerlinNoise {
@@ -121,6 +142,12 @@ public:
 
     std::uint64_t seed() const { return mSeed; }
     std::int64_t period() const { return mPeriod; }
+
+    /// The noise's extremes over every cell (every one of the 8^4 choices of corner gradients): measured once,
+    /// on first use (about 0.2 s), on a grid of 1/64 of a cell, plus the most a C2 function can exceed its
+    /// grid maximum between the grid's points (PerlinNoiseTest checks them against a finer grid and the
+    /// noise itself). Thread-safe; the same for every seed and period.
+    static const GradientNoiseExtremes& extremes();
 
 private:
     void cellsBaseline(const LatticeBatch& batch, float (&out)[LatticeBatch::kSize]) const;

@@ -336,15 +336,20 @@ double RoughnessNoise::bound(int from, int x0, int y0, int x1, int y1) const
     return octaveSum(from, amplitude, lo, hi);
 }
 
-double RoughnessNoise::octaveSum(int from, double amplitude, double lo, double hi) const
+template <typename Weight>
+double RoughnessNoise::weightedOctaveSum(const Weight& weight, double amplitude, double lo, double hi) const
 {
-    if (amplitude == 0.0 || from >= octaves()) {
+    if (amplitude == 0.0) {
         return 0.0;
     }
     // Each octave's largest c(H) 2^(-k H) over the exponents there (the calibration table's entries and
     // the ends), with a margin for the curvature between entries.
     double total = 0.0;
-    for (int k = std::max(from, 0); k < octaves(); ++k) {
+    for (int k = 0; k < octaves(); ++k) {
+        const double w = weight(k);
+        if (w == 0.0) {
+            continue;
+        }
         double most = 0.0;
         for (double h = lo;; h = std::min(h + kRoughnessCalibrationStep, hi)) {
             most = std::max(most, calibration(h) * std::exp2(-k * h));
@@ -352,12 +357,18 @@ double RoughnessNoise::octaveSum(int from, double amplitude, double lo, double h
                 break;
             }
         }
-        total += most;
+        total += w * most;
     }
     return 1.01 * amplitude * total;
 }
 
-double RoughnessNoise::boundOver(int from, double u0, double v0, double u1, double v1) const
+double RoughnessNoise::octaveSum(int from, double amplitude, double lo, double hi) const
+{
+    return weightedOctaveSum([from](int k) { return k >= from ? 1.0 : 0.0; }, amplitude, lo, hi);
+}
+
+void RoughnessNoise::lawRange(double u0, double v0, double u1, double v1, double& amplitude, double& lo,
+                              double& hi) const
 {
     TERRAIN_EXPECTS(u0 <= u1 && v0 <= v1, "the rectangle must not be empty");
     // The rectangle's corners, and the leaf centres' lines (u or v = (i + 0.5) leafCells) inside it.
@@ -372,7 +383,9 @@ double RoughnessNoise::boundOver(int from, double u0, double v0, double u1, doub
         return at;
     };
     const std::vector<double> us = breaks(u0, u1), vs = breaks(v0, v1);
-    double amplitude = 0.0, lo = kMaxRoughnessExponent, hi = kMinRoughnessExponent;
+    amplitude = 0.0;
+    lo = kMaxRoughnessExponent;
+    hi = kMinRoughnessExponent;
     for (double u : us) {
         for (double v : vs) {
             const RoughnessLaw law = lawAt(u, v);
@@ -381,9 +394,20 @@ double RoughnessNoise::boundOver(int from, double u0, double v0, double u1, doub
             hi = std::max(hi, law.exponent);
         }
     }
-    // lawAt rounds: a hair of margin on the amplitude.
-    return octaveSum(from, amplitude * (1.0 + 1e-9), std::max(lo - 1e-9, kMinRoughnessExponent),
-                     std::min(hi + 1e-9, kMaxRoughnessExponent));
+    // lawAt rounds: a hair of margin on the amplitude and the exponents.
+    amplitude *= 1.0 + 1e-9;
+    lo = std::max(lo - 1e-9, kMinRoughnessExponent);
+    hi = std::min(hi + 1e-9, kMaxRoughnessExponent);
+}
+
+double RoughnessNoise::boundOver(int from, double u0, double v0, double u1, double v1) const
+{
+    if (from >= octaves()) {
+        return 0.0;
+    }
+    double amplitude = 0.0, lo = 0.0, hi = 0.0;
+    lawRange(u0, v0, u1, v1, amplitude, lo, hi);
+    return octaveSum(from, amplitude, lo, hi);
 }
 
 double RoughnessNoise::nodeBound(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const
@@ -392,6 +416,18 @@ double RoughnessNoise::nodeBound(double spacing, std::int64_t firstX, std::int64
     const double scale = std::ldexp(1.0, -below);  // the node's samples in samples of the finest static level
     const double u0 = static_cast<double>(firstX) * scale, v0 = static_cast<double>(firstY) * scale;
     return boundOver(std::max(below, 0), u0, v0, u0 + cells * scale, v0 + cells * scale);
+}
+
+double RoughnessNoise::nodeTail(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const
+{
+    const int below = levelsBelow(spacing);
+    const double scale = std::ldexp(1.0, -below);
+    const double u0 = static_cast<double>(firstX) * scale, v0 = static_cast<double>(firstY) * scale;
+    double amplitude = 0.0, lo = 0.0, hi = 0.0;
+    lawRange(u0, v0, u0 + cells * scale, v0 + cells * scale, amplitude, lo, hi);
+    const GradientNoiseExtremes& extremes = PerlinNoise::extremes();
+    return weightedOctaveSum([&](int k) { return k >= below ? extremes.peak : extremes.interpolationAt(below - k); },
+                             amplitude, lo, hi);
 }
 
 double RoughnessNoise::bound(int from) const

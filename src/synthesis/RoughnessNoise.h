@@ -101,11 +101,24 @@ public:
     /// the leaves (0 above them) over its square. The node has sample spacing `spacing` and `cells` cells a
     /// side from global sample (firstX, firstY) of its level.
     double nodeBound(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const;
+    /// How far the noise can lie anywhere in a square from the template triangulation of its values at the
+    /// samples of a level (spacing `spacing`; the square: `cells` cells a side from global sample (firstX,
+    /// firstY) of that level): the octaves that vanish at those samples (k >= the level's levels below the
+    /// leaves) up to their largest |P| each (PerlinNoise::extremes().peak), and the octaves present there
+    /// up to their interpolation error at the samples (extremes().interpolationAt(levels below - k)), each
+    /// times its largest amplitude over the square (as boundOver). metres, >= 0.
+    double nodeTail(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const;
 
 private:
     /// Sum over octaves k >= from of the largest c(H) 2^(-kH) for H in [lo, hi], times 1.01 (the curvature
     /// between calibration entries) and `amplitude`.
     double octaveSum(int from, double amplitude, double lo, double hi) const;
+    /// Sum over every octave k of weight(k) x the largest c(H) 2^(-kH) for H in [lo, hi], times 1.01 and
+    /// `amplitude`.
+    template <typename Weight>
+    double weightedOctaveSum(const Weight& weight, double amplitude, double lo, double hi) const;
+    /// The largest amplitude and the exponents' range of the law over the rectangle (as boundOver).
+    void lawRange(double u0, double v0, double u1, double v1, double& amplitude, double& lo, double& hi) const;
     /// a_k at the interpolated law: c(H) A 2^(-k H), for k = 0 .. count - 1, into amplitudes.
     void amplitudes(double u, double v, int count, double* out) const;
 

@@ -58,7 +58,12 @@ TEST(DetailErrorModelTest, SubdivisionTermIsTheClosedFormOnAQuadratic)
         EXPECT_NEAR(model.nextSubdivisionChange(map), expected,
                     2e-6 * std::max(1.0, static_cast<double>(map.base.back())))
             << "spacing " << spacing;
-        EXPECT_NEAR(model.bound(map, {}, 3), DetailErrorModel::kSubdivisionTail * expected,
+        // Measured on the children: (a + b) s^2 / 4 at the cell centres, plus the tail 4/3 of the children's
+        // own next change, (a + b) (s / 2)^2 / 4: 4/3 of the node's change in all.
+        WindowPlacement where;
+        where.spacing = spacing;
+        EXPECT_NEAR(model.boundFromChildren(map, s->synthesizeChildren(map, where), where, 3),
+                    DetailErrorModel::kSubdivisionTail * expected,
                     1e-5 * std::max(1.0, static_cast<double>(map.base.back())));
     }
     // A plane is reproduced exactly: nothing to add.
@@ -161,7 +166,7 @@ TEST(DetailErrorModelTest, PrepsLeafErrorIsTheModelsBoundOfTheDisplacedLeaf)
     const WindowPlacement where = windowPlacement(h, id);
     s->displace(where, nullptr, 0, leaf);
     const DetailErrorModel model(*s, h.spacingAt(0));
-    EXPECT_EQ(got, model.bound(leaf, s->materialWeights(leaf, where), id.level));
+    EXPECT_EQ(got, model.boundFromChildren(leaf, s->synthesizeChildren(leaf, where), where, id.level));
     EXPECT_GT(got, 0.0f);
     EXPECT_EQ(detailDisplacementRange(*s), 6.0);  // rock's 3 m amplitude, twice
 }

@@ -272,7 +272,7 @@ TEST_F(DynamicNodesTest, SynthesisIsTheSameWithAnyThreadsAndAnyOrder)
 
 TEST_F(DynamicNodesTest, DynamicErrorsFollowTheSynthesisModelBoundWhatIsBelowAndBoxesNest)
 {
-    // Issue 12: a dynamic node's error is DetailErrorModel::bound of its own heights and weights, never above
+    // Issue 12: a dynamic node's error is DetailErrorModel::boundFromChildren of its heights and children, never above
     // its parent's; and it bounds what synthesis really adds below it: the node's surface against every
     // sample of its 16 grandchildren (made by the same source), along a chain of nodes down from the root.
     // Static leaves carry prep's bound (the same model), checked against the paper's stochastic estimate.
@@ -292,9 +292,12 @@ TEST_F(DynamicNodesTest, DynamicErrorsFollowTheSynthesisModelBoundWhatIsBelowAnd
             if (child->isStatic) {
                 continue;
             }
+            const WindowPlacement where = source.placement(child->id);
             EXPECT_EQ(child->deltaC,
                       std::min(node->deltaC / kErrorNesting,
-                               source.errorModel()->bound(child->heights, child->materialWeights, child->id.level)));
+                               source.errorModel()->boundFromChildren(
+                                   child->heights, mSynthesizer->synthesizeChildren(child->heights, where), where,
+                                   child->id.level)));
             double worst = 0.0;
             const ChildNodes grandchildren = source.loadChildren(*child).value();
             for (const auto& grand : grandchildren) {

@@ -2,10 +2,14 @@
 // documented range; continuity across lattice cells; the same smoothness and detail far from the origin.
 #include "synthesis/PerlinNoise.h"
 
+#include "quadtree/TemplateTriangulation.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <random>
 #include <thread>
@@ -260,6 +264,61 @@ TEST(PerlinNoise, GradientChoicesAreUniformAndIndependentBetweenNeighbours)
             EXPECT_LT(chi2, 103.4) << "seed " << seed << " offset (" << d.dx << ", " << d.dy << ")";
         }
     }
+}
+
+TEST(PerlinNoise, ExtremesBoundTheNoiseAndAreReachedByIt)
+{
+    // The extremes are measured on the gradients alone; here the noise itself, on 4000 random cells sampled
+    // 1/96 of a cell apart (off the extremes' grid), reaches within a few percent of each and never
+    // exceeds it: the peak, and the interpolation error at samples 2^-m cells apart.
+    const GradientNoiseExtremes& e = PerlinNoise::extremes();
+    EXPECT_GT(e.peak, 0.8);
+    EXPECT_LT(e.peak, 1.0) << "no tighter than the gradients' scale";
+    for (int m = 1; m < GradientNoiseExtremes::kLevels; ++m) {
+        EXPECT_LT(e.interpolationAt(m + 1), e.interpolationAt(m)) << m;
+    }
+    EXPECT_LT(e.interpolationAt(GradientNoiseExtremes::kLevels + 1), e.interpolationAt(GradientNoiseExtremes::kLevels));
+    const PerlinNoise noise(99);
+    std::mt19937_64 random(7);
+    constexpr int kSteps = 96;
+    double peak = 0.0;
+    std::array<double, GradientNoiseExtremes::kLevels> interpolation{};
+    std::vector<double> p((kSteps + 1) * (kSteps + 1));
+    for (int trial = 0; trial < 4000; ++trial) {
+        const auto ix = static_cast<std::int64_t>(random() % 100000), iy = static_cast<std::int64_t>(random() % 100000);
+        for (int j = 0; j <= kSteps; ++j) {
+            for (int i = 0; i <= kSteps; ++i) {
+                const double v = noise.cell(ix, iy, double(i) / kSteps, double(j) / kSteps);
+                p[j * (kSteps + 1) + i] = v;
+                peak = std::max(peak, std::abs(v));
+            }
+        }
+        auto at = [&](int i, int j) { return p[j * (kSteps + 1) + i]; };
+        for (int m = 1; m <= GradientNoiseExtremes::kLevels; ++m) {
+            const int step = kSteps >> m;
+            for (int j = 0; j <= kSteps; ++j) {
+                const int j0 = std::min(j / step * step, kSteps - step);
+                for (int i = 0; i <= kSteps; ++i) {
+                    const int i0 = std::min(i / step * step, kSteps - step);
+                    const double surface =
+                        interpolateQuad(at(i0, j0), at(i0 + step, j0), at(i0, j0 + step), at(i0 + step, j0 + step),
+                                        double(i - i0) / step, double(j - j0) / step);
+                    interpolation[m - 1] = std::max(interpolation[m - 1], std::abs(at(i, j) - surface));
+                }
+            }
+        }
+    }
+    EXPECT_LE(peak, e.peak);
+    EXPECT_GT(peak, 0.95 * e.peak);
+    for (int m = 1; m <= GradientNoiseExtremes::kLevels; ++m) {
+        EXPECT_LE(interpolation[m - 1], e.interpolationAt(m)) << m;
+        EXPECT_GT(interpolation[m - 1], 0.85 * e.interpolationAt(m)) << m;
+    }
+    std::printf("  peak %.4f (noise %.4f); interpolation at 2^-m cells:", e.peak, peak);
+    for (int m = 1; m <= GradientNoiseExtremes::kLevels; ++m) {
+        std::printf(" %.4f (%.4f)", e.interpolationAt(m), interpolation[m - 1]);
+    }
+    std::printf("\n");
 }
 
 TEST(PerlinNoise, PeriodicNoiseRepeatsExactly)

@@ -382,7 +382,12 @@ TEST_F(RoughSynthesisTest, ErrorsBoundWhatTheRoughnessAddsBelow)
             }
         }
         EXPECT_LE(worst, node->deltaC) << node->id.toString();
-        const double plain = source.errorModel()->bound(node->heights, node->materialWeights, node->id.level);
+        // The bound without the roughness octaves' tail (the children's samples hold the first octave below).
+        const WindowPlacement where = source.placement(node->id);
+        const double plain =
+            source.errorModel()->boundFromChildren(node->heights, mRough->synthesizeChildren(node->heights, where),
+                                                   where, node->id.level) -
+            mRough->roughnessTail(where, 1);
         exceedsWithoutRoughness += worst > plain ? 1 : 0;
         ++checked;
         node = source.loadChildren(*node).value()[2];
