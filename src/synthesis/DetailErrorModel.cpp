@@ -265,6 +265,10 @@ float DetailErrorModel::boundFromChildren(const DualHeightMap& node, const std::
     };
     std::vector<double> measured(static_cast<std::size_t>(n) * n);
     std::vector<float> changes;
+    // The roughness octaves' tail per cell of the children (2 (N - 1) a side over the node).
+    const int cells = 2 * (n - 1);
+    std::vector<float> roughness(static_cast<std::size_t>(cells) * cells);
+    mSynthesizer.roughnessTails(where, 1, roughness);
     double worst = 0.0, largest = 0.0;
     for (int q = 0; q < 4; ++q) {
         const DualHeightMap& child = children[static_cast<std::size_t>(q)];
@@ -291,17 +295,17 @@ float DetailErrorModel::boundFromChildren(const DualHeightMap& node, const std::
                     auto get = [&](int x, int y) { return v[static_cast<std::size_t>(y) * n + x]; };
                     return std::max({get(a, b), get(a + 1, b), get(a, b + 1), get(a + 1, b + 1)});
                 };
+                const std::size_t r = static_cast<std::size_t>((q >> 1) * (n - 1) + b) * cells + (q & 1) * (n - 1) + a;
                 const double cell = corners(measured) +
                                     kSubdivisionTail * changes[static_cast<std::size_t>(b) * (n - 1) + a] +
-                                    corners(displacement);
+                                    corners(displacement) + roughness[r];
                 worst = std::max(worst, cell);
             }
         }
     }
-    // The roughness octaves' tail: the largest over the node's square, the same for every cell. The samples
-    // are floats: the node's, the children's and every later level's each round by half a unit in the last
-    // place of the largest height, and the displacement's sum once more.
-    return static_cast<float>(worst + mSynthesizer.roughnessTail(where, 1) + kFloatRounding * largest);
+    // The samples are floats: the node's, the children's and every later level's each round by half a unit in
+    // the last place of the largest height, and the displacement's sum once more.
+    return static_cast<float>(worst + kFloatRounding * largest);
 }
 
 std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16_t>)> leafDetailErrorFunction(

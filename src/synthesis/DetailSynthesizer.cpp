@@ -218,6 +218,20 @@ double DetailSynthesizer::roughnessTail(const WindowPlacement& where, int levels
                                          (where.gy0 + kBorder) * scale, (chunkSize() - 1) * scale);
 }
 
+void DetailSynthesizer::roughnessTails(const WindowPlacement& where, int levelsDown, std::span<float> out) const
+{
+    TERRAIN_EXPECTS(levelsDown >= 0 && levelsDown <= 16, "levelsDown must be in [0, 16]");
+    const int scale = 1 << levelsDown;
+    const int cells = (chunkSize() - 1) * scale;
+    TERRAIN_EXPECTS(out.size() >= static_cast<std::size_t>(cells) * cells, "out must hold one value a cell");
+    if (!mSettings.roughness) {
+        std::fill(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(cells) * cells, 0.0f);
+        return;
+    }
+    mSettings.roughness->cellTails(where.spacing / scale, (where.gx0 + kBorder) * scale, (where.gy0 + kBorder) * scale,
+                                   cells, out);
+}
+
 void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const DualHeightMap* parent, int px0, int py0,
                                             std::span<const std::uint8_t> mask, DualHeightMap& map) const
 {

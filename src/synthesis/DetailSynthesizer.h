@@ -113,6 +113,9 @@ public:
     /// triangulation of its values at the samples `levelsDown` levels below the node (RoughnessNoise::nodeTail):
     /// the octaves those samples lack, and the interpolation error of those they hold. metres; 0 without.
     double roughnessTail(const WindowPlacement& where, int levelsDown) const;
+    /// roughnessTail per cell of that level over the node's square (RoughnessNoise::cellTails): out holds
+    /// ((N - 1) 2^levelsDown)^2 values, rows south to north; zeros without roughness.
+    void roughnessTails(const WindowPlacement& where, int levelsDown, std::span<float> out) const;
 
     /// Sets map.displacement (and with several materials map.slope) from map.base (W x W): with `parent`
     /// (a dynamic child: the parent's map, this node its child `quadrant`), the placement slopes are the

@@ -84,10 +84,15 @@ const GradientNoiseExtremes& PerlinNoise::extremes()
         GradientNoiseExtremes out;
         out.peak = 0.0;
         out.interpolation.fill(0.0);
+        out.cellPeak.assign(GradientNoiseExtremes::kCombinations, 0.0f);
+        for (int m = 1; m <= GradientNoiseExtremes::kCellLevels; ++m) {
+            out.cellInterpolation[static_cast<std::size_t>(m - 1)].assign(
+                static_cast<std::size_t>(GradientNoiseExtremes::kCombinations) << (2 * m), 0.0f);
+        }
         double curvature = 0.0;  // the largest second difference over h^2, any direction of the grid
         std::vector<double> p(static_cast<std::size_t>(kSide) * kSide);
         auto at = [&](int i, int j) { return p[static_cast<std::size_t>(j) * kSide + i]; };
-        for (int c = 0; c < 8 * 8 * 8 * 8; ++c) {
+        for (int c = 0; c < GradientNoiseExtremes::kCombinations; ++c) {
             const int g00 = c & 7, g10 = (c >> 3) & 7, g01 = (c >> 6) & 7, g11 = (c >> 9) & 7;
             for (int j = 0; j < kSide; ++j) {
                 const double ty = j * kH, v = fades[j];
@@ -111,17 +116,32 @@ const GradientNoiseExtremes& PerlinNoise::extremes()
                                           0.5 * std::abs(at(i - 1, j + 1) + at(i + 1, j - 1) - centre)});
                 }
             }
+            double cellPeak = 0.0;
+            for (double v : p) {
+                cellPeak = std::max(cellPeak, std::abs(v));
+            }
+            out.cellPeak[static_cast<std::size_t>(c)] = static_cast<float>(cellPeak);
             for (int m = 1; m <= GradientNoiseExtremes::kLevels; ++m) {
-                const int step = kSteps >> m;  // grid points a sample cell side
+                const int split = 1 << m, step = kSteps >> m;  // sample cells a side, grid points a sample cell
                 double& worst = out.interpolation[static_cast<std::size_t>(m - 1)];
-                for (int j = 0; j < kSide; ++j) {
-                    const int j0 = std::min(j / step, (kSteps / step) - 1) * step;
-                    for (int i = 0; i < kSide; ++i) {
-                        const int i0 = std::min(i / step, (kSteps / step) - 1) * step;
-                        const double surface =
-                            interpolateQuad(at(i0, j0), at(i0 + step, j0), at(i0, j0 + step), at(i0 + step, j0 + step),
-                                            double(i - i0) / step, double(j - j0) / step);
-                        worst = std::max(worst, std::abs(at(i, j) - surface));
+                for (int sy = 0; sy < split; ++sy) {
+                    for (int sx = 0; sx < split; ++sx) {
+                        const int i0 = sx * step, j0 = sy * step;
+                        double cellWorst = 0.0;
+                        for (int b = 0; b <= step; ++b) {
+                            for (int a = 0; a <= step; ++a) {
+                                const double surface =
+                                    interpolateQuad(at(i0, j0), at(i0 + step, j0), at(i0, j0 + step),
+                                                    at(i0 + step, j0 + step), double(a) / step, double(b) / step);
+                                cellWorst = std::max(cellWorst, std::abs(at(i0 + a, j0 + b) - surface));
+                            }
+                        }
+                        worst = std::max(worst, cellWorst);
+                        if (m <= GradientNoiseExtremes::kCellLevels) {
+                            out.cellInterpolation[static_cast<std::size_t>(m - 1)]
+                                                 [static_cast<std::size_t>(c) * split * split + sy * split + sx] =
+                                static_cast<float>(cellWorst);
+                        }
                     }
                 }
             }
@@ -135,6 +155,14 @@ const GradientNoiseExtremes& PerlinNoise::extremes()
         out.peak += slack;
         for (double& e : out.interpolation) {
             e += slack;
+        }
+        for (float& e : out.cellPeak) {
+            e = static_cast<float>(e + slack);
+        }
+        for (auto& table : out.cellInterpolation) {
+            for (float& e : table) {
+                e = static_cast<float>(e + slack);
+            }
         }
         return out;
     }();

@@ -23,6 +23,7 @@
 #include <array>
 #include <bit>
 #include <cstdint>
+#include <vector>
 
 namespace terrain {
 
@@ -69,6 +70,16 @@ struct GradientNoiseExtremes {
     /// (samples on the lattice or coarser: the triangles' corners are lattice points, where P is 0, but
     /// their insides are not) is not defined: precondition m >= 1.
     double interpolationAt(int m) const;
+
+    /// Choices of a cell's four corner gradients: index g00 + 8 g10 + 64 g01 + 512 g11 (PerlinNoise::cellGradients).
+    static constexpr int kCombinations = 8 * 8 * 8 * 8;
+    /// Levels of sampling with per-cell tables (cellInterpolation).
+    static constexpr int kCellLevels = 2;
+    /// Per choice of corner gradients: the largest |P| in the cell.
+    std::vector<float> cellPeak;
+    /// cellInterpolation[m - 1][choice * 4^m + sy * 2^m + sx]: the largest distance of P from the triangulation of
+    /// its samples 2^-m cells apart inside sample cell (sx, sy) of the lattice cell (0 the south-west one).
+    std::array<std::vector<float>, kCellLevels> cellInterpolation;
 };
 
 class PerlinNoise {
@@ -142,6 +153,17 @@ public:
 
     std::uint64_t seed() const { return mSeed; }
     std::int64_t period() const { return mPeriod; }
+
+    /// The choice of corner gradients of lattice cell (ix, iy) (GradientNoiseExtremes::kCombinations; its
+    /// index in the extremes' per-cell tables). Precondition: period() == 0.
+    int cellGradients(std::int64_t ix, std::int64_t iy) const
+    {
+        const std::uint32_t hx0 = static_cast<std::uint32_t>(ix) * kMulX, hx1 = hx0 + kMulX;
+        const std::uint32_t hy = static_cast<std::uint32_t>(iy) * kMulY;
+        const std::uint32_t hy0 = hy ^ mKey, hy1 = (hy + kMulY) ^ mKey;
+        auto index = [](std::uint32_t hx, std::uint32_t hy) { return static_cast<int>(((hx ^ hy) * kMix) >> 29); };
+        return index(hx0, hy0) | index(hx1, hy0) << 3 | index(hx0, hy1) << 6 | index(hx1, hy1) << 9;
+    }
 
     /// The noise's extremes over every cell (every one of the 8^4 choices of corner gradients): measured once,
     /// on first use (about 0.2 s), on a grid of 1/64 of a cell, plus the most a C2 function can exceed its

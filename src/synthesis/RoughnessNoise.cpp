@@ -430,6 +430,56 @@ double RoughnessNoise::nodeTail(double spacing, std::int64_t firstX, std::int64_
                              amplitude, lo, hi);
 }
 
+void RoughnessNoise::cellTails(double spacing, std::int64_t firstX, std::int64_t firstY, int cells,
+                               std::span<float> out) const
+{
+    TERRAIN_EXPECTS(cells >= 1 && out.size() >= static_cast<std::size_t>(cells) * cells,
+                    "out must hold cells^2 values");
+    const int below = levelsBelow(spacing);
+    const double scale = std::ldexp(1.0, -below);
+    const double u0 = static_cast<double>(firstX) * scale, v0 = static_cast<double>(firstY) * scale;
+    double amplitude = 0.0, lo = 0.0, hi = 0.0;
+    lawRange(u0, v0, u0 + cells * scale, v0 + cells * scale, amplitude, lo, hi);
+    const GradientNoiseExtremes& extremes = PerlinNoise::extremes();
+    // The octaves looked up per cell: the level's own (below: one lattice cell a sample cell), the next
+    // (four), and the two coarser ones with per-cell interpolation tables (m = 1, 2).
+    auto perCell = [&](int k) { return k >= below - GradientNoiseExtremes::kCellLevels && k <= below + 1; };
+    auto weight = [&](int k) { return k >= below ? extremes.peak : extremes.interpolationAt(below - k); };
+    // The other octaves, the same everywhere; then each per-cell octave's amplitude.
+    const double uniform = weightedOctaveSum([&](int k) { return perCell(k) ? 0.0 : weight(k); }, amplitude, lo, hi);
+    std::vector<std::pair<int, double>> octavesPerCell;
+    for (int k = std::max(0, below - GradientNoiseExtremes::kCellLevels); k <= below + 1 && k < octaves(); ++k) {
+        octavesPerCell.emplace_back(k, weightedOctaveSum([k](int o) { return o == k ? 1.0 : 0.0; }, amplitude, lo, hi));
+    }
+    for (int j = 0; j < cells; ++j) {
+        const std::int64_t gy = firstY + j;
+        for (int i = 0; i < cells; ++i) {
+            const std::int64_t gx = firstX + i;
+            double tail = uniform;
+            for (const auto& [k, a] : octavesPerCell) {
+                const PerlinNoise& noise = mNoise[static_cast<std::size_t>(k)];
+                double w = 0.0;
+                if (k == below) {
+                    w = extremes.cellPeak[static_cast<std::size_t>(noise.cellGradients(gx, gy))];
+                } else if (k == below + 1) {
+                    for (int q = 0; q < 4; ++q) {
+                        w = std::max(w, static_cast<double>(extremes.cellPeak[static_cast<std::size_t>(
+                                            noise.cellGradients(2 * gx + (q & 1), 2 * gy + (q >> 1)))]));
+                    }
+                } else {
+                    const int m = below - k, split = 1 << m;
+                    const std::int64_t sub = (gy & (split - 1)) * split + (gx & (split - 1));
+                    const auto combo = static_cast<std::size_t>(noise.cellGradients(gx >> m, gy >> m));
+                    w = extremes.cellInterpolation[static_cast<std::size_t>(
+                        m - 1)][combo * static_cast<std::size_t>(split * split) + static_cast<std::size_t>(sub)];
+                }
+                tail += a * w;
+            }
+            out[static_cast<std::size_t>(j) * cells + i] = static_cast<float>(tail * (1.0 + 1e-6));
+        }
+    }
+}
+
 double RoughnessNoise::bound(int from) const
 {
     return bound(from, 0, 0, mGrid.leavesPerSide - 1, mGrid.leavesPerSide - 1);

@@ -108,6 +108,13 @@ public:
     /// up to their interpolation error at the samples (extremes().interpolationAt(levels below - k)), each
     /// times its largest amplitude over the square (as boundOver). metres, >= 0.
     double nodeTail(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const;
+    /// nodeTail per cell of the square: out[j * cells + i] for cell (firstX + i, firstY + j) of the level, with
+    /// the octaves closest to the level's spacing taken from that cell's own corner gradients (the per-cell
+    /// tables of PerlinNoise::extremes): the first two octaves the samples lack (the cell, and its four cells
+    /// of the next octave, up to their own peaks) and the two coarsest-but-one they hold (their interpolation
+    /// error in the part of their lattice cell the cell covers); the other octaves as nodeTail. Each at most
+    /// nodeTail's term. Precondition: out holds cells^2 values.
+    void cellTails(double spacing, std::int64_t firstX, std::int64_t firstY, int cells, std::span<float> out) const;
 
 private:
     /// Sum over octaves k >= from of the largest c(H) 2^(-kH) for H in [lo, hi], times 1.01 (the curvature

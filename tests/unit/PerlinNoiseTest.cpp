@@ -270,7 +270,8 @@ TEST(PerlinNoise, ExtremesBoundTheNoiseAndAreReachedByIt)
 {
     // The extremes are measured on the gradients alone; here the noise itself, on 4000 random cells sampled
     // 1/96 of a cell apart (off the extremes' grid), reaches within a few percent of each and never
-    // exceeds it: the peak, and the interpolation error at samples 2^-m cells apart.
+    // exceeds it: the peak, and the interpolation error at samples 2^-m cells apart, over all cells and in
+    // each cell by its corner gradients (PerlinNoise::cellGradients), per sample cell.
     const GradientNoiseExtremes& e = PerlinNoise::extremes();
     EXPECT_GT(e.peak, 0.8);
     EXPECT_LT(e.peak, 1.0) << "no tighter than the gradients' scale";
@@ -286,24 +287,41 @@ TEST(PerlinNoise, ExtremesBoundTheNoiseAndAreReachedByIt)
     std::vector<double> p((kSteps + 1) * (kSteps + 1));
     for (int trial = 0; trial < 4000; ++trial) {
         const auto ix = static_cast<std::int64_t>(random() % 100000), iy = static_cast<std::int64_t>(random() % 100000);
+        // The cell's own tables, by its corner gradients: they bound this cell, and are reached in it.
+        const auto combo = static_cast<std::size_t>(noise.cellGradients(ix, iy));
+        double cellPeak = 0.0;
         for (int j = 0; j <= kSteps; ++j) {
             for (int i = 0; i <= kSteps; ++i) {
                 const double v = noise.cell(ix, iy, double(i) / kSteps, double(j) / kSteps);
                 p[j * (kSteps + 1) + i] = v;
-                peak = std::max(peak, std::abs(v));
+                cellPeak = std::max(cellPeak, std::abs(v));
             }
         }
+        peak = std::max(peak, cellPeak);
+        EXPECT_LE(cellPeak, e.cellPeak[combo]);
+        EXPECT_GT(cellPeak, 0.98 * e.cellPeak[combo] - 0.002);
         auto at = [&](int i, int j) { return p[j * (kSteps + 1) + i]; };
         for (int m = 1; m <= GradientNoiseExtremes::kLevels; ++m) {
-            const int step = kSteps >> m;
-            for (int j = 0; j <= kSteps; ++j) {
-                const int j0 = std::min(j / step * step, kSteps - step);
-                for (int i = 0; i <= kSteps; ++i) {
-                    const int i0 = std::min(i / step * step, kSteps - step);
-                    const double surface =
-                        interpolateQuad(at(i0, j0), at(i0 + step, j0), at(i0, j0 + step), at(i0 + step, j0 + step),
-                                        double(i - i0) / step, double(j - j0) / step);
-                    interpolation[m - 1] = std::max(interpolation[m - 1], std::abs(at(i, j) - surface));
+            const int split = 1 << m, step = kSteps >> m;
+            for (int sy = 0; sy < split; ++sy) {
+                for (int sx = 0; sx < split; ++sx) {
+                    const int i0 = sx * step, j0 = sy * step;
+                    double worst = 0.0;
+                    for (int b = 0; b <= step; ++b) {
+                        for (int a = 0; a <= step; ++a) {
+                            const double surface =
+                                interpolateQuad(at(i0, j0), at(i0 + step, j0), at(i0, j0 + step),
+                                                at(i0 + step, j0 + step), double(a) / step, double(b) / step);
+                            worst = std::max(worst, std::abs(at(i0 + a, j0 + b) - surface));
+                        }
+                    }
+                    interpolation[m - 1] = std::max(interpolation[m - 1], worst);
+                    if (m <= GradientNoiseExtremes::kCellLevels) {
+                        const float table = e.cellInterpolation[m - 1][combo * split * split +
+                                                                       static_cast<std::size_t>(sy * split + sx)];
+                        EXPECT_LE(worst, table) << m;
+                        EXPECT_GT(worst, 0.95 * table - 0.002) << m;
+                    }
                 }
             }
         }
