@@ -161,7 +161,7 @@ public:
         const std::uint32_t hx0 = static_cast<std::uint32_t>(ix) * kMulX, hx1 = hx0 + kMulX;
         const std::uint32_t hy = static_cast<std::uint32_t>(iy) * kMulY;
         const std::uint32_t hy0 = hy ^ mKey, hy1 = (hy + kMulY) ^ mKey;
-        auto index = [](std::uint32_t hx, std::uint32_t hy) { return static_cast<int>(((hx ^ hy) * kMix) >> 29); };
+        auto index = [](std::uint32_t x, std::uint32_t y) { return static_cast<int>(((x ^ y) * kMix) >> 29); };
         return index(hx0, hy0) | index(hx1, hy0) << 3 | index(hx0, hy1) << 6 | index(hx1, hy1) << 9;
     }
 
