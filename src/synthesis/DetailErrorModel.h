@@ -1,7 +1,6 @@
 // The error of synthesized detail from the synthesis model (paper 3.4.1; issue 12, replacing "half the error
 // of the parent"): how far the surface synthesized below a node (DetailSynthesizer.h: subdivision of the base
-// plus material displacement) can lie from the node's own triangulated surface. Two terms, from the node's
-// own data and its materials:
+// plus material displacement and the roughness continued) can lie from the node's own triangulated surface:
 //
 //   delta = max over the children's cells of  max over the cell's corners of |child sample - node surface|
 //           + kSubdivisionTail * D1(cell) + max over the cell's corners of sum_m w_m * E_m(level + 1)
@@ -15,8 +14,9 @@
 // limit surface lies from the children's triangles inside each cell, the three terms after it:
 //
 // - D1: the largest change the next subdivision makes to the base (every grandchild sample against the
-//   child's surface along the template triangulation), computed from the children's bases. Later levels change it less:
-//   the 4-point rule's changes shrink by 1/4 per level on smooth data, so the whole tail is D1 / (1 - 1/4).
+//   child's surface along the template triangulation), computed from the children's bases. Later levels
+//   change it less: the 4-point rule's changes shrink by 1/4 per level on smooth data, so the whole tail is
+//   D1 / (1 - 1/4).
 //   (Measured on the bundled terrain with tengine-tool error --levels: the largest distance of a node from
 //   the reference is up to 1.0 D1, so 4/3 holds with margin; a contraction of only 1/2 would need 2.)
 // - E_m(level): how far material m's displacement, sampled at the level's spacing and interpolated along the
@@ -24,14 +24,13 @@
 //   itself at random places, as the largest distance of the fractal sampled 16 times finer from the
 //   level's triangles, plus the largest change each level below that makes, times kDisplacementMargin, and
 //   never more than the fractal's range (measured on the probes, times the margin; at most 2 amplitude). It
-//   shrinks by the fractal's gain per level while
-//   octaves are finer than the spacing, then by 4 per level once the sampling resolves them all (fBm); a
-//   ridged fractal's creases keep it shrinking by about 2.
+//   shrinks by the fractal's gain per level while octaves are finer than the spacing, then by 4 per level once
+//   the sampling resolves them all (fBm); a ridged fractal's creases keep it shrinking by about 2.
 // - w_m: material m's weight at a sample (placement, DetailSynthesizer::materialWeights): the displacement
 //   there is the weighted sum of the materials', so its error is the weighted sum of theirs.
-//
-// - the roughness octaves (RoughnessNoise::nodeTail): those the children lack, up to the noise's measured
-//   peak each, and the interpolation error of those they hold between their samples (PerlinNoise::extremes).
+// - the roughness octaves (RoughnessNoise::cellTails, per child cell): those the children lack, up to the
+//   noise's measured peak each, and the interpolation error of those they hold between their samples
+//   (PerlinNoise::extremes).
 //
 // The viewer computes it for every dynamic node it makes (lod/TerrainNodeSource.h) and prep for every static
 // leaf (leafDetailErrorFunction), so both follow one model; tengine-tool error measures how tight it is, and
@@ -85,7 +84,7 @@ public:
     /// node's triangulated surface, measured, plus what the levels below the children can add inside the
     /// cell: kSubdivisionTail x the children's next subdivision change there, the materials' E_m(level + 1)
     /// at its corners weighted by placement (relative materials scaled), and the roughness octaves
-    /// (DetailSynthesizer::roughnessTail one level down); plus kFloatRounding x the largest |height|. The
+    /// (DetailSynthesizer::roughnessTails one level down, per cell); plus kFloatRounding x the largest |height|. The
     /// children's triangles nest in the node's, so the measured part is exact over the cell and only the tail
     /// is a model. metres.
     float boundFromChildren(const DualHeightMap& node, const std::array<DualHeightMap, 4>& children,

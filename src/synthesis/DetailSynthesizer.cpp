@@ -207,17 +207,6 @@ void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightM
     }
 }
 
-double DetailSynthesizer::roughnessTail(const WindowPlacement& where, int levelsDown) const
-{
-    TERRAIN_EXPECTS(levelsDown >= 0 && levelsDown <= 16, "levelsDown must be in [0, 16]");
-    if (!mSettings.roughness) {
-        return 0.0;
-    }
-    const int scale = 1 << levelsDown;
-    return mSettings.roughness->nodeTail(where.spacing / scale, (where.gx0 + kBorder) * scale,
-                                         (where.gy0 + kBorder) * scale, (chunkSize() - 1) * scale);
-}
-
 void DetailSynthesizer::roughnessTails(const WindowPlacement& where, int levelsDown, std::span<float> out) const
 {
     TERRAIN_EXPECTS(levelsDown >= 0 && levelsDown <= 16, "levelsDown must be in [0, 16]");

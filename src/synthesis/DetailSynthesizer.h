@@ -109,12 +109,10 @@ public:
     /// factor over the map for a relative one.
     double materialBound() const;
 
-    /// How far the roughness noise can lie anywhere in the square of the node at `where` from the template
-    /// triangulation of its values at the samples `levelsDown` levels below the node (RoughnessNoise::nodeTail):
-    /// the octaves those samples lack, and the interpolation error of those they hold. metres; 0 without.
-    double roughnessTail(const WindowPlacement& where, int levelsDown) const;
-    /// roughnessTail per cell of that level over the node's square (RoughnessNoise::cellTails): out holds
-    /// ((N - 1) 2^levelsDown)^2 values, rows south to north; zeros without roughness.
+    /// How far the roughness noise can lie inside each cell of the level `levelsDown` below the node at `where`
+    /// (over the node's square) from the template triangulation of its values at that level's samples: the
+    /// octaves those samples lack, and the interpolation error of those they hold (RoughnessNoise::cellTails).
+    /// out holds ((N - 1) 2^levelsDown)^2 values, rows south to north; zeros without roughness. metres.
     void roughnessTails(const WindowPlacement& where, int levelsDown, std::span<float> out) const;
 
     /// Sets map.displacement (and with several materials map.slope) from map.base (W x W): with `parent`

@@ -418,16 +418,21 @@ double RoughnessNoise::nodeBound(double spacing, std::int64_t firstX, std::int64
     return boundOver(std::max(below, 0), u0, v0, u0 + cells * scale, v0 + cells * scale);
 }
 
-double RoughnessNoise::nodeTail(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const
+RoughnessNoise::SquareLaw RoughnessNoise::squareLaw(double spacing, std::int64_t firstX, std::int64_t firstY,
+                                                    int cells) const
 {
-    const int below = levelsBelow(spacing);
-    const double scale = std::ldexp(1.0, -below);
+    SquareLaw out;
+    out.below = levelsBelow(spacing);
+    const double scale = std::ldexp(1.0, -out.below);  // the level's samples in samples of the finest static level
     const double u0 = static_cast<double>(firstX) * scale, v0 = static_cast<double>(firstY) * scale;
-    double amplitude = 0.0, lo = 0.0, hi = 0.0;
-    lawRange(u0, v0, u0 + cells * scale, v0 + cells * scale, amplitude, lo, hi);
+    lawRange(u0, v0, u0 + cells * scale, v0 + cells * scale, out.amplitude, out.lo, out.hi);
+    return out;
+}
+
+double RoughnessNoise::tailWeight(int k, int below)
+{
     const GradientNoiseExtremes& extremes = PerlinNoise::extremes();
-    return weightedOctaveSum([&](int k) { return k >= below ? extremes.peak : extremes.interpolationAt(below - k); },
-                             amplitude, lo, hi);
+    return k >= below ? extremes.peak : extremes.interpolationAt(below - k);
 }
 
 void RoughnessNoise::cellTails(double spacing, std::int64_t firstX, std::int64_t firstY, int cells,
@@ -435,21 +440,19 @@ void RoughnessNoise::cellTails(double spacing, std::int64_t firstX, std::int64_t
 {
     TERRAIN_EXPECTS(cells >= 1 && out.size() >= static_cast<std::size_t>(cells) * cells,
                     "out must hold cells^2 values");
-    const int below = levelsBelow(spacing);
-    const double scale = std::ldexp(1.0, -below);
-    const double u0 = static_cast<double>(firstX) * scale, v0 = static_cast<double>(firstY) * scale;
-    double amplitude = 0.0, lo = 0.0, hi = 0.0;
-    lawRange(u0, v0, u0 + cells * scale, v0 + cells * scale, amplitude, lo, hi);
+    const SquareLaw law = squareLaw(spacing, firstX, firstY, cells);
+    const int below = law.below;
     const GradientNoiseExtremes& extremes = PerlinNoise::extremes();
     // The octaves looked up per cell: the level's own (below: one lattice cell a sample cell), the next
     // (four), and the two coarser ones with per-cell interpolation tables (m = 1, 2).
     auto perCell = [&](int k) { return k >= below - GradientNoiseExtremes::kCellLevels && k <= below + 1; };
-    auto weight = [&](int k) { return k >= below ? extremes.peak : extremes.interpolationAt(below - k); };
     // The other octaves, the same everywhere; then each per-cell octave's amplitude.
-    const double uniform = weightedOctaveSum([&](int k) { return perCell(k) ? 0.0 : weight(k); }, amplitude, lo, hi);
+    const double uniform = weightedOctaveSum([&](int k) { return perCell(k) ? 0.0 : tailWeight(k, below); },
+                                             law.amplitude, law.lo, law.hi);
     std::vector<std::pair<int, double>> octavesPerCell;
     for (int k = std::max(0, below - GradientNoiseExtremes::kCellLevels); k <= below + 1 && k < octaves(); ++k) {
-        octavesPerCell.emplace_back(k, weightedOctaveSum([k](int o) { return o == k ? 1.0 : 0.0; }, amplitude, lo, hi));
+        octavesPerCell.emplace_back(
+            k, weightedOctaveSum([k](int o) { return o == k ? 1.0 : 0.0; }, law.amplitude, law.lo, law.hi));
     }
     for (int j = 0; j < cells; ++j) {
         const std::int64_t gy = firstY + j;

@@ -101,19 +101,16 @@ public:
     /// the leaves (0 above them) over its square. The node has sample spacing `spacing` and `cells` cells a
     /// side from global sample (firstX, firstY) of its level.
     double nodeBound(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const;
-    /// How far the noise can lie anywhere in a square from the template triangulation of its values at the
-    /// samples of a level (spacing `spacing`; the square: `cells` cells a side from global sample (firstX,
-    /// firstY) of that level): the octaves that vanish at those samples (k >= the level's levels below the
-    /// leaves) up to their largest |P| each (PerlinNoise::extremes().peak), and the octaves present there
-    /// up to their interpolation error at the samples (extremes().interpolationAt(levels below - k)), each
-    /// times its largest amplitude over the square (as boundOver). metres, >= 0.
-    double nodeTail(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const;
-    /// nodeTail per cell of the square: out[j * cells + i] for cell (firstX + i, firstY + j) of the level, with
-    /// the octaves closest to the level's spacing taken from that cell's own corner gradients (the per-cell
-    /// tables of PerlinNoise::extremes): the first two octaves the samples lack (the cell, and its four cells
-    /// of the next octave, up to their own peaks) and the two coarsest-but-one they hold (their interpolation
-    /// error in the part of their lattice cell the cell covers); the other octaves as nodeTail. Each at most
-    /// nodeTail's term. Precondition: out holds cells^2 values.
+    /// How far the noise can lie inside each cell of a level (spacing `spacing`; the square: `cells` cells a
+    /// side from global sample (firstX, firstY) of that level) from the template triangulation of its values at
+    /// the level's samples, into out[j * cells + i] for cell (firstX + i, firstY + j): the octaves that vanish at
+    /// those samples (k >= the level's levels below the leaves) up to their largest |P|, and those present
+    /// there up to their interpolation error at the samples (tailWeight), each times its largest amplitude
+    /// over the square (as boundOver). The octaves closest to the level's spacing are taken by the cell's own
+    /// corner gradients (PerlinNoise::extremes' per-cell tables): the first two the samples lack (the cell,
+    /// and its four cells of the next octave, up to their own peaks) and the two coarser ones they hold (their
+    /// interpolation error in the part of their lattice cell the cell covers). metres, >= 0. Precondition: out
+    /// holds cells^2 values.
     void cellTails(double spacing, std::int64_t firstX, std::int64_t firstY, int cells, std::span<float> out) const;
 
 private:
@@ -124,6 +121,16 @@ private:
     /// `amplitude`.
     template <typename Weight>
     double weightedOctaveSum(const Weight& weight, double amplitude, double lo, double hi) const;
+    /// A level's square (cellTails' arguments): its levels below the leaves and the law's largest amplitude
+    /// and exponents' range over it.
+    struct SquareLaw {
+        int below = 0;
+        double amplitude = 0.0, lo = 0.0, hi = 0.0;
+    };
+    SquareLaw squareLaw(double spacing, std::int64_t firstX, std::int64_t firstY, int cells) const;
+    /// Octave k's factor in the tail at samples `below` levels below the leaves: the noise's peak for an
+    /// octave they lack (k >= below), its interpolation error at 2^(k - below) lattice cells for one they hold.
+    static double tailWeight(int k, int below);
     /// The largest amplitude and the exponents' range of the law over the rectangle (as boundOver).
     void lawRange(double u0, double v0, double u1, double v1, double& amplitude, double& lo, double& hi) const;
     /// a_k at the interpolated law: c(H) A 2^(-k H), for k = 0 .. count - 1, into amplitudes.
