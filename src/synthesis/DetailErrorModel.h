@@ -84,9 +84,11 @@ public:
     /// node's triangulated surface, measured, plus what the levels below the children can add inside the
     /// cell: kSubdivisionTail x the children's next subdivision change there, the materials' E_m(level + 1)
     /// at its corners weighted by placement (relative materials scaled), and the roughness octaves
-    /// (DetailSynthesizer::roughnessTails one level down, per cell); plus kFloatRounding x the largest |height|. The
-    /// children's triangles nest in the node's, so the measured part is exact over the cell and only the tail
-    /// is a model. metres.
+    /// (DetailSynthesizer::roughnessTails, per cell). Where that peaks, the same one level deeper: the
+    /// grandchild under the worst cell is synthesized and each cell it covers takes the smaller bound, until the
+    /// worst cell is one already refined.
+    /// Plus kFloatRounding x the largest |height|. Descendants' triangles nest in the node's, so the measured
+    /// part is exact over each cell and only the tail is a model. metres.
     float boundFromChildren(const DualHeightMap& node, const std::array<DualHeightMap, 4>& children,
                             const WindowPlacement& where, int level) const;
 
@@ -94,6 +96,12 @@ public:
     double worstDisplacementError(int level) const;
 
 private:
+    /// The bound of each cell ((N - 1)^2, rows south to north) of a descendant of `node` (its window, placed at
+    /// `at`, at quadtree level `descendantLevel`) whose sample (a, b) lies at node sample position (x0 + a step,
+    /// y0 + b step): its corners' distance from the node's triangulated surface, measured, plus the tail of the
+    /// levels below it inside the cell (see boundFromChildren), into `out`.
+    void descendantCellBounds(const DualHeightMap& node, const DualHeightMap& descendant, const WindowPlacement& at,
+                              int descendantLevel, double x0, double y0, double step, std::vector<double>& out) const;
     /// Per sample of the node (N x N), sum_m w_m E_m(level).
     std::vector<double> sampleDisplacementErrors(std::span<const std::uint8_t> weights, int level,
                                                  std::span<const std::vector<float>> scales) const;

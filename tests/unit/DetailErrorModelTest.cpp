@@ -58,12 +58,13 @@ TEST(DetailErrorModelTest, SubdivisionTermIsTheClosedFormOnAQuadratic)
         EXPECT_NEAR(model.nextSubdivisionChange(map), expected,
                     2e-6 * std::max(1.0, static_cast<double>(map.base.back())))
             << "spacing " << spacing;
-        // Measured on the children: (a + b) s^2 / 4 at the cell centres, plus the tail 4/3 of the children's
-        // own next change, (a + b) (s / 2)^2 / 4: 4/3 of the node's change in all.
+        // Every cell's bound is the same, so every grandchild is measured: (a + b) s^2 / 4 at the cell centres
+        // (children's samples), plus the tail 4/3 of the grandchildren's own next change, (a + b) (s / 4)^2 / 4:
+        // 1 + 1/12 of the node's change in all (from the children alone it would be 1 + 1/3).
         WindowPlacement where;
         where.spacing = spacing;
         EXPECT_NEAR(model.boundFromChildren(map, s->synthesizeChildren(map, where), where, 3),
-                    DetailErrorModel::kSubdivisionTail * expected,
+                    (1.0 + DetailErrorModel::kSubdivisionTail / 16.0) * expected,
                     1e-5 * std::max(1.0, static_cast<double>(map.base.back())));
     }
     // A plane is reproduced exactly: nothing to add.
