@@ -586,7 +586,8 @@ int main(int argc, char** argv)
             return fail(made.error().message);
         }
         synthesizer = std::move(made).value();
-        source.emplace(**map, DetailPolicy{synthesizer.get(), detail.lodMinimumSpacing});
+        // Heights only: no error bounds (they synthesize each node's children), normal maps or tessellation errors.
+        source.emplace(**map, DetailPolicy{synthesizer.get(), detail.lodMinimumSpacing, 0, 0, false});
         sampler.emplace(**map, *source, *depth);
     }
     int shallowest = NodeId::kMaxLevel + 1;  // the coarsest level a point stopped at, for the note
