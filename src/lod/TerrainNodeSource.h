@@ -31,8 +31,7 @@ struct DetailPolicy {
     /// Whether dynamic nodes get their error bound (DetailErrorModel::boundFromChildren: the node's four
     /// children synthesized and measured, with the node). false: a source of reference surfaces that needs
     /// heights only (the error meter's, height queries), whose dynamic nodes carry their parent's delta_c /
-    /// kErrorNesting, which bounds nothing; it saves four child syntheses a node where there is no normal map to share
-    /// them.
+    /// kErrorNesting, which bounds nothing; it saves the children's syntheses where no normal map shares them.
     bool bounds = true;
 };
 
