@@ -136,24 +136,34 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     if (mPolicy.bounds || mPolicy.normalMapSize > 0) {
         children = synthesizer.synthesizeChildren(data->heights, where);
     }
+    // The bound, before the nesting cap: the box below needs what is true, the selection what nests.
+    const double bound =
+        mPolicy.bounds ? mErrorModel->boundFromChildren(data->heights, children, where, id.level) : 0.0;
     data->deltaC = parent.deltaC / kErrorNesting;
     if (mPolicy.bounds) {
-        data->deltaC = std::min(data->deltaC, mErrorModel->boundFromChildren(data->heights, children, where, id.level));
+        data->deltaC = std::min(data->deltaC, static_cast<float>(bound));
     }
     data->texture = upsampleTexture(parent.texture, static_cast<int>(h.textureSize), quadrant);
-    // The box: the node's base samples plus whatever displacement its descendants may add, kept inside the
-    // parent's so boxes stay nested (3.2.12).
+    // The box, kept inside the parent's so boxes stay nested (3.2.12). With the bound: the node's surface
+    // samples (its triangles lie between them) widened by it, since every finer surface lies within the bound
+    // of the node's triangles and the finer levels' triangles interpolate such points. Without: the base
+    // samples plus whatever displacement may be added anywhere on the map.
     const int n = static_cast<int>(h.chunkSize), w = data->heights.size;
-    float lo = data->heights.base[static_cast<std::size_t>(kBorder) * w + kBorder], hi = lo;
+    const bool surface = mPolicy.bounds;
+    auto at = [&](int i, int j) {
+        const auto k = static_cast<std::size_t>(j) * w + i;
+        return surface ? data->heights.height(k) : data->heights.base[k];
+    };
+    float lo = at(kBorder, kBorder), hi = lo;
     for (int j = kBorder; j < kBorder + n; ++j) {
         for (int i = kBorder; i < kBorder + n; ++i) {
-            const float b = data->heights.base[static_cast<std::size_t>(j) * w + i];
-            lo = std::min(lo, b);
-            hi = std::max(hi, b);
+            lo = std::min(lo, at(i, j));
+            hi = std::max(hi, at(i, j));
         }
     }
-    data->zMin = std::clamp(h.heightOffset + lo - mDisplacementBound, parent.zMin, parent.zMax);
-    data->zMax = std::clamp(h.heightOffset + hi + mDisplacementBound, data->zMin, parent.zMax);
+    const double widen = surface ? bound : mDisplacementBound;
+    data->zMin = std::clamp(h.heightOffset + lo - widen, parent.zMin, parent.zMax);
+    data->zMax = std::clamp(h.heightOffset + hi + widen, data->zMin, parent.zMax);
     addTessellationErrors(*data);
     if (mPolicy.normalMapSize > 0) {
         data->normalMap = makeNormalMap(synthesizer, data->heights, children, where, mPolicy.normalMapSize);

@@ -4,7 +4,8 @@
 // down, at every one of their samples, is within the node's delta_c. Three kinds of data: the bundled terrain
 // (90 m SRTM), a 16x decimated copy of it (1440 m) and a 9 km grid under the highest mountains of ETOPO5, each
 // with the demo's materials (grass, rock) relative to the terrain's roughness, continued below the data.
-// Prints, per level, the nodes measured and the median and largest measured / bound (how tight it is).
+// The node's bounding box holds those descendants too. Prints, per level, the nodes measured and the median and largest
+// measured / bound (how tight it is).
 #include "MapTestSupport.h"
 #include "TestSupport.h"
 
@@ -24,6 +25,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <random>
 #include <string>
@@ -44,9 +46,14 @@ HeightField decimate(const HeightField& field, int factor)
     return test::makeHeightField(w, h, [&](int i, int j) { return field.at(i * factor, j * factor); });
 }
 
-/// The largest distance of `node`'s triangulated surface from the surface kReferenceDepth levels below it,
-/// at every sample of that surface over the node's square.
-double measuredError(const DetailSynthesizer& synthesizer, const NodeData& node, const WindowPlacement& where)
+/// What the surface kReferenceDepth levels below a node does over the node's square: its largest distance
+/// from the node's triangulated surface, and its lowest and highest sample (metres above the map's offset).
+struct Reference {
+    double error = 0.0;
+    double lowest = 0.0, highest = 0.0;
+};
+
+Reference measure(const DetailSynthesizer& synthesizer, const NodeData& node, const WindowPlacement& where)
 {
     const int w = synthesizer.windowSize();
     const int below = kReferenceDepth - 1;  // surfaceBelow's depth under each child
@@ -56,7 +63,9 @@ double measuredError(const DetailSynthesizer& synthesizer, const NodeData& node,
     auto own = [&](int i, int j) {
         return static_cast<double>(node.heights.height(static_cast<std::size_t>(j + kBorder) * w + i + kBorder));
     };
-    double worst = 0.0;
+    Reference out;
+    out.lowest = std::numeric_limits<double>::max();
+    out.highest = std::numeric_limits<double>::lowest();
     const auto children = synthesizer.synthesizeChildren(node.heights, where);
     for (int q = 0; q < 4; ++q) {
         const std::vector<float> fine =
@@ -69,11 +78,13 @@ double measuredError(const DetailSynthesizer& synthesizer, const NodeData& node,
                 const double surface =
                     interpolateQuad(own(i, j), own(i + 1, j), own(i, j + 1), own(i + 1, j + 1), x - i, y - j);
                 const double z = fine[static_cast<std::size_t>(b + kBorder) * wc + a + kBorder];
-                worst = std::max(worst, std::abs(z - surface));
+                out.error = std::max(out.error, std::abs(z - surface));
+                out.lowest = std::min(out.lowest, z);
+                out.highest = std::max(out.highest, z);
             }
         }
     }
-    return worst;
+    return out;
 }
 
 /// Builds `field` at `spacing` metres with the demo's materials and the roughness measured, as prep does,
@@ -115,13 +126,16 @@ void check(const std::string& name, HeightField field, double spacing, int walks
         NodePtr node = source.loadRoot().value();
         while (node->id.level < leafLevel + kDynamicLevels) {
             if (node->id.level >= leafLevel) {
-                const double measured = measuredError(**synthesizer, *node, source.placement(node->id));
-                ratios[node->id.level].push_back(measured / node->deltaC);
-                if (measured > node->deltaC) {
+                const Reference r = measure(**synthesizer, *node, source.placement(node->id));
+                ratios[node->id.level].push_back(r.error / node->deltaC);
+                if (r.error > node->deltaC) {
                     ++failures;
-                    ADD_FAILURE() << name << ": node " << node->id.toString() << " measured " << measured
+                    ADD_FAILURE() << name << ": node " << node->id.toString() << " measured " << r.error
                                   << " m against its bound " << node->deltaC << " m";
                 }
+                // The node's box holds what is drawn below it (culling and the selection's distance).
+                EXPECT_GE(h.heightOffset + r.lowest, node->zMin) << name << ": node " << node->id.toString();
+                EXPECT_LE(h.heightOffset + r.highest, node->zMax) << name << ": node " << node->id.toString();
             }
             auto children = source.loadChildren(*node);
             ASSERT_TRUE(children.ok()) << children.error().message;
