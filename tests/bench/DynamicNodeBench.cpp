@@ -88,9 +88,10 @@ std::shared_ptr<const RoughnessNoise> roughness()
     return std::make_shared<const RoughnessNoise>(grid, kChunk - 1, 4.0 * kSpacing * 0.5, 2);
 }
 
-/// `withBound`: also the node's error bound (its four children synthesized and DetailErrorModel::boundFromChildren),
-/// as TerrainNodeSource makes every dynamic node: the cost the bound adds per node (the children are shared with
-/// the normal map where there is one). `rough`: with roughness().
+/// `withBound`: also the node's error bound (its four children synthesized and DetailErrorModel::boundFromChildren,
+/// which synthesizes the grandchildren where the bound peaks), as TerrainNodeSource makes every dynamic node: the
+/// cost the bound adds per node (the children are shared with the normal map where there is one). `rough`: with
+/// roughness().
 void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> materials, bool withBound,
                  bool rough = false, bool relative = false)
 {
