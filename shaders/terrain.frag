@@ -34,6 +34,7 @@ uniform float uLayerTexels;       // texels per side of a layer (>= uTexels: DXT
 #ifdef NORMAL_MAP
 uniform sampler2DArray uNormalMaps;  // per slot: unit normals (x, y) of the surface below, corner texels on corners
 uniform float uNormalTexels;         // texels per side of a normal map
+uniform float uNormalLayerTexels;    // texels per side of a layer (>= uNormalTexels: RGTC2 pads to a multiple of 4)
 #endif
 uniform vec3 uSunDirection;       // unit, towards the sun
 uniform vec3 uSunColour;
@@ -59,9 +60,10 @@ vec2 texelCentre(vec2 p) { return (p * (uTexels - 1.0) + 0.5) / uLayerTexels; }
 #ifdef NORMAL_MAP
 vec3 mappedNormal()
 {
-    vec2 own = texture(uNormalMaps, vec3((vNodeUv * (uNormalTexels - 1.0) + 0.5) / uNormalTexels, float(vSlots.x))).xy;
+    vec2 own = texture(uNormalMaps, vec3((vNodeUv * (uNormalTexels - 1.0) + 0.5) / uNormalLayerTexels,
+                                         float(vSlots.x))).xy;
     vec2 parent = texture(uNormalMaps, vec3(((vParentOffset + 0.5 * vNodeUv) * (uNormalTexels - 1.0) + 0.5) /
-                                                uNormalTexels, float(vSlots.y))).xy;
+                                                uNormalLayerTexels, float(vSlots.y))).xy;
     vec2 n = mix(parent, own, vMorph);
     return vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
 }

@@ -364,7 +364,8 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
                         : TerrainRenderer::create(
                               shaders, header, o.vertexCacheSize,
                               {static_cast<std::size_t>(o.quadCacheSize), o.nodeTextureCompression, scene->tessellation,
-                               o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0, countPixels},
+                               o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0,
+                               o.normalMapCompression, countPixels},
                               materials);
     if (!renderer.ok()) {
         return fail(renderer.error().message);

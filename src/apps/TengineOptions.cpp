@@ -454,6 +454,11 @@ std::vector<OptionSpec> makeOptionTable()
                            "65 x 65 node. Off by default: Mesa's llvmpipe decodes DXT1 in software, which cost about "
                            "15% of frame time in RenderBench.",
                            &O::nodeTextureCompression));
+    t.push_back(boolOption("normal_map_compression", kGroupDisplay,
+                           "Keep the nodes' normal maps (dynamic_texture_size) on the GPU as RGTC2 blocks: 1 byte a "
+                           "texel instead of 2 (17 KB instead of 33 KB a 129 x 129 map), the shading within a "
+                           "degree of the uncompressed maps.",
+                           &O::normalMapCompression));
     t.push_back({"render_mode", kGroupDisplay,
                  "How nodes become triangles: chunks draws every selected node's template mesh in full (3.2.9); "
                  "tessellation cuts each node into blocks of 8 x 8 quads that the GPU tessellates, each as coarse "

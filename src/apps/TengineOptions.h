@@ -72,6 +72,7 @@ struct TengineOptions {
     bool wireframe = false;                   ///< wireframe
     bool geomorph = true;                     ///< geomorph: off draws every node at its own detail (pops)
     bool nodeTextureCompression = false;      ///< node_texture_compression: DXT1 colour textures on the GPU
+    bool normalMapCompression = true;         ///< normal_map_compression: RGTC2 normal maps on the GPU
     bool tessellation = true;                 ///< render_mode: true tessellation (issue 13), false chunks
     bool clipmap = false;                     ///< lod_mode: false quadtree, true clipmap (seed 002, issue 17)
     int clipmapSamples = 255;                 ///< clipmap_samples: n = 2^k - 1 in [15, 1023]

@@ -22,7 +22,7 @@
 
 namespace terrain {
 
-int dxt1LayerSize(int textureSize)
+int blockLayerSize(int textureSize)
 {
     TERRAIN_EXPECTS(textureSize >= 1, "a texture has at least one texel");
     return (textureSize + 3) / 4 * 4;
@@ -33,7 +33,7 @@ std::vector<std::uint8_t> compressDxt1(std::span<const std::uint8_t> rgb, int te
     const int t = textureSize;
     TERRAIN_EXPECTS(rgb.size() == static_cast<std::size_t>(t) * static_cast<std::size_t>(t) * 3,
                     "the texture must hold T x T RGB texels");
-    const int blocks = dxt1LayerSize(t) / 4;
+    const int blocks = blockLayerSize(t) / 4;
     std::vector<std::uint8_t> out(static_cast<std::size_t>(blocks) * blocks * 8);
     unsigned char block[16 * 4];
     for (int by = 0; by < blocks; ++by) {
@@ -51,6 +51,36 @@ std::vector<std::uint8_t> compressDxt1(std::span<const std::uint8_t> rgb, int te
             }
             stb_compress_dxt_block(out.data() + (static_cast<std::size_t>(by) * blocks + bx) * 8, block, 0,
                                    STB_DXT_HIGHQUAL);
+        }
+    }
+    return out;
+}
+
+std::vector<std::uint8_t> compressRgtc2(std::span<const std::int8_t> rg, int textureSize)
+{
+    const int t = textureSize;
+    TERRAIN_EXPECTS(t >= 1 && rg.size() == static_cast<std::size_t>(t) * static_cast<std::size_t>(t) * 2,
+                    "the normal map must hold T x T (x, y) pairs");
+    const int blocks = blockLayerSize(t) / 4;
+    std::vector<std::uint8_t> out(static_cast<std::size_t>(blocks) * blocks * 16);
+    unsigned char block[16 * 2];
+    for (int by = 0; by < blocks; ++by) {
+        for (int bx = 0; bx < blocks; ++bx) {
+            for (int y = 0; y < 4; ++y) {
+                for (int x = 0; x < 4; ++x) {
+                    const int i = std::min(4 * bx + x, t - 1), j = std::min(4 * by + y, t - 1);
+                    const std::int8_t* texel = rg.data() + (static_cast<std::size_t>(j) * t + i) * 2;
+                    // Offset binary: the unsigned encoder's order and steps are the signed values' own.
+                    block[(y * 4 + x) * 2] = static_cast<unsigned char>(texel[0] + 128);
+                    block[(y * 4 + x) * 2 + 1] = static_cast<unsigned char>(texel[1] + 128);
+                }
+            }
+            std::uint8_t* to = out.data() + (static_cast<std::size_t>(by) * blocks + bx) * 16;
+            stb_compress_bc5_block(to, block);
+            // The endpoints back to two's complement (the indices are the same for signed blocks).
+            for (const int endpoint : {0, 1, 8, 9}) {
+                to[endpoint] = static_cast<std::uint8_t>(to[endpoint] ^ 0x80u);
+            }
         }
     }
     return out;

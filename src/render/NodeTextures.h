@@ -1,6 +1,6 @@
-// A node's colour texture and material weights as the renderer's texture arrays store them (issue 13: node
-// data in GPU pools): the colour as DXT1 (S3TC) blocks, 4 bits a texel, and the weights as 4 bits per
-// material. Pure CPU code: no GL here.
+// A node's textures as the renderer's texture arrays store them (node data in GPU pools): the colour as DXT1
+// (S3TC) blocks, 4 bits a texel, the normal map as RGTC2 blocks, 8 bits a texel, and the weights as 4 bits
+// per material. Pure CPU code: no GL here.
 #pragma once
 
 #include <cstdint>
@@ -9,14 +9,22 @@
 
 namespace terrain {
 
-/// Texels per side of a DXT1 layer for a T x T texture: T rounded up to a multiple of 4 (DXT1 codes 4 x 4
-/// blocks). The texels beyond T repeat the last row and column.
-int dxt1LayerSize(int textureSize);
+/// Texels per side of a block-compressed layer (DXT1, RGTC2) for a T x T texture: T rounded up to a multiple
+/// of 4 (both code 4 x 4 blocks). The texels beyond T repeat the last row and column.
+int blockLayerSize(int textureSize);
 
 /// The DXT1 blocks (8 bytes each, rows of blocks south to north, as GL_COMPRESSED_RGB_S3TC_DXT1_EXT wants
-/// them) of a T x T RGB texture (3 bytes a texel, rows south to north), padded to dxt1LayerSize(T). Encoded
+/// them) of a T x T RGB texture (3 bytes a texel, rows south to north), padded to blockLayerSize(T). Encoded
 /// with stb_dxt's high-quality mode.
 std::vector<std::uint8_t> compressDxt1(std::span<const std::uint8_t> rgb, int textureSize);
+
+/// The RGTC2 blocks (16 bytes each: x's BC4 block, then y's; rows of blocks south to north, as
+/// GL_COMPRESSED_SIGNED_RG_RGTC2 wants them) of a T x T normal map of signed 8-bit (x, y) pairs
+/// (GL_RG8_SNORM, rows south to north; NodeData::normalMap), padded to blockLayerSize(T). Each block keeps
+/// its own smallest and largest value exactly and puts every texel on the nearest of the 8 steps between
+/// them (stb_dxt's BC4 encoder): a texel is off by at most 1/14 of its block's range, plus a half step of
+/// rounding.
+std::vector<std::uint8_t> compressRgtc2(std::span<const std::int8_t> rg, int textureSize);
 
 /// The parent's unit normals at its samples, the node's even samples: ((N + 1) / 2)^2 pairs (x, y) as signed
 /// 8-bit normalised integers (GL_RG8_SNORM; z = sqrt(1 - x^2 - y^2)), rows south to north. The parent's

@@ -235,7 +235,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         r->mSlotBytes.normals = static_cast<std::size_t>(m) * m * 2;
     }
     r->mDxt1 = pools.compressColour && epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
-    r->mColourLayerSize = r->mDxt1 ? dxt1LayerSize(t) : t;
+    r->mColourLayerSize = r->mDxt1 ? blockLayerSize(t) : t;
     const auto colourTexels = static_cast<std::size_t>(r->mColourLayerSize) * r->mColourLayerSize;
     r->mSlotBytes.colour = r->mDxt1 ? colourTexels / 2 : colourTexels * 3;
     if (r->mDxt1) {
@@ -258,10 +258,26 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     }
     if (r->mNormalTexels > 0) {
         const int texels = r->mNormalTexels;
-        r->mNormalMaps = createLayers(GL_RG8_SNORM, texels, layersOf, GL_RG, GL_BYTE, GL_LINEAR);
+        r->mRgtc2 = pools.compressNormals;
+        r->mNormalLayerSize = r->mRgtc2 ? blockLayerSize(texels) : texels;
+        const auto layerTexels = static_cast<std::size_t>(r->mNormalLayerSize) * r->mNormalLayerSize;
+        if (r->mRgtc2) {
+            // RGTC is core since OpenGL 3.0: every context this renderer runs on decodes it.
+            r->mSlotBytes.normalMap = layerTexels;
+            r->mNormalMaps = gl::Texture::create();
+            glBindTexture(GL_TEXTURE_2D_ARRAY, r->mNormalMaps.name());
+            glCompressedTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_COMPRESSED_SIGNED_RG_RGTC2, r->mNormalLayerSize,
+                                   r->mNormalLayerSize, layersOf, 0,
+                                   static_cast<GLsizei>(r->mSlotBytes.normalMap * slots), nullptr);
+            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        } else {
+            r->mSlotBytes.normalMap = layerTexels * 2;
+            r->mNormalMaps = createLayers(GL_RG8_SNORM, texels, layersOf, GL_RG, GL_BYTE, GL_LINEAR);
+        }
         glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
         glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-        r->mSlotBytes.normalMap = static_cast<std::size_t>(texels) * texels * 2;
     }
     r->mSlotBytes.constants = static_cast<std::size_t>(r->mNodeTexels) * 4 * sizeof(float);
     r->mSlotData.resize(slots);
@@ -345,8 +361,15 @@ int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats)
         TERRAIN_EXPECTS(node->normalMap.size() == static_cast<std::size_t>(mNormalTexels) * mNormalTexels * 2,
                         "with normal maps every node needs one of the pools' size (DetailPolicy::normalMapSize)");
         glBindTexture(GL_TEXTURE_2D_ARRAY, mNormalMaps.name());
-        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, mNormalTexels, mNormalTexels, 1, GL_RG, GL_BYTE,
-                        node->normalMap.data());
+        if (mRgtc2) {
+            const std::vector<std::uint8_t> blocks = compressRgtc2(node->normalMap, mNormalTexels);
+            glCompressedTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, mNormalLayerSize, mNormalLayerSize, 1,
+                                      GL_COMPRESSED_SIGNED_RG_RGTC2, static_cast<GLsizei>(blocks.size()),
+                                      blocks.data());
+        } else {
+            glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, mNormalTexels, mNormalTexels, 1, GL_RG, GL_BYTE,
+                            node->normalMap.data());
+        }
     }
     ++stats.uploads;
     return slot;
@@ -556,6 +579,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         glUniform1f(program.uniform("uTexels"), static_cast<float>(mHeader.textureSize));
         glUniform1f(program.uniform("uLayerTexels"), static_cast<float>(mColourLayerSize));
         glUniform1f(program.uniform("uNormalTexels"), static_cast<float>(mNormalTexels));
+        glUniform1f(program.uniform("uNormalLayerTexels"), static_cast<float>(mNormalLayerSize));
         const glm::vec3 sun = glm::normalize(style.sunDirection);
         glUniform3fv(program.uniform("uSunDirection"), 1, glm::value_ptr(sun));
         glUniform3fv(program.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));

@@ -48,7 +48,7 @@ struct SlotBytes {
     std::size_t normals = 0;    ///< the parent's normals at its samples, 2 bytes each
     std::size_t colour = 0;     ///< the colour texture (RGB8, or DXT1 with node_texture_compression)
     std::size_t weights = 0;    ///< material weights (RGBA4), 0 without materials
-    std::size_t normalMap = 0;  ///< the normal map of the surface below (RG8), 0 without normal maps
+    std::size_t normalMap = 0;  ///< the normal map of the surface below (RGTC2, or RG8), 0 without normal maps
     std::size_t constants = 0;  ///< per drawn node, in the frame's constants buffer
     std::size_t total() const { return heights + normals + colour + weights + normalMap + constants; }
 };
@@ -65,6 +65,9 @@ struct PoolOptions {
     /// dynamic_texture_size), and the fragment program lights by them, morphed between the node's and its
     /// parent's like the colours; 0: lit by the vertex normals.
     int normalMapTexels = 0;
+    /// Normal maps as RGTC2 blocks (normal_map_compression; render/NodeTextures.h, compressRgtc2): 1 byte a
+    /// texel instead of RG8's 2.
+    bool compressNormals = false;
     /// Count each drawn node's visible pixels (issue 16, visibility_lod; takePixelCounts()): needs GL 4.3 or
     /// its shader storage and early fragment test extensions (pixelCountsSupported()).
     bool pixelCounts = false;
@@ -163,8 +166,10 @@ private:
     gl::Texture mParentNormals;                      ///< GL_RG8_SNORM, ((N + 1) / 2)^2 per layer
     gl::Texture mColour;                             ///< DXT1 (or GL_RGB8), mColourLayerSize^2 per layer
     gl::Texture mWeights;                            ///< GL_RGBA4, N^2 per layer; none without materials
-    gl::Texture mNormalMaps;                         ///< GL_RG8_SNORM, mNormalTexels^2 per layer; or none
+    gl::Texture mNormalMaps;                         ///< RGTC2 (or GL_RG8_SNORM), mNormalLayerSize^2 per layer; or none
     int mNormalTexels = 0;
+    bool mRgtc2 = false;
+    int mNormalLayerSize = 0;  ///< mNormalTexels, padded to a multiple of 4 for RGTC2
     bool mDxt1 = false;
     int mColourLayerSize = 0;
     SlotBytes mSlotBytes;

@@ -836,6 +836,60 @@ TEST_F(TengineGLTest, NormalMapsShowShadingDetailFinerThanTheTriangles)
     }
 }
 
+TEST_F(TengineGLTest, CompressedNormalMapsShadeLikeTheUncompressedOnes)
+{
+    // normal_map_compression: the same low view lit by RGTC2 normal maps (1 byte a texel) and by RG8 ones
+    // (2 bytes), 129 texels a node. The frames differ little pixel by pixel and keep their shading detail
+    // (the mean luminance step between neighbouring pixels); the log gives the smaller slots.
+    auto render = [&](const std::filesystem::path& frames, bool compressed, std::string& log) {
+        auto run = video(frames,
+                         lowDetailFlight({"video_frames=1", "draw_user_interface=false", "worker_threads=2",
+                                          "window_width=480", "window_height=270", "dynamic_texture_size=128",
+                                          std::string("normal_map_compression=") + (compressed ? "on" : "off")}),
+                         detailMap());
+        EXPECT_EQ(run.exitCode, 0) << run.output;
+        log = run.output;
+        return frame(frames, 0);
+    };
+    test::ScratchDir plain, compressed;
+    std::string plainLog, compressedLog;
+    const Image a = render(plain.path(), false, plainLog);
+    const Image b = render(compressed.path(), true, compressedLog);
+    ASSERT_EQ(a.width, 480);
+    ASSERT_EQ(a.pixels.size(), b.pixels.size());
+    EXPECT_NE(plainLog.find("normal map 33282"), std::string::npos) << plainLog;            // 129^2 x 2
+    EXPECT_NE(compressedLog.find("normal map 17424"), std::string::npos) << compressedLog;  // 132^2 x 1
+    double sum = 0.0;
+    int worst = 0;
+    for (std::size_t k = 0; k < a.pixels.size(); ++k) {
+        const int d = std::abs(int{a.pixels[k]} - int{b.pixels[k]});
+        sum += d;
+        worst = std::max(worst, d);
+    }
+    const double mean = sum / static_cast<double>(a.pixels.size());
+    auto detail = [](const Image& image) {
+        auto luminance = [&](int x, int y) {
+            const std::uint8_t* p = image.pixel(x, y);
+            return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+        };
+        double steps = 0.0;
+        for (int y = 0; y + 1 < image.height; ++y) {
+            for (int x = 0; x + 1 < image.width; ++x) {
+                steps +=
+                    std::abs(luminance(x + 1, y) - luminance(x, y)) + std::abs(luminance(x, y + 1) - luminance(x, y));
+            }
+        }
+        return steps / (2.0 * (image.width - 1) * (image.height - 1));
+    };
+    const double detailA = detail(a), detailB = detail(b);
+    std::printf("RGTC2 against RG8 normal maps: mean difference %.3f, largest %d of 255; shading detail %.3f / %.3f\n",
+                mean, worst, detailB, detailA);
+    EXPECT_GT(worst, 0) << "compression must change something, or the option does nothing";
+    EXPECT_LT(mean, 0.5);  // measured 0.21, largest 6, detail 1.007x
+    EXPECT_LT(worst, 24);
+    EXPECT_NEAR(detailB / detailA, 1.0, 0.03);
+}
+
 TEST_F(TengineGLTest, ACoarseCopyShowsTheReliefOfTheOriginalUpClose)
 {
     // Issue 14: 30 m above a ridge of the bundled terrain decimated 16x (1440 m between samples, one node),
