@@ -1,6 +1,7 @@
 #include "apps/ErrorCommand.h"
 
 #include "apps/DetailSetup.h"
+#include "apps/NodeBudget.h"
 #include "core/Parse.h"
 #include "lod/CameraPath.h"
 #include "lod/ErrorMeter.h"
@@ -238,7 +239,18 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
     TerrainNodeSource source(map,
                              {synthesizer->get(), o.lodMinimumSpacing, o.tessellation ? kTessellationBlockQuads : 0});
     StreamerOptions streamerOptions;
-    streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);
+    // The viewer's cache: its nodes' CPU bytes are those of its own source (normal maps included).
+    TerrainNodeSource viewerSource(
+        map, {synthesizer->get(), o.lodMinimumSpacing, o.tessellation ? kTessellationBlockQuads : 0,
+              o.dynamicTextureSize, true, o.normalMapCompression});
+    auto root = viewerSource.loadRoot();
+    if (!root.ok()) {
+        return fail(root.error().message);
+    }
+    const CacheChoice cache =
+        chooseCacheSize(o, header, *synthesizer ? (*synthesizer)->settings().materials.get() : nullptr, true,
+                        residentBytes(**root), kLayersWithoutContext);
+    streamerOptions.cacheSize = cache.nodes;
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
     streamerOptions.workers = o.workerThreads;
     streamerOptions.velocityLimit = 0.0;  // the loader runs to completion every frame
@@ -284,6 +296,7 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
                  "< %g px\n",
                  tau, command.lens.viewportWidth, command.lens.viewportHeight, o.cameraFov, *synthesizer ? "on" : "off",
                  tau / 8.0);
+    std::fprintf(out, "# %s\n", cache.description.c_str());
     if (command.pops) {
         if (!o.tessellation) {
             return fail(
@@ -422,9 +435,10 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
     }
     if (framesShort > 0) {
         std::fprintf(err,
-                     "tengine-tool: warning: in %zu frame%s quad_cache_size (%d) had no room for every node the "
-                     "selection wanted; measured what the viewer draws then\n",
-                     framesShort, framesShort == 1 ? "" : "s", o.quadCacheSize);
+                     "tengine-tool: warning: in %zu frame%s the node cache (%zu nodes; memory_budget, "
+                     "quad_cache_size) had no room for every node the selection wanted; measured what the viewer "
+                     "draws then\n",
+                     framesShort, framesShort == 1 ? "" : "s", cache.nodes);
     }
     if (command.levels) {
         std::fprintf(out,

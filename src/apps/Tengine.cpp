@@ -5,6 +5,7 @@
 #include "DataDirectories.h"
 #include "DetailSetup.h"
 #include "FrameRateMeter.h"
+#include "NodeBudget.h"
 #include "TengineOptions.h"
 #include "VideoRecorder.h"
 
@@ -189,12 +190,13 @@ private:
 /// synthesized that arrived this frame (FrameStats::synthesized). New columns go at the end: readers cut
 /// columns by position. blocks_occluded: tessellation mode with visibility_lod, blocks of drawn nodes made
 /// coarsest, behind the previous frame's depth. error_max_px, error_p99_px: with video_measure_error_every, the
-/// measured screen-space error of what the frame shows (empty in frames not measured).
+/// measured screen-space error of what the frame shows (empty in frames not measured). cache_short: groups of
+/// children the selection wanted that the node cache had no room for (FrameStats::deferred; memory_budget).
 constexpr const char* kCsvHeader =
     "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
     "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,resident_bytes,"
     "deepest_level,draw_calls,nodes_hidden,requests_skipped_hidden,nodes_revealing,dynamic_groups_made,blocks_occluded,"
-    "error_max_px,error_p99_px";
+    "error_max_px,error_p99_px,cache_short";
 
 /// Everything the viewer draws with, opened from the options in dependency order. Not movable: the source
 /// refers to the map and the synthesizer, the streamer to the source.
@@ -212,6 +214,7 @@ struct Scene {
     std::unique_ptr<NodeVisibility> visibility;
     PixelCounts pixelCounts;                  ///< reused for each frame's counts
     std::optional<DepthOcclusion> occlusion;  ///< the depth of the latest frame measured
+    std::size_t cacheNodes = 0;               ///< the node cache's capacity (chooseCacheSize)
     double nodePixels = 2.0;                  ///< the selection's tau: all of lod_error, or what the blocks leave of it
     double blockPixels = 0.0;                 ///< tessellation: the blocks' part of lod_error
     /// video_measure_error_every: the reference the frames are measured against (tengine-tool error's), last
@@ -357,16 +360,30 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
             std::to_string(scene->clipmapRenderer->textureBytes() + scene->clipmap->bytes()) +
             " bytes of ring data (GPU and CPU)");
     }
+    scene->source = std::make_unique<TerrainNodeSource>(
+        *scene->map,
+        DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing, scene->tessellation ? kTessellationBlockQuads : 0,
+                     o.dynamicTextureSize, true, o.normalMapCompression && !o.clipmap});
+    // The node cache: what memory_budget pays for at this map's GPU slot and CPU bytes a node (the root's: a
+    // static node, which holds its height codes too, costs at least what a dynamic one does).
+    auto root = scene->source->loadRoot();
+    if (!root.ok()) {
+        return fail(root.error().message);
+    }
+    const bool s3tc = epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
+    const CacheChoice cache = chooseCacheSize(o, header, materials, s3tc, residentBytes(**root),
+                                              o.clipmap ? SIZE_MAX : TerrainRenderer::maxSlots());
+    log(cache.description);
+    scene->cacheNodes = cache.nodes;
     scene->nodePixels = scene->tessellation ? o.lodError * (1.0 - o.tessellationShare) : o.lodError;
     scene->blockPixels = scene->tessellation ? o.lodError * o.tessellationShare : 0.0;
-    auto renderer = o.clipmap
-                        ? Expected<std::unique_ptr<TerrainRenderer>>(std::unique_ptr<TerrainRenderer>())
-                        : TerrainRenderer::create(
-                              shaders, header, o.vertexCacheSize,
-                              {static_cast<std::size_t>(o.quadCacheSize), o.nodeTextureCompression, scene->tessellation,
-                               o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0,
-                               o.normalMapCompression, countPixels},
-                              materials);
+    auto renderer = o.clipmap ? Expected<std::unique_ptr<TerrainRenderer>>(std::unique_ptr<TerrainRenderer>())
+                              : TerrainRenderer::create(
+                                    shaders, header, o.vertexCacheSize,
+                                    PoolOptions{cache.nodes, o.nodeTextureCompression, scene->tessellation,
+                                                o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0,
+                                                o.normalMapCompression, countPixels},
+                                    materials);
     if (!renderer.ok()) {
         return fail(renderer.error().message);
     }
@@ -384,11 +401,8 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
     }
     scene->overlay = std::move(overlay).value();
 
-    scene->source = std::make_unique<TerrainNodeSource>(
-        *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing,
-                                  scene->tessellation ? kTessellationBlockQuads : 0, o.dynamicTextureSize});
     StreamerOptions streamerOptions;
-    streamerOptions.cacheSize = static_cast<std::size_t>(o.quadCacheSize);
+    streamerOptions.cacheSize = cache.nodes;
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
     streamerOptions.workers = o.workerThreads;
     streamerOptions.velocityLimit = o.detailVelocityLimit;
@@ -523,8 +537,10 @@ std::vector<std::string> overlayLines(bool video, std::size_t frame, double time
         lines.emplace_back(line);
     }
     const auto server = scene.streamer->serverStats();
-    std::snprintf(line, sizeof line, "cache %zu / %zu nodes, requests pending %zu", scene.streamer->cache().size(),
-                  scene.streamer->cache().capacity(), server.queued + server.inFlight);
+    std::snprintf(
+        line, sizeof line, "cache %zu / %zu nodes, requests pending %zu%s", scene.streamer->cache().size(),
+        scene.streamer->cache().capacity(), server.queued + server.inFlight,
+        selection.deferred > 0 ? ("  cache short: " + std::to_string(selection.deferred) + " groups").c_str() : "");
     lines.emplace_back(line);
     std::snprintf(line, sizeof line, "camera %.0f %.0f %.0f m  tau %.1f px%s", camera.position.x, camera.position.y,
                   camera.position.z, tau, wireframe ? "  wireframe" : "");
@@ -825,9 +841,9 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
                 }
                 shownError.pixels.insert(shownError.pixels.end(), error->pixels.begin(), error->pixels.end());
             }
-            if (auto added =
-                    recorder->add(frame, std::move(pixels),
-                                  counters.row(frame, time, milliseconds, renderStats, frameStats, *scene) + measured);
+            if (auto added = recorder->add(frame, std::move(pixels),
+                                           counters.row(frame, time, milliseconds, renderStats, frameStats, *scene) +
+                                               measured + "," + std::to_string(frameStats.deferred));
                 !added.ok()) {
                 log(added.error().message);
                 (void)recorder->finish(true);

@@ -276,10 +276,27 @@ std::vector<OptionSpec> makeOptionTable()
                           "Size of the GPU's post-transform vertex cache that the zigzag index order is built for "
                           "(3.2.10).",
                           &O::vertexCacheSize, 4, 64, "vertices"));
-    t.push_back(intOption("quad_cache_size", kGroupMap,
-                          "How many nodes the node cache holds: more keeps more detail around, costs GPU memory. At "
-                          "least a node and its four children.",
-                          &O::quadCacheSize, 5, INT_MAX, "nodes"));
+    t.push_back(intOption("memory_budget", kGroupMap,
+                          "Memory for resident nodes, GPU and CPU together: the node cache holds as many nodes as "
+                          "it pays for (each node's GPU slot plus its CPU data, measured on the map's root; the "
+                          "log says how many), at most as many as the GPU's texture arrays have layers. More keeps "
+                          "more detail around. When the selection wants more than the cache holds, the nodes with "
+                          "the largest screen-space error are refined first and frames.csv's cache_short counts "
+                          "the groups left out. 0: 1/16 of the machine's memory, between 128 MiB and 4 GiB.",
+                          &O::memoryBudget, 0, 1 << 20, "MiB"));
+    t.push_back({"quad_cache_size", kGroupMap,
+                 "How many nodes the node cache holds, instead of what memory_budget pays for (for comparisons "
+                 "at a fixed count). At least a node and its four children; 0: from memory_budget.",
+                 "0, or an integer >= 5 (nodes)",
+                 [](std::string_view value, const SetContext&, O& o) {
+                     auto v = parseInt(value, 0, INT_MAX);
+                     if (!v || (*v != 0 && *v < 5)) {
+                         return false;
+                     }
+                     o.quadCacheSize = *v;
+                     return true;
+                 },
+                 [](const O& o) { return std::to_string(o.quadCacheSize); }});
     t.push_back({"reader", kGroupMap,
                  "How the map file is read: 'stream' reads each node with a file read, 'memory_mapped' maps the "
                  "whole file.",

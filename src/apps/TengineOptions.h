@@ -34,7 +34,8 @@ struct TengineOptions {
     double lodMinimumSpacing = 0.01;  ///< lod_minimum_spacing: metres, >= 0; no finer detail
     int dynamicTextureSize = 128;     ///< dynamic_texture_size: normal map texels, 0 or 2^k(+1) in [16, 4096]
     int vertexCacheSize = 16;         ///< vertex_cache_size: entries, [4, 64] (3.2.10)
-    int quadCacheSize = 1024;         ///< quad_cache_size: nodes, >= 5
+    int memoryBudget = 0;             ///< memory_budget: MiB for resident nodes; 0: from the machine
+    int quadCacheSize = 0;            ///< quad_cache_size: nodes, >= 5; 0: from memory_budget
     ReaderKind reader = ReaderKind::MemoryMapped;  ///< reader: stream | memory_mapped
     int workerThreads = 1;                         ///< worker_threads: >= 0; 0 loads on the render thread
     int requestQueueSize = 8;                      ///< request_queue_size: node groups waiting, >= 1

@@ -32,6 +32,9 @@ struct NodeData {
     /// The normal map of the surface below the node (synthesis/NormalMap.h): normalMapTexels^2 pairs (x, y)
     /// as GL_RG8_SNORM, rows south to north; empty when normal maps are off (DetailPolicy::normalMapSize 0).
     std::vector<std::int8_t> normalMap;
+    /// The same normal map as RGTC2 blocks (lod/NodeTextures.h, compressRgtc2) where the source keeps them so
+    /// (DetailPolicy::compressNormalMaps); normalMap is then empty.
+    std::vector<std::uint8_t> normalMapBlocks;
     /// The tessellation render mode's block errors of the drawn surface (base plus displacement), made with
     /// the node when that mode is on (DetailPolicy::tessellationBlockQuads); null otherwise.
     std::shared_ptr<const TessellationErrors> tessellation;

@@ -1,6 +1,8 @@
 // Static and dynamic nodes (paper 3.2.14, 3.4.1, 3.4.3, 4.2.4).
 #include "lod/TerrainNodeSource.h"
 
+#include "lod/NodeTextures.h"
+
 #include "core/Check.h"
 #include "synthesis/NormalMap.h"
 
@@ -39,7 +41,16 @@ void TerrainNodeSource::addNormalMap(NodeData& data, const WindowPlacement& wher
         return;
     }
     const DetailSynthesizer& below = mPolicy.synthesizer ? *mPolicy.synthesizer : *mSubdivisionOnly;
-    data.normalMap = makeNormalMap(below, data.heights, where, mPolicy.normalMapSize);
+    keepNormalMap(data, makeNormalMap(below, data.heights, where, mPolicy.normalMapSize));
+}
+
+void TerrainNodeSource::keepNormalMap(NodeData& data, std::vector<std::int8_t> map) const
+{
+    if (mPolicy.compressNormalMaps) {
+        data.normalMapBlocks = compressRgtc2(map, normalMapTexels(mPolicy.normalMapSize));
+    } else {
+        data.normalMap = std::move(map);
+    }
 }
 
 WindowPlacement TerrainNodeSource::placement(const NodeId& id) const
@@ -166,7 +177,7 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     data->zMax = std::clamp(h.heightOffset + hi + widen, data->zMin, parent.zMax);
     addTessellationErrors(*data);
     if (mPolicy.normalMapSize > 0) {
-        data->normalMap = makeNormalMap(synthesizer, data->heights, children, where, mPolicy.normalMapSize);
+        keepNormalMap(*data, makeNormalMap(synthesizer, data->heights, children, where, mPolicy.normalMapSize));
     }
     return data;
 }

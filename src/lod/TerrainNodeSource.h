@@ -33,6 +33,9 @@ struct DetailPolicy {
     /// heights only (the error meter's, height queries), whose dynamic nodes carry their parent's delta_c /
     /// kErrorNesting, which bounds nothing; it saves the children's syntheses where no normal map shares them.
     bool bounds = true;
+    /// The normal maps kept as RGTC2 blocks (NodeData::normalMapBlocks, lod/NodeTextures.h: half the bytes,
+    /// what the renderer's compressed pools take as they are) instead of RG8 texels (NodeData::normalMap).
+    bool compressNormalMaps = false;
 };
 
 class TerrainNodeSource final : public NodeSource {
@@ -58,6 +61,8 @@ private:
     bool childrenAllowed(const NodeId& id, bool hasStaticChildren) const;
     void addTessellationErrors(NodeData& data) const;
     void addNormalMap(NodeData& data, const WindowPlacement& where) const;
+    /// Puts `map` into data.normalMap, or into data.normalMapBlocks as RGTC2 (DetailPolicy::compressNormalMaps).
+    void keepNormalMap(NodeData& data, std::vector<std::int8_t> map) const;
 
     const MapFile& mMap;
     DetailPolicy mPolicy;

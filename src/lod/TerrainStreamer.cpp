@@ -162,8 +162,9 @@ FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels, doubl
     stats.hidden = mSelection.hiddenNodes;
     stats.requestsSkippedHidden = mSelection.requestsSkippedHidden;
 
-    // Ask only for what the cache can take now (nearest first): a group loaded without room would be
-    // refused and asked for again every frame, wasting the loader on a working set larger than the cache.
+    // Ask only for what the cache can take now: a group loaded without room would be refused and asked for
+    // again every frame, wasting the loader on a working set larger than the cache. When the room is short,
+    // the parents whose screen-space error is largest (delta_c over distance, eq. 3.3) are refined first.
     mRequests.clear();
     for (const auto& request : mSelection.requests) {
         NodePtr parent = node(request.parent);
@@ -178,8 +179,14 @@ FrameStats TerrainStreamer::update(const Camera& camera, double tauPixels, doubl
     }
     const std::size_t room = mCache.groupsInsertable();
     if (mRequests.size() > room) {
+        auto error = [](const LoadRequest& r) {
+            return static_cast<double>(r.parent->deltaC) / std::max(r.distance, 1e-3);
+        };
         std::partial_sort(mRequests.begin(), mRequests.begin() + static_cast<std::ptrdiff_t>(room), mRequests.end(),
-                          [](const LoadRequest& a, const LoadRequest& b) { return a.distance < b.distance; });
+                          [&](const LoadRequest& a, const LoadRequest& b) {
+                              const double ea = error(a), eb = error(b);
+                              return ea > eb || (ea == eb && a.parent->id.key() < b.parent->id.key());
+                          });
         stats.deferred = mRequests.size() - room;
         mRequests.resize(room);
     }

@@ -43,9 +43,11 @@ struct FrameVisibility {
 
 /// Per-frame figures.
 struct FrameStats {
-    std::size_t selected = 0;               ///< nodes drawn
-    std::size_t requested = 0;              ///< child groups the traversal wanted but were not resident
-    std::size_t deferred = 0;               ///< of those, not asked for: the cache has no room this frame
+    std::size_t selected = 0;   ///< nodes drawn
+    std::size_t requested = 0;  ///< child groups the traversal wanted but were not resident
+    /// Of those, not asked for: the cache has no room this frame (frames.csv's cache_short); the ones asked for
+    /// are those of the largest screen-space error.
+    std::size_t deferred = 0;
     std::size_t tooFast = 0;                ///< of those, not asked for: dynamic, and the camera is too fast (3.4.4)
     std::size_t inserted = 0;               ///< groups that became resident this frame
     std::size_t refused = 0;                ///< finished groups the cache had no room (or no parent) for

@@ -3,9 +3,9 @@
 #include "render/TerrainRenderer.h"
 
 #include "heightfield/Image.h"
+#include "lod/NodeTextures.h"
 #include "lod/TessellationLevels.h"
 #include "quadtree/ChunkGeometry.h"
-#include "render/NodeTextures.h"
 #include "render/TemplateMesh.h"
 #include "render/ZigzagIndexBuffer.h"
 
@@ -227,17 +227,14 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     const int m = (n + 1) / 2;
     const int t = static_cast<int>(header.textureSize);
     r->mHeights = createLayers(GL_R16, w, layersOf, GL_RED, GL_UNSIGNED_SHORT, GL_NEAREST);
-    r->mSlotBytes.heights = static_cast<std::size_t>(w) * w * sizeof(std::uint16_t);
     r->mSlotHeights.assign(slots, {0.0f, 0.0f});
     if (r->mNormalTexels == 0) {
         // The vertex normals' parent part; with normal maps the fragment program lights by those instead.
         r->mParentNormals = createLayers(GL_RG8_SNORM, m, layersOf, GL_RG, GL_BYTE, GL_NEAREST);
-        r->mSlotBytes.normals = static_cast<std::size_t>(m) * m * 2;
     }
     r->mDxt1 = pools.compressColour && epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
     r->mColourLayerSize = r->mDxt1 ? blockLayerSize(t) : t;
-    const auto colourTexels = static_cast<std::size_t>(r->mColourLayerSize) * r->mColourLayerSize;
-    r->mSlotBytes.colour = r->mDxt1 ? colourTexels / 2 : colourTexels * 3;
+    r->mSlotBytes = poolSlotBytes(header, {pools.normalMapTexels, pools.compressNormals, r->mDxt1, r->mDetail.count()});
     if (r->mDxt1) {
         r->mColour = gl::Texture::create();
         glBindTexture(GL_TEXTURE_2D_ARRAY, r->mColour.name());
@@ -254,16 +251,13 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     if (!r->mDetail.empty()) {
         r->mWeights = createLayers(GL_RGBA4, n, layersOf, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4, GL_NEAREST);
-        r->mSlotBytes.weights = static_cast<std::size_t>(n) * n * sizeof(std::uint16_t);
     }
     if (r->mNormalTexels > 0) {
         const int texels = r->mNormalTexels;
         r->mRgtc2 = pools.compressNormals;
         r->mNormalLayerSize = r->mRgtc2 ? blockLayerSize(texels) : texels;
-        const auto layerTexels = static_cast<std::size_t>(r->mNormalLayerSize) * r->mNormalLayerSize;
         if (r->mRgtc2) {
             // RGTC is core since OpenGL 3.0: every context this renderer runs on decodes it.
-            r->mSlotBytes.normalMap = layerTexels;
             r->mNormalMaps = gl::Texture::create();
             glBindTexture(GL_TEXTURE_2D_ARRAY, r->mNormalMaps.name());
             glCompressedTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_COMPRESSED_SIGNED_RG_RGTC2, r->mNormalLayerSize,
@@ -273,13 +267,12 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
             glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
             glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
         } else {
-            r->mSlotBytes.normalMap = layerTexels * 2;
             r->mNormalMaps = createLayers(GL_RG8_SNORM, texels, layersOf, GL_RG, GL_BYTE, GL_LINEAR);
         }
         glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
         glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     }
-    r->mSlotBytes.constants = static_cast<std::size_t>(r->mNodeTexels) * 4 * sizeof(float);
+    TERRAIN_ASSERT(r->mSlotBytes.constants == static_cast<std::size_t>(r->mNodeTexels) * 4 * sizeof(float));
     r->mSlotData.resize(slots);
     r->mFreeSlots.reserve(slots);
     for (std::size_t k = slots; k-- > 0;) {
@@ -358,21 +351,40 @@ int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats)
                         weights.data());
     }
     if (mNormalMaps) {
-        TERRAIN_EXPECTS(node->normalMap.size() == static_cast<std::size_t>(mNormalTexels) * mNormalTexels * 2,
-                        "with normal maps every node needs one of the pools' size (DetailPolicy::normalMapSize)");
+        const auto texels = static_cast<std::size_t>(mNormalTexels);
         glBindTexture(GL_TEXTURE_2D_ARRAY, mNormalMaps.name());
         if (mRgtc2) {
-            const std::vector<std::uint8_t> blocks = compressRgtc2(node->normalMap, mNormalTexels);
+            // The blocks as the source made them on its thread, else encoded here.
+            std::vector<std::uint8_t> encoded;
+            if (node->normalMapBlocks.empty()) {
+                TERRAIN_EXPECTS(
+                    node->normalMap.size() == texels * texels * 2,
+                    "with normal maps every node needs one of the pools' size (DetailPolicy::normalMapSize)");
+                encoded = compressRgtc2(node->normalMap, mNormalTexels);
+            }
+            const std::vector<std::uint8_t>& blocks = encoded.empty() ? node->normalMapBlocks : encoded;
+            TERRAIN_EXPECTS(blocks.size() == mSlotBytes.normalMap,
+                            "a node's RGTC2 normal map must be of the pools' size (DetailPolicy::normalMapSize)");
             glCompressedTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, mNormalLayerSize, mNormalLayerSize, 1,
                                       GL_COMPRESSED_SIGNED_RG_RGTC2, static_cast<GLsizei>(blocks.size()),
                                       blocks.data());
         } else {
+            TERRAIN_EXPECTS(node->normalMap.size() == texels * texels * 2,
+                            "uncompressed normal map pools need RG8 normal maps (DetailPolicy::compressNormalMaps off) "
+                            "of the pools' size (DetailPolicy::normalMapSize)");
             glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, mNormalTexels, mNormalTexels, 1, GL_RG, GL_BYTE,
                             node->normalMap.data());
         }
     }
     ++stats.uploads;
     return slot;
+}
+
+std::size_t TerrainRenderer::maxSlots()
+{
+    GLint layers = 0;
+    glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &layers);
+    return static_cast<std::size_t>(std::max(layers, 0));
 }
 
 bool TerrainRenderer::tessellationSupported()

@@ -8,6 +8,7 @@
 #include "core/Expected.h"
 #include "lod/LodSelector.h"
 #include "lod/NodeData.h"
+#include "lod/NodeMemory.h"
 #include "lod/TessellationLevels.h"
 #include "quadtree/MapFormat.h"
 #include "render/DetailLayers.h"
@@ -42,17 +43,6 @@ struct RenderStats {
     std::uint64_t generatedTriangles = 0;  ///< with transform feedback: the triangles the GL says it made
 };
 
-/// GPU bytes of one slot of the node pools (TerrainRenderer::create): what each resident node costs.
-struct SlotBytes {
-    std::size_t heights = 0;    ///< the surface with a 1-sample border, 16 bits a sample
-    std::size_t normals = 0;    ///< the parent's normals at its samples, 2 bytes each
-    std::size_t colour = 0;     ///< the colour texture (RGB8, or DXT1 with node_texture_compression)
-    std::size_t weights = 0;    ///< material weights (RGBA4), 0 without materials
-    std::size_t normalMap = 0;  ///< the normal map of the surface below (RGTC2, or RG8), 0 without normal maps
-    std::size_t constants = 0;  ///< per drawn node, in the frame's constants buffer
-    std::size_t total() const { return heights + normals + colour + weights + normalMap + constants; }
-};
-
 /// The node pools' size and formats.
 struct PoolOptions {
     std::size_t slots = 512;      ///< nodes: the cache's capacity (quad_cache_size)
@@ -65,7 +55,7 @@ struct PoolOptions {
     /// dynamic_texture_size), and the fragment program lights by them, morphed between the node's and its
     /// parent's like the colours; 0: lit by the vertex normals.
     int normalMapTexels = 0;
-    /// Normal maps as RGTC2 blocks (normal_map_compression; render/NodeTextures.h, compressRgtc2): 1 byte a
+    /// Normal maps as RGTC2 blocks (normal_map_compression; lod/NodeTextures.h, compressRgtc2): 1 byte a
     /// texel instead of RG8's 2.
     bool compressNormals = false;
     /// Count each drawn node's visible pixels (issue 16, visibility_lod; takePixelCounts()): needs GL 4.3 or
@@ -116,6 +106,8 @@ public:
     /// Whether this context can count visible pixels per node (PoolOptions::pixelCounts): OpenGL 4.3, or
     /// GL_ARB_shader_storage_buffer_object and GL_ARB_shader_image_load_store.
     static bool pixelCountsSupported();
+    /// The most slots the pools can have on this context: a layer per slot (GL_MAX_ARRAY_TEXTURE_LAYERS).
+    static std::size_t maxSlots();
 
     /// Frames between drawing a frame and reading its pixel counts back: the counts of frame F are taken
     /// before drawing frame F + 3, when the GL has normally finished F long ago, so reading them does not

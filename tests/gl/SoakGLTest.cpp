@@ -319,6 +319,7 @@ TEST_F(SoakGLTest, LongFastDeepFlightKeepsMemoryCacheAndQueueBounded)
     // admitted and the peak stays within request_queue_size itself.
     const double pendingBound = kRequestQueueSize + kWorkerThreads;
     double failed = 0, maxPending = 0, maxDynamic = 0, maxCache = 0;
+    int shortFrames = 0;
     int dynamicFrames = 0, deepFrames = 0, deepest = 0;
     std::string firstOverflow;  // the first frame breaking a bound, with what it broke
     for (std::size_t f = 0; f < n; ++f) {
@@ -335,6 +336,7 @@ TEST_F(SoakGLTest, LongFastDeepFlightKeepsMemoryCacheAndQueueBounded)
         maxPending = std::max(maxPending, row.at("requests_pending_peak"));
         maxDynamic = std::max(maxDynamic, row.at("nodes_dynamic"));
         maxCache = std::max(maxCache, row.at("cache_nodes"));
+        shortFrames += row.at("cache_short") > 0 ? 1 : 0;
         dynamicFrames += row.at("nodes_dynamic") > 0 ? 1 : 0;
         const int below = static_cast<int>(row.at("deepest_level")) - staticLeafLevel;
         deepest = std::max(deepest, below);
@@ -343,6 +345,7 @@ TEST_F(SoakGLTest, LongFastDeepFlightKeepsMemoryCacheAndQueueBounded)
     EXPECT_EQ(firstOverflow, "");
     EXPECT_EQ(failed, 0) << run.output;
     EXPECT_GE(maxCache, kQuadCacheSize - 4) << "the cache never filled: the soak does not exercise eviction";
+    EXPECT_GT(shortFrames, 0) << "a cache this small is short of what the deep skims want, and frames.csv says so";
     EXPECT_GE(maxPending, kRequestQueueSize) << "the queue never filled: the soak does not exercise its bound";
     // Dynamic nodes on every skim (a third of each cycle) and at least four levels below the leaves for a
     // good part of it.
@@ -386,7 +389,7 @@ TEST_F(SoakGLTest, SaveEveryWritesEveryNthFrameAndTheCsvHasTheSoakColumns)
               "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
               "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,"
               "resident_bytes,deepest_level,draw_calls,nodes_hidden,requests_skipped_hidden,nodes_revealing,"
-              "dynamic_groups_made,blocks_occluded,error_max_px,error_p99_px");
+              "dynamic_groups_made,blocks_occluded,error_max_px,error_p99_px,cache_short");
     const auto rows = readCsv(out.path() / "frames.csv");
     ASSERT_EQ(rows.size(), 5u);
     for (const auto& row : rows) {

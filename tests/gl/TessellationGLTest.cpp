@@ -8,6 +8,7 @@
 #include "TestSupport.h"
 
 #include "core/Camera.h"
+#include "lod/NodeTextures.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "lod/TessellationLevels.h"
@@ -15,7 +16,6 @@
 #include "quadtree/MapFile.h"
 #include "render/FrameCapture.h"
 #include "render/GlWindow.h"
-#include "render/NodeTextures.h"
 #include "render/TerrainRenderer.h"
 
 #include <gtest/gtest.h>

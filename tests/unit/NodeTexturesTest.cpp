@@ -1,10 +1,10 @@
-// The node pools' texture data (render/NodeTextures.h): DXT1 colour decoded here from the format's definition
+// The node pools' texture data (lod/NodeTextures.h): DXT1 colour decoded here from the format's definition
 // (two RGB565 end points, four colours on the line between them, 2-bit indices) and compared with the
 // source texels, RGTC2 normal maps likewise (two signed 8-bit end points a channel, 3-bit indices), RGBA4 weights
 // against the rounding rule, and the parent's normals against planes whose normal is known in closed form.
 #include "MapTestSupport.h"
 
-#include "render/NodeTextures.h"
+#include "lod/NodeTextures.h"
 
 #include <gtest/gtest.h>
 

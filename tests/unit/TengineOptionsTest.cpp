@@ -54,7 +54,8 @@ TEST(TengineOptions, DefaultsAreTheDocumentedOnes)
     EXPECT_EQ(o.lodMinimumSpacing, 0.01);
     EXPECT_EQ(o.dynamicTextureSize, 128);
     EXPECT_EQ(o.vertexCacheSize, 16);
-    EXPECT_EQ(o.quadCacheSize, 1024);
+    EXPECT_EQ(o.quadCacheSize, 0);
+    EXPECT_EQ(o.memoryBudget, 0);
     EXPECT_EQ(o.reader, ReaderKind::MemoryMapped);
     EXPECT_EQ(o.workerThreads, 1);
     EXPECT_EQ(o.requestQueueSize, 8);
@@ -115,7 +116,10 @@ const std::vector<ValidCase>& validCases()
         {"vertex_cache_size=4", [](const O& o) { return o.vertexCacheSize == 4; }},
         {"vertex_cache_size=64", [](const O& o) { return o.vertexCacheSize == 64; }},
         {"quad_cache_size=5", [](const O& o) { return o.quadCacheSize == 5; }},
+        {"quad_cache_size=0", [](const O& o) { return o.quadCacheSize == 0; }},
         {"quad_cache_size=100000", [](const O& o) { return o.quadCacheSize == 100000; }},
+        {"memory_budget=0", [](const O& o) { return o.memoryBudget == 0; }},
+        {"memory_budget=256", [](const O& o) { return o.memoryBudget == 256; }},
         {"reader=stream", [](const O& o) { return o.reader == ReaderKind::Stream; }},
         {"worker_threads=0", [](const O& o) { return o.workerThreads == 0; }},
         {"worker_threads=8", [](const O& o) { return o.workerThreads == 8; }},
@@ -163,6 +167,7 @@ const std::vector<ValidCase>& validCases()
         {"clear_color=0, 0.5,1", [](const O& o) { return o.clearColor == glm::vec3(0.0f, 0.5f, 1.0f); }},
         {"geomorph=off", [](const O& o) { return !o.geomorph; }},
         {"node_texture_compression=on", [](const O& o) { return o.nodeTextureCompression; }},
+        {"normal_map_compression=off", [](const O& o) { return !o.normalMapCompression; }},
         {"render_mode=Chunks", [](const O& o) { return !o.tessellation; }},
         {"lod_mode=quadtree", [](const O& o) { return !o.clipmap; }},
         {"lod_mode=Clipmap", [](const O& o) { return o.clipmap; }},
@@ -278,8 +283,11 @@ TEST(TengineOptions, InvalidValuesAreErrorsSayingWhatIsExpected)
         {"dynamic_texture_size=128.0", "0, or a power of two or a power of two plus one, in [16, 4096] (texels)"},
         {"vertex_cache_size=3", "an integer in [4, 64] (vertices)"},
         {"vertex_cache_size=65", "an integer in [4, 64] (vertices)"},
-        {"quad_cache_size=4", "an integer >= 5 (nodes)"},
-        {"quad_cache_size=99999999999", "an integer >= 5 (nodes)"},
+        {"quad_cache_size=4", "0, or an integer >= 5 (nodes)"},
+        {"quad_cache_size=-1", "0, or an integer >= 5 (nodes)"},
+        {"quad_cache_size=99999999999", "0, or an integer >= 5 (nodes)"},
+        {"memory_budget=-1", "an integer in [0, 1048576] (MiB)"},
+        {"memory_budget=1e9", "an integer in [0, 1048576] (MiB)"},
         {"reader=mmap", "stream or memory_mapped"},
         {"reader=Stream", "stream or memory_mapped"},
         {"worker_threads=-1", "an integer in [0, 256] (threads)"},
@@ -316,6 +324,7 @@ TEST(TengineOptions, InvalidValuesAreErrorsSayingWhatIsExpected)
         {"wireframe=2", "true or false (also yes/no, on/off, 1/0)"},
         {"geomorph=maybe", "true or false (also yes/no, on/off, 1/0)"},
         {"node_texture_compression=2", "true or false (also yes/no, on/off, 1/0)"},
+        {"normal_map_compression=maybe", "true or false (also yes/no, on/off, 1/0)"},
         {"render_mode=triangles", "chunks or tessellation"},
         {"lod_mode=rings", "quadtree or clipmap"},
         {"clipmap_samples=256", "an integer 2^k - 1 in [15, 1023]"},

@@ -74,6 +74,48 @@ TEST_F(TerrainStreamerTest, CacheNeverExceedsItsCapacityAndEverythingDrawnIsResi
     EXPECT_GT(peak, options.cacheSize - 8);
 }
 
+TEST_F(TerrainStreamerTest, ACacheTooSmallRefinesWhereTheErrorIsLargestAndCountsWhatIsLeftOut)
+{
+    // A cache far smaller than the flight's wanted set: each frame the groups asked for are those whose parents
+    // have the largest screen-space error (delta_c over distance) of all the selection wanted, and the rest
+    // are counted as deferred (frames.csv's cache_short).
+    TerrainNodeSource source(*mMap, {});
+    StreamerOptions options;
+    options.cacheSize = 21;
+    options.queueLimit = 64;  // the server takes whatever the cache has room for
+    options.workers = 0;
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_TRUE(streamer.ok()) << streamer.error().message;
+    const CameraPath path = flight();
+    Camera camera;
+    int shortFrames = 0;
+    for (int frame = 0; frame <= 60; ++frame) {
+        path.evaluate(frame * 1.0).applyTo(camera);
+        const FrameStats stats = (*streamer)->update(camera, 2.0);
+        const std::vector<ChildRequest> wanted = (*streamer)->selection().requests;
+        ASSERT_EQ(stats.requested, wanted.size());
+        (*streamer)->drain();
+        if (stats.deferred == 0) {
+            continue;
+        }
+        ++shortFrames;
+        double leastTaken = INFINITY, mostLeft = 0.0;
+        std::size_t taken = 0;
+        for (const ChildRequest& request : wanted) {
+            const double error = (*streamer)->node(request.parent)->deltaC / std::max(request.distance, 1e-3);
+            if ((*streamer)->childrenResident(request.parent)) {
+                ++taken;
+                leastTaken = std::min(leastTaken, error);
+            } else {
+                mostLeft = std::max(mostLeft, error);
+            }
+        }
+        EXPECT_EQ(taken + stats.deferred, wanted.size()) << "frame " << frame;
+        EXPECT_GE(leastTaken, mostLeft) << "frame " << frame << ": a group of smaller error was refined first";
+    }
+    EXPECT_GT(shortFrames, 10) << "the cache must be short on this flight for the test to mean anything";
+}
+
 TEST_F(TerrainStreamerTest, ConvergesToTheSelectionWithEverythingResident)
 {
     TerrainNodeSource source(*mMap, {});

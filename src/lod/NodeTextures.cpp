@@ -1,4 +1,4 @@
-#include "render/NodeTextures.h"
+#include "lod/NodeTextures.h"
 
 #include "core/Check.h"
 
