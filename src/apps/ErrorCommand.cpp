@@ -239,17 +239,18 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
     TerrainNodeSource source(map,
                              {synthesizer->get(), o.lodMinimumSpacing, o.tessellation ? kTessellationBlockQuads : 0});
     StreamerOptions streamerOptions;
-    // The viewer's cache: its nodes' CPU bytes are those of its own source (normal maps included).
+    // The viewer's cache: its nodes' CPU bytes are those of its own source (normal maps included; auto
+    // compression taken as on a software rasterizer, where no GL can be asked: RG8, the larger).
     TerrainNodeSource viewerSource(
         map, {synthesizer->get(), o.lodMinimumSpacing, o.tessellation ? kTessellationBlockQuads : 0,
-              o.dynamicTextureSize, true, o.normalMapCompression});
+              o.dynamicTextureSize, true, compressNormalMaps(o, true)});
     auto root = viewerSource.loadRoot();
     if (!root.ok()) {
         return fail(root.error().message);
     }
     const CacheChoice cache =
         chooseCacheSize(o, header, *synthesizer ? (*synthesizer)->settings().materials.get() : nullptr, true,
-                        residentBytes(**root), kLayersWithoutContext);
+                        compressNormalMaps(o, true), residentBytes(**root), kLayersWithoutContext);
     streamerOptions.cacheSize = cache.nodes;
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
     streamerOptions.workers = o.workerThreads;

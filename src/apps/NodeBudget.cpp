@@ -8,7 +8,7 @@
 namespace terrain {
 
 CacheChoice chooseCacheSize(const TengineOptions& o, const MapHeader& header, const MaterialSet* materials, bool s3tc,
-                            std::size_t nodeBytes, std::size_t maxNodes)
+                            bool compressNormals, std::size_t nodeBytes, std::size_t maxNodes)
 {
     int detailLayers = 0;
     if (materials) {
@@ -17,9 +17,10 @@ CacheChoice chooseCacheSize(const TengineOptions& o, const MapHeader& header, co
         }
     }
     const int normalTexels = o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0;
-    const SlotBytes slot = o.clipmap ? SlotBytes{}
-                                     : poolSlotBytes(header, {normalTexels, o.normalMapCompression,
-                                                              o.nodeTextureCompression && s3tc, detailLayers});
+    const SlotBytes slot =
+        o.clipmap
+            ? SlotBytes{}
+            : poolSlotBytes(header, {normalTexels, compressNormals, o.nodeTextureCompression && s3tc, detailLayers});
     constexpr double kMiB = 1024.0 * 1024.0;
     auto kb = [](std::size_t bytes) { return static_cast<double>(bytes) / 1024.0; };
     const std::size_t perNode = std::max<std::size_t>(1, slot.total() + nodeBytes);
@@ -44,6 +45,12 @@ CacheChoice chooseCacheSize(const TengineOptions& o, const MapHeader& header, co
                   : s.belowMinimum    ? ", the fewest the cache can work with (a node and its four children)"
                                       : "");
     return {s.nodes, line};
+}
+
+bool compressNormalMaps(const TengineOptions& o, bool software)
+{
+    return o.normalMapCompression == TengineOptions::Compression::On ||
+           (o.normalMapCompression == TengineOptions::Compression::Auto && !software);
 }
 
 }  // namespace terrain

@@ -22,8 +22,13 @@ inline constexpr std::size_t kLayersWithoutContext = 2048;
 
 /// quad_cache_size when it is set (> 0); else as many nodes as memory_budget pays for (0: the machine's
 /// defaultMemoryBudget), each costing its GPU slot in the pools `o` asks for (none in clipmap mode; DXT1 colour
-/// only where `s3tc`) plus `nodeBytes` CPU bytes, at most `maxNodes` (the GPU's texture array layers).
+/// only where `s3tc`; RGTC2 normal maps where `compressNormals`) plus `nodeBytes` CPU bytes, at most
+/// `maxNodes` (the GPU's texture array layers).
 CacheChoice chooseCacheSize(const TengineOptions& o, const MapHeader& header, const MaterialSet* materials, bool s3tc,
-                            std::size_t nodeBytes, std::size_t maxNodes);
+                            bool compressNormals, std::size_t nodeBytes, std::size_t maxNodes);
+
+/// Whether normal maps are RGTC2 (normal_map_compression): On, or Auto on a GL that does not rasterize in
+/// `software`.
+bool compressNormalMaps(const TengineOptions& o, bool software);
 
 }  // namespace terrain

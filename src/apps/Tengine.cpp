@@ -361,9 +361,9 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
             " bytes of ring data (GPU and CPU)");
     }
     scene->source = std::make_unique<TerrainNodeSource>(
-        *scene->map,
-        DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing, scene->tessellation ? kTessellationBlockQuads : 0,
-                     o.dynamicTextureSize, true, o.normalMapCompression && !o.clipmap});
+        *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing,
+                                  scene->tessellation ? kTessellationBlockQuads : 0, o.dynamicTextureSize, true,
+                                  compressNormalMaps(o, TerrainRenderer::softwareRasterizer()) && !o.clipmap});
     // The node cache: what memory_budget pays for at this map's GPU slot and CPU bytes a node (the root's: a
     // static node, which holds its height codes too, costs at least what a dynamic one does).
     auto root = scene->source->loadRoot();
@@ -371,19 +371,21 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
         return fail(root.error().message);
     }
     const bool s3tc = epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
-    const CacheChoice cache = chooseCacheSize(o, header, materials, s3tc, residentBytes(**root),
+    const bool rgtc2 = compressNormalMaps(o, TerrainRenderer::softwareRasterizer());
+    const CacheChoice cache = chooseCacheSize(o, header, materials, s3tc, rgtc2, residentBytes(**root),
                                               o.clipmap ? SIZE_MAX : TerrainRenderer::maxSlots());
     log(cache.description);
     scene->cacheNodes = cache.nodes;
     scene->nodePixels = scene->tessellation ? o.lodError * (1.0 - o.tessellationShare) : o.lodError;
     scene->blockPixels = scene->tessellation ? o.lodError * o.tessellationShare : 0.0;
-    auto renderer = o.clipmap ? Expected<std::unique_ptr<TerrainRenderer>>(std::unique_ptr<TerrainRenderer>())
-                              : TerrainRenderer::create(
-                                    shaders, header, o.vertexCacheSize,
-                                    PoolOptions{cache.nodes, o.nodeTextureCompression, scene->tessellation,
-                                                o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0,
-                                                o.normalMapCompression, countPixels},
-                                    materials);
+    auto renderer =
+        o.clipmap
+            ? Expected<std::unique_ptr<TerrainRenderer>>(std::unique_ptr<TerrainRenderer>())
+            : TerrainRenderer::create(
+                  shaders, header, o.vertexCacheSize,
+                  PoolOptions{cache.nodes, o.nodeTextureCompression, scene->tessellation,
+                              o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0, rgtc2, countPixels},
+                  materials);
     if (!renderer.ok()) {
         return fail(renderer.error().message);
     }

@@ -66,14 +66,17 @@ struct TengineOptions {
     double cameraPitch = -20.0;                ///< camera_pitch: degrees in [-90, 90], positive up
 
     // ---- Display ----
-    int windowWidth = 1280;                   ///< window_width: pixels, [16, 16384]
-    int windowHeight = 720;                   ///< window_height: pixels, [16, 16384]
-    bool drawUserInterface = true;            ///< draw_user_interface
-    bool drawSky = true;                      ///< draw_sky
-    bool wireframe = false;                   ///< wireframe
-    bool geomorph = true;                     ///< geomorph: off draws every node at its own detail (pops)
-    bool nodeTextureCompression = false;      ///< node_texture_compression: DXT1 colour textures on the GPU
-    bool normalMapCompression = true;         ///< normal_map_compression: RGTC2 normal maps on the GPU
+    int windowWidth = 1280;               ///< window_width: pixels, [16, 16384]
+    int windowHeight = 720;               ///< window_height: pixels, [16, 16384]
+    bool drawUserInterface = true;        ///< draw_user_interface
+    bool drawSky = true;                  ///< draw_sky
+    bool wireframe = false;               ///< wireframe
+    bool geomorph = true;                 ///< geomorph: off draws every node at its own detail (pops)
+    bool nodeTextureCompression = false;  ///< node_texture_compression: DXT1 colour textures on the GPU
+    /// normal_map_compression: RGTC2 normal maps on the GPU (On), RG8 (Off), or RGTC2 unless the GL rasterizes
+    /// in software (Auto: llvmpipe draws RG8 faster; a GPU decodes RGTC2 for free).
+    enum class Compression { Auto, On, Off };
+    Compression normalMapCompression = Compression::Auto;
     bool tessellation = true;                 ///< render_mode: true tessellation (issue 13), false chunks
     bool clipmap = false;                     ///< lod_mode: false quadtree, true clipmap (seed 002, issue 17)
     int clipmapSamples = 255;                 ///< clipmap_samples: n = 2^k - 1 in [15, 1023]

@@ -387,6 +387,14 @@ std::size_t TerrainRenderer::maxSlots()
     return static_cast<std::size_t>(std::max(layers, 0));
 }
 
+bool TerrainRenderer::softwareRasterizer()
+{
+    const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    const std::string name = renderer ? renderer : "";
+    return name.find("llvmpipe") != std::string::npos || name.find("softpipe") != std::string::npos ||
+           name.find("swrast") != std::string::npos;
+}
+
 bool TerrainRenderer::tessellationSupported()
 {
     GLint major = 0;

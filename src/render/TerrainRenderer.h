@@ -108,6 +108,9 @@ public:
     static bool pixelCountsSupported();
     /// The most slots the pools can have on this context: a layer per slot (GL_MAX_ARRAY_TEXTURE_LAYERS).
     static std::size_t maxSlots();
+    /// Whether this context rasterizes in software (Mesa's llvmpipe, softpipe or swrast: GL_RENDERER), where
+    /// compressed textures cost decoding per fetch.
+    static bool softwareRasterizer();
 
     /// Frames between drawing a frame and reading its pixel counts back: the counts of frame F are taken
     /// before drawing frame F + 3, when the GL has normally finished F long ago, so reading them does not

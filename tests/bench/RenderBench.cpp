@@ -86,12 +86,17 @@ void BM_ChunkRenderer(benchmark::State& state)
     // render_mode = tessellation (Arg 2 = 1): the selection at 1 px, the blocks at the other 1 px of tau 2.
     const bool tessellation = state.range(1) != 0;
     const double nodePixels = tessellation ? 1.0 : 2.0, blockPixels = tessellation ? 1.0 : 0.0;
-    TerrainNodeSource source(*s.map, {nullptr, 0.0, tessellation ? kTessellationBlockQuads : 0});
+    // Arg 3: normal maps of 129 texels a node (dynamic_texture_size 128, made by subdivision alone here) as
+    // RG8 (1) or RGTC2 blocks (2); 0: none, lit by vertex normals.
+    const int normalMaps = static_cast<int>(state.range(2));
+    TerrainNodeSource source(*s.map, {nullptr, 0.0, tessellation ? kTessellationBlockQuads : 0,
+                                      normalMaps > 0 ? 128 : 0, true, normalMaps == 2});
     StreamerOptions options;
     options.cacheSize = s.map->directory().size();
     options.workers = 2;
     auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, s.map->header(), 16,
-                                            {options.cacheSize, state.range(0) != 0, tessellation})
+                                            {options.cacheSize, state.range(0) != 0, tessellation,
+                                             normalMaps > 0 ? 129 : 0, normalMaps == 2})
                         .value();
     auto streamer = TerrainStreamer::create(source, extentOf(s.map->header()), options).value();
     streamer->onEvict([&renderer](const NodeData& node) { renderer->release(node.id); });
@@ -126,12 +131,15 @@ void BM_ChunkRenderer(benchmark::State& state)
     state.counters["draw_calls"] = static_cast<double>(drawCalls);
     state.counters["gpu_bytes_per_node"] = static_cast<double>(renderer->slotBytes().total());
 }
-// Args: node_texture_compression (DXT1 colour layers) on or off, render_mode chunks (0) or tessellation (1); the
-// brute-force ratio is against the last (chunks, uncompressed).
+// Args: node_texture_compression (DXT1 colour layers) on or off, render_mode chunks (0) or tessellation (1),
+// normal maps (none 0, RG8 1, RGTC2 2); the brute-force ratio is against the last (chunks, uncompressed, no
+// normal maps).
 BENCHMARK(BM_ChunkRenderer)
-    ->Args({1, 0})
-    ->Args({0, 1})
-    ->Args({0, 0})
+    ->Args({0, 0, 1})
+    ->Args({0, 0, 2})
+    ->Args({1, 0, 0})
+    ->Args({0, 1, 0})
+    ->Args({0, 0, 0})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();
