@@ -13,6 +13,7 @@
 #include "lod/CameraPath.h"
 #include "lod/HeightQuery.h"
 #include "lod/LodSelector.h"
+#include "lod/NodeMemory.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "quadtree/ChunkGeometry.h"
@@ -80,8 +81,15 @@ int main(int argc, char** argv)
         return fail(synthesizer.error().message);
     }
     TerrainNodeSource source(**map, DetailPolicy{synthesizer->get(), options.lodMinimumSpacing});
+    // The cache sized by memory as the viewer sizes it (memory_budget's default: lod/NodeMemory.h), for nodes
+    // that take no GPU slot here: what the budget pays for at the root's CPU bytes (no node holds more).
+    auto root = source.loadRoot();
+    if (!root.ok()) {
+        return fail(root.error().message);
+    }
     StreamerOptions streamerOptions;
-    streamerOptions.cacheSize = static_cast<std::size_t>(options.quadCacheSize);
+    streamerOptions.cacheSize =
+        sizeCache(defaultMemoryBudget(physicalMemoryBytes()), residentBytes(**root), std::size_t{1} << 20).nodes;
     auto streamer = TerrainStreamer::create(source, extentOf(header), streamerOptions);
     if (!streamer.ok()) {
         return fail(streamer.error().message);
