@@ -214,7 +214,6 @@ struct Scene {
     std::unique_ptr<NodeVisibility> visibility;
     PixelCounts pixelCounts;                  ///< reused for each frame's counts
     std::optional<DepthOcclusion> occlusion;  ///< the depth of the latest frame measured
-    std::size_t cacheNodes = 0;               ///< the node cache's capacity (chooseCacheSize)
     double nodePixels = 2.0;                  ///< the selection's tau: all of lod_error, or what the blocks leave of it
     double blockPixels = 0.0;                 ///< tessellation: the blocks' part of lod_error
     /// video_measure_error_every: the reference the frames are measured against (tengine-tool error's), last
@@ -247,6 +246,18 @@ int clipmapFinestLevel(const TengineOptions& o, const MapHeader& header, bool sy
 /// Opens the map, the materials, the camera path, the window, the renderer and the streamer; errors are
 /// logged and end the program with status 1.
 /// `materialsDirectory`: the built-in materials (programDataDirectory).
+/// The node cache for `scene`'s map and source: what memory_budget pays for at a GPU slot of the pools the
+/// options ask for (RGTC2 normal maps where `rgtc2`) plus the CPU bytes of the root (a static node, which holds
+/// its height codes too, costs at least what a dynamic one does).
+Expected<CacheChoice> nodeCacheFor(Scene& scene, const TengineOptions& o, const MaterialSet* materials, bool rgtc2)
+{
+    auto root = scene.source->loadRoot();
+    TERRAIN_TRY(root);
+    const bool s3tc = epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
+    return chooseCacheSize(o, scene.header(), materials, s3tc, rgtc2, residentBytes(**root),
+                           o.clipmap ? SIZE_MAX : TerrainRenderer::maxSlots());
+}
+
 std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::filesystem::path& materialsDirectory,
                                  Log& log)
 {
@@ -360,22 +371,16 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
             std::to_string(scene->clipmapRenderer->textureBytes() + scene->clipmap->bytes()) +
             " bytes of ring data (GPU and CPU)");
     }
-    scene->source = std::make_unique<TerrainNodeSource>(
-        *scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing,
-                                  scene->tessellation ? kTessellationBlockQuads : 0, o.dynamicTextureSize, true,
-                                  compressNormalMaps(o, TerrainRenderer::softwareRasterizer()) && !o.clipmap});
-    // The node cache: what memory_budget pays for at this map's GPU slot and CPU bytes a node (the root's: a
-    // static node, which holds its height codes too, costs at least what a dynamic one does).
-    auto root = scene->source->loadRoot();
-    if (!root.ok()) {
-        return fail(root.error().message);
+    const bool rgtc2 = compressNormalMaps(o, TerrainRenderer::softwareRasterizer()) && !o.clipmap;
+    scene->source =
+        std::make_unique<TerrainNodeSource>(*scene->map, DetailPolicy{scene->synthesizer.get(), o.lodMinimumSpacing,
+                                                                      scene->tessellation ? kTessellationBlockQuads : 0,
+                                                                      o.dynamicTextureSize, true, rgtc2});
+    auto cache = nodeCacheFor(*scene, o, materials, rgtc2);
+    if (!cache.ok()) {
+        return fail(cache.error().message);
     }
-    const bool s3tc = epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
-    const bool rgtc2 = compressNormalMaps(o, TerrainRenderer::softwareRasterizer());
-    const CacheChoice cache = chooseCacheSize(o, header, materials, s3tc, rgtc2, residentBytes(**root),
-                                              o.clipmap ? SIZE_MAX : TerrainRenderer::maxSlots());
-    log(cache.description);
-    scene->cacheNodes = cache.nodes;
+    log(cache->description);
     scene->nodePixels = scene->tessellation ? o.lodError * (1.0 - o.tessellationShare) : o.lodError;
     scene->blockPixels = scene->tessellation ? o.lodError * o.tessellationShare : 0.0;
     auto renderer =
@@ -383,7 +388,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
             ? Expected<std::unique_ptr<TerrainRenderer>>(std::unique_ptr<TerrainRenderer>())
             : TerrainRenderer::create(
                   shaders, header, o.vertexCacheSize,
-                  PoolOptions{cache.nodes, o.nodeTextureCompression, scene->tessellation,
+                  PoolOptions{cache->nodes, o.nodeTextureCompression, scene->tessellation,
                               o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0, rgtc2, countPixels},
                   materials);
     if (!renderer.ok()) {
@@ -404,7 +409,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
     scene->overlay = std::move(overlay).value();
 
     StreamerOptions streamerOptions;
-    streamerOptions.cacheSize = cache.nodes;
+    streamerOptions.cacheSize = cache->nodes;
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
     streamerOptions.workers = o.workerThreads;
     streamerOptions.velocityLimit = o.detailVelocityLimit;
