@@ -21,7 +21,7 @@ in vec2 vLocal;
 in vec4 vMaterials;
 flat in float vMorph;
 flat in vec2 vParentOffset;  // the node's quadrant in the parent's square: (0 or 0.5, 0 or 0.5)
-flat in ivec2 vSlots;        // own, parent's layer of uColour
+flat in ivec2 vSlots;        // layers: the node's in uColour, its parent's in uParentColour
 #ifdef PIXEL_COUNTS
 layout(early_fragment_tests) in;
 flat in int vInstance;  // the node's index in the frame's draw order
@@ -29,10 +29,12 @@ layout(std430, binding = 0) buffer PixelCounts { uint uPixelCounts[]; };
 #endif
 
 uniform sampler2DArray uColour;   // per slot: the node's texture, corner texels centred on the corners (3.2.7)
+uniform sampler2DArray uParentColour;  // the same textures in the parent's pool array
 uniform float uTexels;            // texels per side of a node's texture
 uniform float uLayerTexels;       // texels per side of a layer (>= uTexels: DXT1 pads to a multiple of 4)
 #ifdef NORMAL_MAP
 uniform sampler2DArray uNormalMaps;  // per slot: unit normals (x, y) of the surface below, corner texels on corners
+uniform sampler2DArray uParentNormalMaps;  // the same maps in the parent's pool array
 uniform float uNormalTexels;         // texels per side of a normal map
 uniform float uNormalLayerTexels;    // texels per side of a layer (>= uNormalTexels: RGTC2 pads to a multiple of 4)
 #endif
@@ -62,7 +64,7 @@ vec3 mappedNormal()
 {
     vec2 own = texture(uNormalMaps, vec3((vNodeUv * (uNormalTexels - 1.0) + 0.5) / uNormalLayerTexels,
                                          float(vSlots.x))).xy;
-    vec2 parent = texture(uNormalMaps, vec3(((vParentOffset + 0.5 * vNodeUv) * (uNormalTexels - 1.0) + 0.5) /
+    vec2 parent = texture(uParentNormalMaps, vec3(((vParentOffset + 0.5 * vNodeUv) * (uNormalTexels - 1.0) + 0.5) /
                                                 uNormalLayerTexels, float(vSlots.y))).xy;
     vec2 n = mix(parent, own, vMorph);
     return vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
@@ -90,7 +92,7 @@ void main()
         return;
     }
     vec3 own = texture(uColour, vec3(texelCentre(vNodeUv), float(vSlots.x))).rgb;
-    vec3 parent = texture(uColour, vec3(texelCentre(vParentOffset + 0.5 * vNodeUv), float(vSlots.y))).rgb;
+    vec3 parent = texture(uParentColour, vec3(texelCentre(vParentOffset + 0.5 * vNodeUv), float(vSlots.y))).rgb;
     vec3 albedo = mix(parent, own, vMorph);
 #ifdef DETAIL
     albedo *= detailFactor(vLocal, vMaterials, length(vRelative));

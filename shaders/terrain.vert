@@ -13,7 +13,8 @@ layout(location = 1) in int aSkirt;   // 1: skirt vertex hanging below the edge 
 // Per instance (drawn node), from the frame's constants buffer (TerrainRenderer.cpp, NodeConstants):
 layout(location = 2) in vec4 aNode0;  // origin x, y (the node's south-west corner minus the camera, metres),
                                       // spacing (metres), morph
-layout(location = 3) in vec4 aNode1;  // skirt depth (metres), slot, parent's slot, lowest height (metres)
+layout(location = 3) in vec4 aNode1;  // skirt depth (metres), layer (in its pool array), the parent's layer (in
+                                      // its), lowest height (metres)
 layout(location = 4) in vec4 aNode2;  // the node's quadrant in the parent's square (0 or 0.5, 0 or 0.5),
                                       // height range (metres), 0
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
@@ -42,7 +43,7 @@ out vec2 vLocal;      // metres from the node's south-west corner
 out vec4 vMaterials;
 flat out float vMorph;
 flat out vec2 vParentOffset;
-flat out ivec2 vSlots;  // own, parent's
+flat out ivec2 vSlots;  // layers: own (in its pool array), parent's (in its)
 #ifdef PIXEL_COUNTS
 uniform int uFirstInstance;  // the draw's first node in the frame's order
 flat out int vInstance;

@@ -250,7 +250,7 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
     }
     const CacheChoice cache =
         chooseCacheSize(o, header, *synthesizer ? (*synthesizer)->settings().materials.get() : nullptr, true,
-                        compressNormalMaps(o, true), residentBytes(**root), kLayersWithoutContext);
+                        compressNormalMaps(o, true), residentBytes(**root), kSlotsWithoutContext);
     streamerOptions.cacheSize = cache.nodes;
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
     streamerOptions.workers = o.workerThreads;

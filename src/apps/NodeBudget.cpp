@@ -41,7 +41,7 @@ CacheChoice chooseCacheSize(const TengineOptions& o, const MapHeader& header, co
                   "node cache: memory_budget %.0f MiB%s holds %zu nodes of %.1f KB (GPU %.1f KB, CPU %.1f KB)%s",
                   static_cast<double>(budget) / kMiB, machine ? " (1/16 of this machine's memory)" : "", s.nodes,
                   kb(perNode), kb(slot.total()), kb(nodeBytes),
-                  s.limitedByMaxNodes ? ", as many as the GPU's texture arrays have layers"
+                  s.limitedByMaxNodes ? ", as many as the node pools hold"
                   : s.belowMinimum    ? ", the fewest the cache can work with (a node and its four children)"
                                       : "");
     return {s.nodes, line};

@@ -16,14 +16,14 @@ struct CacheChoice {
     std::string description;  ///< one log line: how the capacity was chosen
 };
 
-/// OpenGL 4.5's least GL_MAX_ARRAY_TEXTURE_LAYERS (what llvmpipe and common GPUs have): the most slots where no
-/// context can be asked (tengine-tool).
-inline constexpr std::size_t kLayersWithoutContext = 2048;
+/// The most slots where no context can be asked (tengine-tool): the node pools' kMaxPoolArrays arrays of
+/// OpenGL 4.5's least GL_MAX_ARRAY_TEXTURE_LAYERS (what llvmpipe and common GPUs have).
+inline constexpr std::size_t kSlotsWithoutContext = 2048 * kMaxPoolArrays;
 
 /// quad_cache_size when it is set (> 0); else as many nodes as memory_budget pays for (0: the machine's
 /// defaultMemoryBudget), each costing its GPU slot in the pools `o` asks for (none in clipmap mode; DXT1 colour
 /// only where `s3tc`; RGTC2 normal maps where `compressNormals`) plus `nodeBytes` CPU bytes, at most
-/// `maxNodes` (the GPU's texture array layers).
+/// `maxNodes` (what the node pools hold: TerrainRenderer::maxSlots).
 CacheChoice chooseCacheSize(const TengineOptions& o, const MapHeader& header, const MaterialSet* materials, bool s3tc,
                             bool compressNormals, std::size_t nodeBytes, std::size_t maxNodes);
 

@@ -279,7 +279,8 @@ std::vector<OptionSpec> makeOptionTable()
     t.push_back(intOption("memory_budget", kGroupMap,
                           "Memory for resident nodes, GPU and CPU together: the node cache holds as many nodes as "
                           "it pays for (each node's GPU slot plus its CPU data, measured on the map's root; the "
-                          "log says how many), at most as many as the GPU's texture arrays have layers. More keeps "
+                          "log says how many), at most as many as the node pools hold (16 texture arrays of the GPU's "
+                          "GL_MAX_ARRAY_TEXTURE_LAYERS). More keeps "
                           "more detail around. When the selection wants more than the cache holds, the nodes with "
                           "the largest screen-space error are refined first and frames.csv's cache_short counts "
                           "the groups left out. 0: 1/16 of the machine's memory, between 128 MiB and 4 GiB.",

@@ -21,6 +21,11 @@ struct SlotBytes {
     std::size_t total() const { return heights + normals + colour + weights + normalMap + constants; }
 };
 
+/// The most texture arrays each of the renderer's pools spreads its slots over: with 2048 layers an array
+/// (GL_MAX_ARRAY_TEXTURE_LAYERS on llvmpipe and common GPUs) 32768 nodes. A frame is drawn in one call per
+/// pair of arrays in use (a node's, its parent's).
+inline constexpr std::size_t kMaxPoolArrays = 16;
+
 /// The formats of the node pools that decide a slot's size.
 struct PoolLayout {
     int normalMapTexels = 0;       ///< per side; 0: no normal maps (then the parent's normals)
@@ -46,7 +51,7 @@ std::uint64_t physicalMemoryBytes();
 struct CacheSizing {
     std::size_t nodes = 0;           ///< the cache's capacity: budget / bytesPerNode, within [5, maxNodes]
     std::size_t bytesPerNode = 0;    ///< what one resident node costs (GPU slot plus CPU data)
-    bool limitedByMaxNodes = false;  ///< the budget would hold more than maxNodes (the GPU's layer limit)
+    bool limitedByMaxNodes = false;  ///< the budget would hold more than maxNodes (what the GPU's pools hold)
     bool belowMinimum = false;       ///< the budget holds fewer than 5 nodes: the cache has 5 anyway
 };
 /// Precondition: bytesPerNode > 0, maxNodes >= 5.

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 
 namespace terrain {
 
@@ -74,9 +75,19 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     std::unique_ptr<TerrainRenderer> r(new TerrainRenderer(header));
     GLint maxLayers = 0;
     glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &maxLayers);
-    if (slots > static_cast<std::size_t>(maxLayers)) {
-        return makeError("quad_cache_size ", slots, " is more nodes than this GPU's texture arrays hold (",
-                         "GL_MAX_ARRAY_TEXTURE_LAYERS ", maxLayers, "): the node pools keep one layer per node");
+    if (slots > maxSlots()) {
+        return makeError("a node cache of ", slots, " nodes is more than the node pools hold on this GPU (",
+                         kMaxPoolArrays, " texture arrays of GL_MAX_ARRAY_TEXTURE_LAYERS ", maxLayers,
+                         " layers, a layer per node): a smaller memory_budget or quad_cache_size fits");
+    }
+    TERRAIN_EXPECTS(pools.layersPerArray <= static_cast<std::size_t>(maxLayers),
+                    "an array of at most GL_MAX_ARRAY_TEXTURE_LAYERS layers");
+    {
+        // As few arrays as the layers allow, the slots spread evenly over them.
+        const std::size_t most = pools.layersPerArray > 0 ? pools.layersPerArray : static_cast<std::size_t>(maxLayers);
+        const std::size_t arrays = (slots + most - 1) / most;
+        r->mLayersPerArray = (slots + arrays - 1) / arrays;
+        r->mArrays.resize(arrays);
     }
     if (materials) {
         auto layers = DetailLayers::create(*materials);
@@ -146,6 +157,8 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         glUniform1i(program.uniform("uParentNormals"), 4);
         glUniform1i(program.uniform("uLevels"), 5);
         glUniform1i(program.uniform("uNormalMaps"), 6);
+        glUniform1i(program.uniform("uParentColour"), 7);
+        glUniform1i(program.uniform("uParentNormalMaps"), 8);
         glUniform1i(program.uniform("uBlocks"), r->mBlocks);
         glUniform1i(program.uniform("uBlockQuads"), kTessellationBlockQuads);
     }
@@ -222,66 +235,64 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     }
 
     // The pools, allocated once: a layer per slot.
-    const auto layersOf = static_cast<GLsizei>(slots);
     const int w = n + 2;  // the surface with a 1-sample border: own normals at the edges need it
     const int m = (n + 1) / 2;
     const int t = static_cast<int>(header.textureSize);
-    r->mHeights = createLayers(GL_R16, w, layersOf, GL_RED, GL_UNSIGNED_SHORT, GL_NEAREST);
-    r->mSlotHeights.assign(slots, {0.0f, 0.0f});
-    if (r->mNormalTexels == 0) {
-        // The vertex normals' parent part; with normal maps the fragment program lights by those instead.
-        r->mParentNormals = createLayers(GL_RG8_SNORM, m, layersOf, GL_RG, GL_BYTE, GL_NEAREST);
-    }
     r->mDxt1 = pools.compressColour && epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
     r->mColourLayerSize = r->mDxt1 ? blockLayerSize(t) : t;
     r->mSlotBytes = poolSlotBytes(header, {pools.normalMapTexels, pools.compressNormals, r->mDxt1, r->mDetail.count()});
-    if (r->mDxt1) {
-        r->mColour = gl::Texture::create();
-        glBindTexture(GL_TEXTURE_2D_ARRAY, r->mColour.name());
-        glCompressedTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_COMPRESSED_RGB_S3TC_DXT1_EXT, r->mColourLayerSize,
-                               r->mColourLayerSize, layersOf, 0, static_cast<GLsizei>(r->mSlotBytes.colour * slots),
-                               nullptr);
+    r->mRgtc2 = r->mNormalTexels > 0 && pools.compressNormals;
+    r->mNormalLayerSize = r->mRgtc2 ? blockLayerSize(r->mNormalTexels) : r->mNormalTexels;
+    auto clampToEdge = [] {
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    };
+    auto createBlockLayers = [](GLenum format, int size, GLsizei layers, std::size_t layerBytes) {
+        gl::Texture texture = gl::Texture::create();
+        glBindTexture(GL_TEXTURE_2D_ARRAY, texture.name());
+        glCompressedTexImage3D(GL_TEXTURE_2D_ARRAY, 0, format, size, size, layers, 0,
+                               static_cast<GLsizei>(layerBytes * static_cast<std::size_t>(layers)), nullptr);
         glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
         glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
         glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    } else {
-        r->mColour = createLayers(GL_RGB8, t, layersOf, GL_RGB, GL_UNSIGNED_BYTE, GL_LINEAR);
-    }
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    if (!r->mDetail.empty()) {
-        r->mWeights = createLayers(GL_RGBA4, n, layersOf, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4, GL_NEAREST);
-    }
-    if (r->mNormalTexels > 0) {
-        const int texels = r->mNormalTexels;
-        r->mRgtc2 = pools.compressNormals;
-        r->mNormalLayerSize = r->mRgtc2 ? blockLayerSize(texels) : texels;
-        if (r->mRgtc2) {
-            // RGTC is core since OpenGL 3.0: every context this renderer runs on decodes it.
-            r->mNormalMaps = gl::Texture::create();
-            glBindTexture(GL_TEXTURE_2D_ARRAY, r->mNormalMaps.name());
-            glCompressedTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_COMPRESSED_SIGNED_RG_RGTC2, r->mNormalLayerSize,
-                                   r->mNormalLayerSize, layersOf, 0,
-                                   static_cast<GLsizei>(r->mSlotBytes.normalMap * slots), nullptr);
-            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
-            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-        } else {
-            r->mNormalMaps = createLayers(GL_RG8_SNORM, texels, layersOf, GL_RG, GL_BYTE, GL_LINEAR);
+        return texture;
+    };
+    for (std::size_t a = 0; a < r->mArrays.size(); ++a) {
+        PoolArrays& pool = r->mArrays[a];
+        const auto layers = static_cast<GLsizei>(std::min(r->mLayersPerArray, slots - a * r->mLayersPerArray));
+        pool.heights = createLayers(GL_R16, w, layers, GL_RED, GL_UNSIGNED_SHORT, GL_NEAREST);
+        if (r->mNormalTexels == 0) {
+            // The vertex normals' parent part; with normal maps the fragment program lights by those instead.
+            pool.parentNormals = createLayers(GL_RG8_SNORM, m, layers, GL_RG, GL_BYTE, GL_NEAREST);
         }
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        pool.colour = r->mDxt1 ? createBlockLayers(GL_COMPRESSED_RGB_S3TC_DXT1_EXT, r->mColourLayerSize, layers,
+                                                   r->mSlotBytes.colour)
+                               : createLayers(GL_RGB8, t, layers, GL_RGB, GL_UNSIGNED_BYTE, GL_LINEAR);
+        clampToEdge();
+        if (!r->mDetail.empty()) {
+            pool.weights = createLayers(GL_RGBA4, n, layers, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4, GL_NEAREST);
+        }
+        if (r->mNormalTexels > 0) {
+            // RGTC is core since OpenGL 3.0: every context this renderer runs on decodes it.
+            pool.normalMaps = r->mRgtc2
+                                  ? createBlockLayers(GL_COMPRESSED_SIGNED_RG_RGTC2, r->mNormalLayerSize, layers,
+                                                      r->mSlotBytes.normalMap)
+                                  : createLayers(GL_RG8_SNORM, r->mNormalTexels, layers, GL_RG, GL_BYTE, GL_LINEAR);
+            clampToEdge();
+        }
     }
+    r->mSlotHeights.assign(slots, {0.0f, 0.0f});
     TERRAIN_ASSERT(r->mSlotBytes.constants == static_cast<std::size_t>(r->mNodeTexels) * 4 * sizeof(float));
     r->mSlotData.resize(slots);
-    r->mFreeSlots.reserve(slots);
+    r->mFreeSlots.resize(r->mArrays.size());
     for (std::size_t k = slots; k-- > 0;) {
-        r->mFreeSlots.push_back(static_cast<int>(k));  // slot 0 on top
+        r->mFreeSlots[static_cast<std::size_t>(r->arrayOf(static_cast<int>(k)))].push_back(
+            static_cast<int>(k));  // the array's first slot on top
     }
     if (GLenum error = glGetError(); error != GL_NO_ERROR) {
         return makeError("allocating the node pools for ", slots, " nodes (", r->mSlotBytes.total(),
                          " bytes each) failed: GL error ", error,
-                         " (out of GPU memory? a smaller quad_cache_size needs less)");
+                         " (out of GPU memory? a smaller memory_budget or quad_cache_size needs less)");
     }
     return r;
 }
@@ -293,26 +304,38 @@ void TerrainRenderer::release(const NodeId& id)
         return;
     }
     mSlotData[static_cast<std::size_t>(it->second)].reset();
-    mFreeSlots.push_back(it->second);
+    mFreeSlots[static_cast<std::size_t>(arrayOf(it->second))].push_back(it->second);
     mSlotOf.erase(it);
 }
 
-int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats)
+int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats, int preferredArray)
 {
     auto [it, inserted] = mSlotOf.try_emplace(node->id.key(), -1);
     if (!inserted && mSlotData[static_cast<std::size_t>(it->second)] == node) {
         return it->second;
     }
     if (inserted) {
-        TERRAIN_EXPECTS(!mFreeSlots.empty(),
+        // The preferred array's free slots, else those of the array with the most.
+        std::vector<int>* free = &mFreeSlots[0];
+        for (std::vector<int>& candidate : mFreeSlots) {
+            if (candidate.size() > free->size()) {
+                free = &candidate;
+            }
+        }
+        if (preferredArray >= 0 && !mFreeSlots[static_cast<std::size_t>(preferredArray)].empty()) {
+            free = &mFreeSlots[static_cast<std::size_t>(preferredArray)];
+        }
+        TERRAIN_EXPECTS(!free->empty(),
                         "more nodes drawn than the pools have slots: size them by the cache's capacity and release "
                         "what the cache evicts (TerrainStreamer::onEvict)");
-        it->second = mFreeSlots.back();
-        mFreeSlots.pop_back();
+        it->second = free->back();
+        free->pop_back();
     }
     // A new node, or the cache holds a different copy of this one now: copy it into its slot.
     const int slot = it->second;
     mSlotData[static_cast<std::size_t>(slot)] = node;
+    const PoolArrays& pool = mArrays[static_cast<std::size_t>(arrayOf(slot))];
+    const int layer = layerOf(slot);
     const int n = static_cast<int>(mHeader.chunkSize);
     const int w = windowSize(n);
     const int m = (n + 1) / 2;
@@ -325,34 +348,34 @@ int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats)
     (void)w;
     const QuantizedHeights heights = quantizeHeightsR16(surface, n);
     mSlotHeights[static_cast<std::size_t>(slot)] = {heights.lo, heights.range};
-    glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
-    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, n + 2, n + 2, 1, GL_RED, GL_UNSIGNED_SHORT,
+    glBindTexture(GL_TEXTURE_2D_ARRAY, pool.heights.name());
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, n + 2, n + 2, 1, GL_RED, GL_UNSIGNED_SHORT,
                     heights.codes.data());
-    if (mParentNormals) {
+    if (pool.parentNormals) {
         const std::vector<std::int8_t> normals = parentNormalsRg8(surface, n, node->spacing);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mParentNormals.name());
-        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, m, m, 1, GL_RG, GL_BYTE, normals.data());
+        glBindTexture(GL_TEXTURE_2D_ARRAY, pool.parentNormals.name());
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, m, m, 1, GL_RG, GL_BYTE, normals.data());
     }
-    glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
+    glBindTexture(GL_TEXTURE_2D_ARRAY, pool.colour.name());
     if (mDxt1) {
         const std::vector<std::uint8_t> blocks = compressDxt1(node->texture, t);
-        glCompressedTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, mColourLayerSize, mColourLayerSize, 1,
+        glCompressedTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, mColourLayerSize, mColourLayerSize, 1,
                                   GL_COMPRESSED_RGB_S3TC_DXT1_EXT, static_cast<GLsizei>(blocks.size()), blocks.data());
     } else {
-        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, t, t, 1, GL_RGB, GL_UNSIGNED_BYTE, node->texture.data());
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, t, t, 1, GL_RGB, GL_UNSIGNED_BYTE, node->texture.data());
     }
-    if (mWeights) {
+    if (pool.weights) {
         std::vector<std::uint16_t> weights(static_cast<std::size_t>(n) * n, 0);
         if (!node->materialWeights.empty()) {
             weights = packWeightsRgba4(node->materialWeights);
         }
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mWeights.name());
-        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, n, n, 1, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4,
+        glBindTexture(GL_TEXTURE_2D_ARRAY, pool.weights.name());
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, n, n, 1, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4,
                         weights.data());
     }
-    if (mNormalMaps) {
+    if (pool.normalMaps) {
         const auto texels = static_cast<std::size_t>(mNormalTexels);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mNormalMaps.name());
+        glBindTexture(GL_TEXTURE_2D_ARRAY, pool.normalMaps.name());
         if (mRgtc2) {
             // The blocks as the source made them on its thread, else encoded here.
             std::vector<std::uint8_t> encoded;
@@ -365,14 +388,14 @@ int TerrainRenderer::slotFor(const NodePtr& node, RenderStats& stats)
             const std::vector<std::uint8_t>& blocks = encoded.empty() ? node->normalMapBlocks : encoded;
             TERRAIN_EXPECTS(blocks.size() == mSlotBytes.normalMap,
                             "a node's RGTC2 normal map must be of the pools' size (DetailPolicy::normalMapSize)");
-            glCompressedTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, mNormalLayerSize, mNormalLayerSize, 1,
+            glCompressedTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, mNormalLayerSize, mNormalLayerSize, 1,
                                       GL_COMPRESSED_SIGNED_RG_RGTC2, static_cast<GLsizei>(blocks.size()),
                                       blocks.data());
         } else {
             TERRAIN_EXPECTS(node->normalMap.size() == texels * texels * 2,
                             "uncompressed normal map pools need RG8 normal maps (DetailPolicy::compressNormalMaps off) "
                             "of the pools' size (DetailPolicy::normalMapSize)");
-            glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot, mNormalTexels, mNormalTexels, 1, GL_RG, GL_BYTE,
+            glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, mNormalTexels, mNormalTexels, 1, GL_RG, GL_BYTE,
                             node->normalMap.data());
         }
     }
@@ -384,7 +407,7 @@ std::size_t TerrainRenderer::maxSlots()
 {
     GLint layers = 0;
     glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &layers);
-    return static_cast<std::size_t>(std::max(layers, 0));
+    return static_cast<std::size_t>(std::max(layers, 0)) * kMaxPoolArrays;
 }
 
 bool TerrainRenderer::softwareRasterizer()
@@ -490,15 +513,12 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
 
     // The frame's nodes: slots (uploading what is new) and constants. In the selection's (front to back)
     // order, the nodes with detail layers first, then those beyond every layer's fade (shaders/terrain.frag
-    // fades each layer out by 40 repeats away; the coarsest fades last), which the second draw takes.
+    // fades each layer out by 40 repeats away; the coarsest fades last), which the second program draws; within
+    // each program, grouped by the pool arrays of the node and its parent (one group while the pools have one).
     const int texels = mNodeTexels;
     const bool split = mPrograms.size() > 1;
     const double fade = mDetail.fadeDistance();
-    mConstants.assign(selection.nodes.size() * static_cast<std::size_t>(texels) * 4, 0.0f);
-    std::size_t count = 0;
-    std::size_t nearCount = 0;
-    std::uint64_t tessellatedTriangles = 0;
-    mCodes.clear();
+    mFrameNodes.clear();
     for (int pass = 0; pass < (split ? 2 : 1); ++pass) {
         for (const SelectedNode& selected : selection.nodes) {
             const bool near = !split || selected.distance < fade;
@@ -507,60 +527,74 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
             }
             NodePtr node = resident(selected.id);
             TERRAIN_EXPECTS(node != nullptr, "every selected node must be resident");
-            (node->isStatic ? stats.staticNodes : stats.dynamicNodes) += 1;
-            const int slot = slotFor(node, stats);
             // The parent's texture for textural morphing (eq. 3.6); the root morphs to itself.
             NodePtr parent = selected.id.isRoot() ? node : resident(selected.id.parent());
             TERRAIN_EXPECTS(parent != nullptr, "a selected node's parent must be resident");
-            const int parentSlot = parent == node ? slot : slotFor(parent, stats);
-            float* c = mConstants.data() + count * static_cast<std::size_t>(texels) * 4;
-            c[0] = static_cast<float>(selected.cameraRelativeOrigin.x);
-            c[1] = static_cast<float>(selected.cameraRelativeOrigin.y);
-            c[2] = static_cast<float>(selected.size / (mHeader.chunkSize - 1));
-            c[3] = selected.id.isRoot() || !style.geomorph ? 1.0f : selected.morph;
-            // Skirts hang the parent's delta_c deep: a leaf's own delta_c is zero, yet it can meet a coarser
-            // neighbour whose edge lies up to that far away (3.2.6).
-            c[4] = std::max(parent->deltaC, node->deltaC) + static_cast<float>(mHeader.heightStep);
-            c[5] = static_cast<float>(slot);
-            c[6] = static_cast<float>(parentSlot);
-            c[7] = mSlotHeights[static_cast<std::size_t>(slot)][0];
-            c[10] = mSlotHeights[static_cast<std::size_t>(slot)][1];
-            c[8] = (selected.id.x & 1) ? 0.5f : 0.0f;
-            c[9] = (selected.id.y & 1) ? 0.5f : 0.0f;
-            if (split && near) {
-                // The node's corner in repeats of each layer (and of its turned copy), reduced to [0, 1).
-                const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(camera.position);
-                for (int k = 0; k < mDetail.count(); ++k) {
-                    const glm::vec4 origin = mDetail.origin(k, corner);
-                    for (int i = 0; i < 4; ++i) {
-                        c[12 + 4 * k + i] = origin[i];
-                    }
+            const int parentSlot = parent == node ? -1 : slotFor(parent, stats);
+            const int slot = slotFor(node, stats, parentSlot < 0 ? -1 : arrayOf(parentSlot));
+            mFrameNodes.push_back(
+                {&selected, node.get(), parent.get(), slot, parentSlot < 0 ? slot : parentSlot, pass});
+        }
+    }
+    auto drawGroup = [this](const FrameNode& f) {
+        return std::array<int, 3>{f.program, arrayOf(f.slot), arrayOf(f.parentSlot)};
+    };
+    if (mArrays.size() > 1) {
+        std::stable_sort(mFrameNodes.begin(), mFrameNodes.end(),
+                         [&](const FrameNode& a, const FrameNode& b) { return drawGroup(a) < drawGroup(b); });
+    }
+    mConstants.assign(mFrameNodes.size() * static_cast<std::size_t>(texels) * 4, 0.0f);
+    std::size_t count = 0;
+    std::uint64_t tessellatedTriangles = 0;
+    mCodes.clear();
+    for (const FrameNode& f : mFrameNodes) {
+        const SelectedNode& selected = *f.selected;
+        const NodeData& node = *f.node;
+        (node.isStatic ? stats.staticNodes : stats.dynamicNodes) += 1;
+        float* c = mConstants.data() + count * static_cast<std::size_t>(texels) * 4;
+        c[0] = static_cast<float>(selected.cameraRelativeOrigin.x);
+        c[1] = static_cast<float>(selected.cameraRelativeOrigin.y);
+        c[2] = static_cast<float>(selected.size / (mHeader.chunkSize - 1));
+        c[3] = selected.id.isRoot() || !style.geomorph ? 1.0f : selected.morph;
+        // Skirts hang the parent's delta_c deep: a leaf's own delta_c is zero, yet it can meet a coarser
+        // neighbour whose edge lies up to that far away (3.2.6).
+        c[4] = std::max(f.parent->deltaC, node.deltaC) + static_cast<float>(mHeader.heightStep);
+        c[5] = static_cast<float>(layerOf(f.slot));
+        c[6] = static_cast<float>(layerOf(f.parentSlot));
+        c[7] = mSlotHeights[static_cast<std::size_t>(f.slot)][0];
+        c[10] = mSlotHeights[static_cast<std::size_t>(f.slot)][1];
+        c[8] = (selected.id.x & 1) ? 0.5f : 0.0f;
+        c[9] = (selected.id.y & 1) ? 0.5f : 0.0f;
+        if (split && f.program == static_cast<int>(kNear)) {
+            // The node's corner in repeats of each layer (and of its turned copy), reduced to [0, 1).
+            const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(camera.position);
+            for (int k = 0; k < mDetail.count(); ++k) {
+                const glm::vec4 origin = mDetail.origin(k, corner);
+                for (int i = 0; i < 4; ++i) {
+                    c[12 + 4 * k + i] = origin[i];
                 }
             }
-            if (mTessellation) {
-                TERRAIN_EXPECTS(node->tessellation != nullptr,
-                                "tessellation mode needs nodes made with their tessellation errors "
-                                "(DetailPolicy::tessellationBlockQuads)");
-                // Hidden nodes' blocks all at their coarsest; in the others, hidden blocks away from visible ones.
-                const BlockLevels levels =
-                    drawnBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
-                                     blockPixels, selected.hidden, occluded);
-                stats.occludedBlocks += static_cast<std::size_t>(levels.occludedBlocks);
-                const int b = levels.blocksPerSide;
-                for (int k = 0; k < b * b; ++k) {
-                    mCodes.push_back(levels.code(k));
-                    (levels.culled[static_cast<std::size_t>(k)] == 0 ? stats.blocks : stats.culledBlocks) += 1;
-                }
-                tessellatedTriangles += levels.triangles();
-            }
-            if (counting) {
-                counting->nodes.push_back(selected.id);
-            }
-            ++count;
         }
-        if (pass == 0) {
-            nearCount = count;
+        if (mTessellation) {
+            TERRAIN_EXPECTS(node.tessellation != nullptr,
+                            "tessellation mode needs nodes made with their tessellation errors "
+                            "(DetailPolicy::tessellationBlockQuads)");
+            // Hidden nodes' blocks all at their coarsest; in the others, hidden blocks away from visible ones.
+            const BlockLevels levels =
+                drawnBlockLevels(*node.tessellation, mExtent.box(selected.id, node.zMin, node.zMax), camera,
+                                 blockPixels, selected.hidden, occluded);
+            stats.occludedBlocks += static_cast<std::size_t>(levels.occludedBlocks);
+            const int b = levels.blocksPerSide;
+            for (int k = 0; k < b * b; ++k) {
+                mCodes.push_back(levels.code(k));
+                (levels.culled[static_cast<std::size_t>(k)] == 0 ? stats.blocks : stats.culledBlocks) += 1;
+            }
+            tessellatedTriangles += levels.triangles();
         }
+        if (counting) {
+            counting->nodes.push_back(selected.id);
+        }
+        ++count;
     }
     stats.nodes = count;
     stats.triangles = mTessellation ? tessellatedTriangles : count * mTrianglesPerNode;
@@ -618,25 +652,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                     static_cast<float>(valid.y - slack), static_cast<float>(valid.z + slack),
                     static_cast<float>(valid.w + slack));
     }
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
-    glActiveTexture(GL_TEXTURE1);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
     mDetail.bind(2);
-    if (mWeights) {
-        glActiveTexture(GL_TEXTURE3);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mWeights.name());
-    }
-    glActiveTexture(GL_TEXTURE0);
-
-    if (mParentNormals) {
-        glActiveTexture(GL_TEXTURE4);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mParentNormals.name());
-    }
-    if (mNormalMaps) {
-        glActiveTexture(GL_TEXTURE6);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mNormalMaps.name());
-    }
     glActiveTexture(GL_TEXTURE0);
 
     if (counting) {
@@ -665,20 +681,35 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
     }
     std::size_t captured = 0;  // triangles
     const auto patches = static_cast<GLsizei>(mBlocks * mBlocks + 4 * mBlocks);
-    const std::size_t ranges[2][2] = {{0, nearCount}, {nearCount, count}};
-    for (std::size_t p = 0; p < mPrograms.size(); ++p) {
-        const auto [first, last] = ranges[p];
-        if (first == last) {
-            continue;
+    for (std::size_t first = 0; first < count;) {
+        // A draw: the consecutive nodes of one program and pair of arrays.
+        const std::array<int, 3> group = drawGroup(mFrameNodes[first]);
+        std::size_t last = first + 1;
+        while (last < count && drawGroup(mFrameNodes[last]) == group) {
+            ++last;
         }
-        mPrograms[p].use();
+        const PoolArrays& own = mArrays[static_cast<std::size_t>(group[1])];
+        const PoolArrays& parents = mArrays[static_cast<std::size_t>(group[2])];
+        const std::pair<GLenum, const gl::Texture*> bindings[] = {
+            {GL_TEXTURE0, &own.colour},        {GL_TEXTURE1, &own.heights},    {GL_TEXTURE3, &own.weights},
+            {GL_TEXTURE4, &own.parentNormals}, {GL_TEXTURE6, &own.normalMaps}, {GL_TEXTURE7, &parents.colour},
+            {GL_TEXTURE8, &parents.normalMaps}};
+        for (const auto& [unit, texture] : bindings) {
+            if (*texture) {
+                glActiveTexture(unit);
+                glBindTexture(GL_TEXTURE_2D_ARRAY, texture->name());
+            }
+        }
+        glActiveTexture(GL_TEXTURE0);
+        ShaderProgram& program = mPrograms[static_cast<std::size_t>(group[0])];
+        program.use();
         // The instances' constants start at `first`: the per-instance attributes are pointed there.
         pointNodeConstants(mConstantsBuffer, texels, first);
-        glUniform1i(mPrograms[p].uniform("uFirstInstance"), static_cast<GLint>(first));
+        glUniform1i(program.uniform("uFirstInstance"), static_cast<GLint>(first));
         if (mTessellation) {
             GLuint query = 0, generated = 0;
             if (feedback) {
-                // Each program's triangles after the previous one's (feedback cannot span a program change).
+                // Each draw's triangles after the previous one's (feedback cannot span a program change).
                 glBindBufferRange(GL_TRANSFORM_FEEDBACK_BUFFER, 0, mFeedback.name(),
                                   static_cast<GLintptr>(captured * 3 * sizeof(glm::vec3)),
                                   static_cast<GLsizeiptr>((stats.triangles - captured) * 3 * sizeof(glm::vec3)));
@@ -706,6 +737,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
             glDrawElementsInstanced(GL_TRIANGLES, mIndexCount, mIndexType, nullptr, static_cast<GLsizei>(last - first));
         }
         ++stats.drawCalls;
+        first = last;
     }
     glBindVertexArray(0);
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);

@@ -1,7 +1,8 @@
 // The chunk renderer (paper 3.2.6-3.2.11, 4.2.3): one template mesh for every node, geomorphed and skirted
 // in the vertex program, front to back in the selector's order. Node data lives in pools allocated once for
-// the cache's capacity (4.2.3; issue 13): a slot per resident node in texture arrays, taken when the node is
-// first drawn and given back when the cache evicts it, and every frame's nodes go in one instanced draw.
+// the cache's capacity (4.2.3): a slot per resident node, a layer of one of each pool's texture arrays, taken
+// when the node is first drawn and given back when the cache evicts it. A frame's nodes go in one instanced
+// draw per program and pair of arrays (the node's and its parent's; one pair while the pools fit one array).
 #pragma once
 
 #include "core/Camera.h"
@@ -34,18 +35,20 @@ struct RenderStats {
     std::size_t staticNodes = 0;
     std::size_t dynamicNodes = 0;
     std::uint64_t triangles = 0;
-    std::size_t uploads = 0;         ///< nodes copied into their slots this frame
-    std::size_t gpuNodes = 0;        ///< slots holding a node after the frame
-    std::size_t drawCalls = 0;       ///< draw calls for the terrain (the sky not counted): 1 with anything in view
-    std::size_t blocks = 0;          ///< tessellation mode: blocks drawn (not culled)
-    std::size_t culledBlocks = 0;    ///< tessellation mode: blocks of drawn nodes outside the frustum
-    std::size_t occludedBlocks = 0;  ///< tessellation mode: blocks drawn at their coarsest, hidden (`occluded`)
+    std::size_t uploads = 0;   ///< nodes copied into their slots this frame
+    std::size_t gpuNodes = 0;  ///< slots holding a node after the frame
+    /// Draw calls for the terrain (the sky not counted): one per program and pair of pool arrays (the nodes',
+    /// their parents') that has nodes in view; 1 when the pools fit one array and no detail layers split it.
+    std::size_t drawCalls = 0;
+    std::size_t blocks = 0;                ///< tessellation mode: blocks drawn (not culled)
+    std::size_t culledBlocks = 0;          ///< tessellation mode: blocks of drawn nodes outside the frustum
+    std::size_t occludedBlocks = 0;        ///< tessellation mode: blocks drawn at their coarsest, hidden (`occluded`)
     std::uint64_t generatedTriangles = 0;  ///< with transform feedback: the triangles the GL says it made
 };
 
 /// The node pools' size and formats.
 struct PoolOptions {
-    std::size_t slots = 512;      ///< nodes: the cache's capacity (quad_cache_size)
+    std::size_t slots = 512;  ///< nodes: the cache's capacity (memory_budget or quad_cache_size)
     bool compressColour = false;  ///< DXT1 colour layers (node_texture_compression), where the GL has S3TC
     /// render_mode = tessellation: blocks of kTessellationBlockQuads quads tessellated at the levels
     /// chooseBlockLevels picks (lod/TessellationLevels.h); needs GL 4.0 (tessellationSupported()) and nodes
@@ -61,6 +64,9 @@ struct PoolOptions {
     /// Count each drawn node's visible pixels (issue 16, visibility_lod; takePixelCounts()): needs GL 4.3 or
     /// its shader storage and early fragment test extensions (pixelCountsSupported()).
     bool pixelCounts = false;
+    /// Layers of each texture array (0: GL_MAX_ARRAY_TEXTURE_LAYERS): more slots take more arrays per pool.
+    /// Tests set a few to draw with several arrays.
+    std::size_t layersPerArray = 0;
 };
 
 /// The visible pixels of the nodes drawn in one frame (PoolOptions::pixelCounts), and its depth.
@@ -106,7 +112,8 @@ public:
     /// Whether this context can count visible pixels per node (PoolOptions::pixelCounts): OpenGL 4.3, or
     /// GL_ARB_shader_storage_buffer_object and GL_ARB_shader_image_load_store.
     static bool pixelCountsSupported();
-    /// The most slots the pools can have on this context: a layer per slot (GL_MAX_ARRAY_TEXTURE_LAYERS).
+    /// The most slots the pools can have on this context: kMaxPoolArrays texture arrays a pool
+    /// (lod/NodeMemory.h) of GL_MAX_ARRAY_TEXTURE_LAYERS layers.
     static std::size_t maxSlots();
     /// Whether this context rasterizes in software (Mesa's llvmpipe, softpipe or swrast: GL_RENDERER), where
     /// compressed textures cost decoding per fetch.
@@ -137,7 +144,11 @@ public:
 
 private:
     TerrainRenderer(const MapHeader& header) : mHeader(header) {}
-    int slotFor(const NodePtr& node, RenderStats& stats);
+    /// The node's slot, copying it there when it is new; a new node takes a free slot in `preferredArray`'s
+    /// layers when there is one (its parent's: a node and its parent in one array draw together).
+    int slotFor(const NodePtr& node, RenderStats& stats, int preferredArray = -1);
+    int arrayOf(int slot) const { return slot / static_cast<int>(mLayersPerArray); }
+    int layerOf(int slot) const { return slot % static_cast<int>(mLayersPerArray); }
 
     MapHeader mHeader;
     TemplateMesh mMesh;
@@ -155,13 +166,17 @@ private:
     std::uint64_t mTrianglesPerNode = 0;
     DetailLayers mDetail;  ///< the materials' detail textures (none without)
 
-    // The pools: one layer per slot in each texture array.
-    gl::Texture mHeights;                            ///< GL_R16 (quantizeHeightsR16), (N + 2)^2 per layer
+    // The pools: slot s is layer s % mLayersPerArray of array s / mLayersPerArray of each pool.
+    struct PoolArrays {
+        gl::Texture heights;        ///< GL_R16 (quantizeHeightsR16), (N + 2)^2 per layer
+        gl::Texture parentNormals;  ///< GL_RG8_SNORM, ((N + 1) / 2)^2 per layer; none with normal maps
+        gl::Texture colour;         ///< DXT1 (or GL_RGB8), mColourLayerSize^2 per layer
+        gl::Texture weights;        ///< GL_RGBA4, N^2 per layer; none without materials
+        gl::Texture normalMaps;     ///< RGTC2 (or GL_RG8_SNORM), mNormalLayerSize^2 per layer; or none
+    };
+    std::vector<PoolArrays> mArrays;
+    std::size_t mLayersPerArray = 1;
     std::vector<std::array<float, 2>> mSlotHeights;  ///< per slot: lo and range of its height codes
-    gl::Texture mParentNormals;                      ///< GL_RG8_SNORM, ((N + 1) / 2)^2 per layer
-    gl::Texture mColour;                             ///< DXT1 (or GL_RGB8), mColourLayerSize^2 per layer
-    gl::Texture mWeights;                            ///< GL_RGBA4, N^2 per layer; none without materials
-    gl::Texture mNormalMaps;                         ///< RGTC2 (or GL_RG8_SNORM), mNormalLayerSize^2 per layer; or none
     int mNormalTexels = 0;
     bool mRgtc2 = false;
     int mNormalLayerSize = 0;  ///< mNormalTexels, padded to a multiple of 4 for RGTC2
@@ -169,7 +184,7 @@ private:
     int mColourLayerSize = 0;
     SlotBytes mSlotBytes;
     std::vector<NodePtr> mSlotData;                  ///< per slot: the node it holds (identity for reloads), or null
-    std::vector<int> mFreeSlots;                     ///< a stack
+    std::vector<std::vector<int>> mFreeSlots;        ///< per array, a stack
     std::unordered_map<std::uint64_t, int> mSlotOf;  ///< by node key
     // The frame's per-node constants (terrain.vert's per-instance attributes: mNodeTexels vec4s a node).
     int mNodeTexels = 3;
@@ -184,6 +199,16 @@ private:
     gl::Buffer mLevelsBuffer;
     gl::Texture mLevelsTexture;  ///< GL_TEXTURE_BUFFER over mLevelsBuffer, R16UI
     std::vector<std::uint16_t> mCodes;
+    // The frame's nodes before they are ordered into draws, and the draws.
+    struct FrameNode {
+        const SelectedNode* selected;
+        const NodeData* node;    ///< held by the cache for the frame
+        const NodeData* parent;  ///< the node itself for the root
+        int slot;
+        int parentSlot;
+        int program;
+    };
+    std::vector<FrameNode> mFrameNodes;
     gl::Buffer mFeedback;  ///< transform feedback of draw(..., feedback)
     // Pixel counts: three frames' buffers in turn (frame % 3), each a uint a drawn node.
     struct CountFrame {

@@ -211,17 +211,18 @@ TEST_F(TengineGLTest, NoHolesAlongTheFlight)
 }
 
 /// render_mode = tessellation (issue 13): no holes, neither between nodes (skirts) nor inside them where
-/// blocks of different levels meet (snapped sides); one draw call per program a frame; identical frames run to run; and
-/// fewer triangles than chunks on the same flight.
+/// blocks of different levels meet (snapped sides); one draw call per program a frame (with a cache that fits one
+/// texture array a pool); identical frames run to run; and fewer triangles than chunks on the same flight.
 TEST_F(TengineGLTest, TessellationHasNoHolesOneDrawAndFewerTriangles)
 {
     expectNoHolesAlongTheFlight({"render_mode=tessellation"});
     test::ScratchDir a, b, chunks;
-    const std::vector<std::string> settings = {"frames_per_second=2", "render_mode=tessellation"};  // the default
+    const std::vector<std::string> settings = {"frames_per_second=2", "render_mode=tessellation",  // the default
+                                               "quad_cache_size=2048"};
     auto run = video(a.path(), settings);
     ASSERT_EQ(run.exitCode, 0) << run.output;
     ASSERT_EQ(video(b.path(), settings).exitCode, 0);
-    ASSERT_EQ(video(chunks.path(), {"frames_per_second=2", "render_mode=chunks"}).exitCode, 0);
+    ASSERT_EQ(video(chunks.path(), {"frames_per_second=2", "render_mode=chunks", "quad_cache_size=2048"}).exitCode, 0);
     for (int f = 0; f <= 16; ++f) {
         Image first = frame(a.path(), f), second = frame(b.path(), f);
         ASSERT_EQ(first.pixels.size(), second.pixels.size());
@@ -420,13 +421,15 @@ TEST_F(TengineGLTest, SameRunGivesIdenticalFrames)
     EXPECT_EQ(rows, 17);
 }
 
-/// The node pools (issue 13): every frame's terrain is one instanced draw per program (detail layers need
-/// two: the nodes beyond the layers' fade get a program without them), the log gives each slot's bytes,
-/// and DXT1 colour layers (node_texture_compression) look like the uncompressed ones.
+/// The node pools: with a cache that fits one texture array a pool, every frame's terrain is one instanced
+/// draw per program (detail layers need two: the nodes beyond the layers' fade get a program without them;
+/// PoolArraysGLTest draws with several arrays), the log gives each slot's bytes, and DXT1 colour layers
+/// (node_texture_compression) look like the uncompressed ones. The same node count in both, or the budget
+/// would hold more of the smaller DXT1 nodes.
 TEST_F(TengineGLTest, NodePoolsDrawOneCallPerProgramAndCompressedTexturesLookTheSame)
 {
     test::ScratchDir plain, compressed, detail;
-    const std::vector<std::string> settings = {"frames_per_second=2"};
+    const std::vector<std::string> settings = {"frames_per_second=2", "quad_cache_size=1024"};
     auto run = video(plain.path(), settings);
     ASSERT_EQ(run.exitCode, 0) << run.output;
     EXPECT_NE(run.output.find("node pools: "), std::string::npos) << run.output;
@@ -484,7 +487,8 @@ TEST_F(TengineGLTest, NodePoolsDrawOneCallPerProgramAndCompressedTexturesLookThe
     EXPECT_LT(worst, 64);
 
     // Low over the detail map, near and far nodes are both in view: two calls, one per program.
-    auto runDetail = video(detail.path(), lowDetailFlight({"frames_per_second=2", "video_frames=8"}), detailMap());
+    auto runDetail = video(
+        detail.path(), lowDetailFlight({"frames_per_second=2", "video_frames=8", "quad_cache_size=1024"}), detailMap());
     ASSERT_EQ(runDetail.exitCode, 0) << runDetail.output;
     const std::vector<int> detailCalls = drawCalls(detail.path());
     ASSERT_FALSE(detailCalls.empty());
