@@ -31,6 +31,7 @@
 
 #include <unistd.h>
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -60,10 +61,16 @@ public:
     explicit Log(const std::filesystem::path& file)
     {
         if (!file.empty()) {
+            errno = 0;
             mFile.open(file, std::ios::app);
+            if (!mFile.is_open()) {
+                mError = errno != 0 ? std::strerror(errno) : "it cannot be opened for appending";
+            }
         }
     }
-    bool ok() const { return !mFile.is_open() || mFile.good(); }
+    bool ok() const { return mError.empty() && (!mFile.is_open() || mFile.good()); }
+    /// Why the file could not be opened (the system's reason).
+    const std::string& error() const { return mError; }
     void operator()(const std::string& message)
     {
         std::fprintf(stderr, "tengine: %s\n", message.c_str());
@@ -75,6 +82,7 @@ public:
 
 private:
     std::ofstream mFile;
+    std::string mError;
 };
 
 SceneStyle styleFrom(const TengineOptions& o)
@@ -647,9 +655,18 @@ FrameStats updateClipmap(Scene& scene, const Camera& camera, bool video, double 
 int run(const ParsedCommandLine& parsed, const StopSignals& stop)
 {
     const TengineOptions& o = parsed.options;
+    // Before anything is opened for writing, the log included: no output may be one of the inputs.
+    const std::filesystem::path materialsDirectory = programDataDirectory("materials", TERRAIN_MATERIALS_DIR);
+    if (auto refused = checkOutputsAreNotInputs(parsed, o.detailCreateNewNodes && o.detailAddMaterial
+                                                            ? detailMaterialFiles(o, materialsDirectory)
+                                                            : std::vector<std::filesystem::path>{});
+        !refused.ok()) {
+        std::fprintf(stderr, "tengine: %s\n", refused.error().message.c_str());
+        return 2;
+    }
     Log log(o.logFile);
     if (!log.ok()) {
-        std::fprintf(stderr, "tengine: %s: cannot open the log file\n", o.logFile.c_str());
+        std::fprintf(stderr, "tengine: %s: cannot open the log file: %s\n", o.logFile.c_str(), log.error().c_str());
         return 1;
     }
     for (const auto& warning : parsed.warnings) {
@@ -657,14 +674,6 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
     }
     if (o.mapFile.empty()) {
         log("no map: give a .map file on the command line or map_file in a config (see tengine --help)");
-        return 2;
-    }
-    const std::filesystem::path materialsDirectory = programDataDirectory("materials", TERRAIN_MATERIALS_DIR);
-    if (auto refused = checkOutputsAreNotInputs(parsed, o.detailCreateNewNodes && o.detailAddMaterial
-                                                            ? detailMaterialFiles(o, materialsDirectory)
-                                                            : std::vector<std::filesystem::path>{});
-        !refused.ok()) {
-        log(refused.error().message);
         return 2;
     }
     const auto scene = openScene(parsed, materialsDirectory, log);

@@ -10,11 +10,13 @@
 #include "core/Check.h"
 #include "core/Parse.h"
 #include "quadtree/ChunkGeometry.h"
+#include "quadtree/MapFormat.h"
 
 #include <algorithm>
 #include <charconv>
 #include <climits>
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -593,7 +595,9 @@ std::vector<OptionSpec> makeOptionTable()
 
     // ---- Demo and video mode ----
     t.push_back(boolOption("demo_mode", kGroupVideo,
-                           "Fly camera_path over and over (needs camera_path). Overrides video_mode.", &O::demoMode));
+                           "Fly camera_path over and over (needs camera_path). Demo and video mode exclude each other: "
+                           "setting one to true turns the other off (the later setting wins, and says so).",
+                           &O::demoMode));
     t.push_back(boolOption("video_mode", kGroupVideo,
                            "Fly camera_path once at frames_per_second, saving every frame to image_path (needs "
                            "camera_path).",
@@ -743,6 +747,13 @@ Status applyEntry(const ConfigEntry& entry, const std::filesystem::path& baseDir
         return makeError(entry.location(), ": invalid value '", entry.value, "' for ", entry.key, ": expected ",
                          spec->expected);
     }
+    // Demo and video mode exclude each other: the later of the two settings wins, and says so.
+    if (options.demoMode && options.videoMode && (entry.key == "video_mode" || entry.key == "demo_mode")) {
+        const bool video = entry.key == "video_mode";
+        (video ? options.demoMode : options.videoMode) = false;
+        warnings.push_back(entry.location() + ": " + entry.key + " = true turns " +
+                           (video ? "demo_mode" : "video_mode") + " off (of the two, the later setting wins)");
+    }
     return {};
 }
 
@@ -775,7 +786,7 @@ void writeSetting(std::ostringstream& out, std::string_view prefix, std::string_
     out << " " << (quote ? "\"" : "") << value << (quote ? "\"" : "") << "\n";
 }
 
-Status validate(const TengineOptions& o, std::vector<std::string>& warnings)
+Status validate(const TengineOptions& o)
 {
     if (!(o.cameraZFar > o.cameraZNear)) {
         return makeError("camera_z_far (", formatNumber(o.cameraZFar), ") must be greater than camera_z_near (",
@@ -786,9 +797,6 @@ Status validate(const TengineOptions& o, std::vector<std::string>& warnings)
     }
     if (o.videoMode && o.cameraPath.empty()) {
         return makeError("video_mode needs a camera_path");
-    }
-    if (o.demoMode && o.videoMode) {
-        warnings.push_back("video_mode is ignored: demo_mode overrides it");
     }
     if (o.videoMeasureErrorEvery > 0 && (!o.videoMode || o.demoMode)) {
         return makeError(
@@ -812,13 +820,49 @@ Status applySetting(std::string_view keyEqualsValue, TengineOptions& options, st
 {
     auto entry = ConfigFile::parseEntry(keyEqualsValue, "--set", 0);
     TERRAIN_TRY(entry);
+    // A config may hold keys of other versions (a warning); a --set was typed for this run: an unknown key is
+    // an error.
+    if (!findOption(entry->key)) {
+        std::string message = "--set: unknown option '" + entry->key + "'";
+        if (auto suggestion = closestKey(entry->key)) {
+            message += " (did you mean '" + std::string(*suggestion) + "'?)";
+        }
+        return Error{message + " (see configs/tengine.cfg for every option)"};
+    }
     return applyEntry(*entry, {}, options, warnings);
 }
 
-Status validateTengineOptions(const TengineOptions& options, std::vector<std::string>& warnings)
+Status validateTengineOptions(const TengineOptions& options)
 {
-    return validate(options, warnings);
+    return validate(options);
 }
+
+namespace {
+
+enum class ArgumentKind { Map, Config, Unknown };
+
+/// A map when the file starts with the map signature or is named .map (opening it then says what is wrong with
+/// it), a config when it is named .cfg; otherwise it has to parse as a config.
+ArgumentKind classifyArgument(const std::string& arg)
+{
+    if (arg.ends_with(".map")) {
+        return ArgumentKind::Map;
+    }
+    std::ifstream in(arg, std::ios::binary);
+    if (!in) {
+        return arg.ends_with(".cfg") ? ArgumentKind::Config : ArgumentKind::Unknown;
+    }
+    std::array<char, kMapMagic.size()> head{};
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    if (in.gcount() == static_cast<std::streamsize>(head.size()) &&
+        std::equal(head.begin(), head.end(), kMapMagic.begin(),
+                   [](char a, std::uint8_t b) { return static_cast<std::uint8_t>(a) == b; })) {
+        return ArgumentKind::Map;
+    }
+    return arg.ends_with(".cfg") ? ArgumentKind::Config : ArgumentKind::Unknown;
+}
+
+}  // namespace
 
 Expected<ParsedCommandLine> parseTengineCommandLine(const std::vector<std::string>& arguments)
 {
@@ -845,19 +889,33 @@ Expected<ParsedCommandLine> parseTengineCommandLine(const std::vector<std::strin
             TERRAIN_TRY(applySetting(setting, result.options, result.warnings));
         } else if (arg.size() > 1 && arg.front() == '-') {
             return makeError("unknown argument '", arg, "' (see --help)");
-        } else if (arg.ends_with(".cfg")) {
+        } else {
+            // A map by its signature, a config by parsing (any name); anything else is an error naming it.
+            const ArgumentKind kind = classifyArgument(arg);
+            if (kind == ArgumentKind::Map) {
+                if (mapArgument) {
+                    return makeError("two maps on the command line, '", mapArgument->string(), "' and '", arg,
+                                     "': give one");
+                }
+                mapArgument = arg;
+                continue;
+            }
             auto config = ConfigFile::load(arg);
-            TERRAIN_TRY(config);
+            if (!config.ok()) {
+                if (kind == ArgumentKind::Config) {
+                    return config.error();
+                }
+                return makeError("'", arg, "' is neither a map (it does not start with the map signature) nor a ",
+                                 "config file (", config.error().message, ")");
+            }
             TERRAIN_TRY(applyConfig(*config, result.options, result.warnings));
             result.configFiles.emplace_back(arg);
-        } else {
-            mapArgument = arg;
         }
     }
     if (mapArgument) {
         result.options.mapFile = *mapArgument;
     }
-    TERRAIN_TRY(validate(result.options, result.warnings));
+    TERRAIN_TRY(validate(result.options));
     return result;
 }
 
@@ -878,7 +936,9 @@ Renders a terrain map made by prep (paper 4.4.2).
 
   FILE.cfg          a configuration file ('option = value' lines; see configs/tengine.cfg for every
                     option with its default). Files are read in order; later ones override earlier ones.
-  FILE.map          the terrain map; overrides map_file. If several are given, the last one is used.
+                    Any name works: a file that is not a map must parse as a config.
+  FILE.map          the terrain map (known by its signature, or by the name .map); overrides map_file.
+                    One at most.
   --set key=value   set one option, in command-line order with the .cfg files (a later one wins)
   --print-config    print the resulting options as a config file and exit
   --help            this text

@@ -109,12 +109,14 @@ struct TengineOptions {
 /// before it). Checks each value alone; relations between options are validateTengineOptions()'s.
 Status applyConfig(const ConfigFile& config, TengineOptions& options, std::vector<std::string>& warnings);
 
-/// Applies one `key=value` (from `--set`), with the rules of applyConfig(); messages name "--set".
+/// Applies one `key=value` (from `--set`), with the rules of applyConfig() except that an unknown key is an
+/// error (it was typed for this run); messages name "--set". Setting demo_mode or video_mode to true turns the
+/// other off, with a warning (the later of the two wins), in configs too.
 Status applySetting(std::string_view keyEqualsValue, TengineOptions& options, std::vector<std::string>& warnings);
 
 /// Checks the rules between options once all are applied: camera_z_far > camera_z_near; demo_mode and
-/// video_mode need a camera_path. Warns when demo_mode and video_mode are both on (demo wins).
-Status validateTengineOptions(const TengineOptions& options, std::vector<std::string>& warnings);
+/// video_mode need a camera_path.
+Status validateTengineOptions(const TengineOptions& options);
 
 /// The result of the command line.
 struct ParsedCommandLine {
@@ -125,11 +127,13 @@ struct ParsedCommandLine {
     bool printConfig = false;                        ///< --print-config: print the resulting options as a config
 };
 
-/// Parses tengine's arguments (without the program name), paper 4.4.2: each argument ending in `.cfg` is
-/// read and applied, and each `--set key=value` applied, in command-line order, so later ones override
-/// earlier ones. Any other argument is the map file; the last one wins and overrides every `map_file`
-/// setting. Then validateTengineOptions(). `--help` stops parsing. Errors: unknown `-` options, a missing
-/// `--set` value, unreadable configs, syntax errors and invalid values.
+/// Parses tengine's arguments (without the program name), paper 4.4.2: each config file is read and applied,
+/// and each `--set key=value` applied, in command-line order, so later ones override earlier ones. An argument
+/// is the map when its file starts with the map signature (kMapMagic) or is named .map; it overrides every
+/// `map_file` setting, and a second one is an error. Any other argument must be a config file (named .cfg, or
+/// parsing as one): what is neither is an error naming it, never dropped. Then validateTengineOptions().
+/// `--help` stops parsing. Errors: unknown `-` options, a missing `--set` value, an unknown `--set` key,
+/// unreadable configs, syntax errors and invalid values.
 Expected<ParsedCommandLine> parseTengineCommandLine(const std::vector<std::string>& arguments);
 /// The same for main()'s arguments (argv[0] is skipped).
 Expected<ParsedCommandLine> parseTengineCommandLine(int argc, char** argv);

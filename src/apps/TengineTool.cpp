@@ -3,6 +3,7 @@
 #include "apps/DetailSetup.h"
 #include "apps/ErrorCommand.h"
 #include "core/Memory.h"
+#include "core/OutputGuard.h"
 #include "core/Parse.h"
 #include "heightfield/GdalRaster.h"
 #include "heightfield/Image.h"
@@ -193,13 +194,36 @@ int verify(const MapFile& map)
 
 int texture(const MapFile& map, const std::string& node, const std::string& output)
 {
-    NodeId id;
-    unsigned level = 0;
-    char tail = 0;
-    if (std::sscanf(node.c_str(), "%u/%u/%u%c", &level, &id.x, &id.y, &tail) != 3 || level > NodeId::kMaxLevel) {
-        return fail("texture: '" + node + "' is not a node LEVEL/X/Y");
+    // LEVEL/X/Y, each a whole number, 0 <= X, Y < 2^LEVEL.
+    std::array<long long, 3> parts{};
+    std::size_t at = 0;
+    bool parsed = true;
+    for (std::size_t k = 0; k < 3 && parsed; ++k) {
+        const std::size_t slash = k < 2 ? node.find('/', at) : node.size();
+        parsed = slash != std::string::npos;
+        if (parsed) {
+            auto v = parseInteger(node.substr(at, slash - at));
+            parsed = v.ok();
+            parts[k] = parsed ? *v : 0;
+            at = slash + 1;
+        }
     }
-    id.level = static_cast<int>(level);
+    if (!parsed) {
+        return fail("texture: '" + node + "' is not a node LEVEL/X/Y (whole numbers)");
+    }
+    if (parts[0] < 0 || parts[0] > NodeId::kMaxLevel) {
+        return fail("texture: node '" + node + "': the level must be in [0, " + std::to_string(NodeId::kMaxLevel) +
+                    "]");
+    }
+    const long long side = 1LL << parts[0];
+    if (parts[1] < 0 || parts[1] >= side || parts[2] < 0 || parts[2] >= side) {
+        return fail("texture: node '" + node + "': X and Y must be in [0, " + std::to_string(side - 1) + "] at level " +
+                    std::to_string(parts[0]));
+    }
+    NodeId id;
+    id.level = static_cast<int>(parts[0]);
+    id.x = static_cast<std::uint32_t>(parts[1]);
+    id.y = static_cast<std::uint32_t>(parts[2]);
     auto loaded = map.loadPath(id);
     if (!loaded.ok()) {
         return fail(loaded.error().message);
@@ -427,6 +451,21 @@ int main(int argc, char** argv)
         command != "export" && command != "select" && command != "stream" && command != "error") {
         std::fprintf(stderr, "tengine-tool: unknown command '%s'\n%s", command.c_str(), kUsage);
         return 2;
+    }
+    // What texture and export write must not be one of the run's inputs: checked before anything is opened.
+    if ((command == "texture" && args.size() == 4) || (command == "export" && args.size() >= 3)) {
+        std::vector<InputFile> inputs = {{"map", args[1]}};
+        for (std::size_t i = 3; i + 1 < args.size(); ++i) {
+            if (args[i] == "--material" || args[i] == "--points") {
+                inputs.push_back({args[i] == "--material" ? "material" : "points file", args[i + 1]});
+            }
+        }
+        const std::string& output = command == "texture" ? args[3] : args[2];
+        if (auto refused =
+                refuseInputAsOutput(command == "texture" ? "texture PNG" : "exported GeoTIFF", output, inputs);
+            !refused.ok()) {
+            return fail(command + ": " + refused.error().message);
+        }
     }
     auto map = MapFile::open(args[1], reader);
     if (!map.ok()) {

@@ -199,7 +199,7 @@ void fuzzConfig(std::span<const std::uint8_t> data)
     TengineOptions options;
     std::vector<std::string> warnings;
     if (applyConfig(config.value(), options, warnings).ok()) {
-        (void)validateTengineOptions(options, warnings);
+        (void)validateTengineOptions(options);
         (void)tengineConfigText(options);
     }
 }

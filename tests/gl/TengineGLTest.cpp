@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <numbers>
 #include <sstream>
@@ -504,6 +505,48 @@ TEST_F(TengineGLTest, ACacheLargerThanTheGpuPoolsCanHoldIsAClearError)
     EXPECT_NE(run.exitCode, 0);
     EXPECT_NE(run.output.find("quad_cache_size 1000000"), std::string::npos) << run.output;
     EXPECT_NE(run.output.find("GL_MAX_ARRAY_TEXTURE_LAYERS"), std::string::npos) << run.output;
+}
+
+/// No output of tengine may be one of its inputs, the log included: nothing is written, not even the refusal.
+TEST_F(TengineGLTest, OutputsNamingAnInputAreRefusedBeforeAnythingIsWritten)
+{
+    test::ScratchDir dir;
+    const std::filesystem::path mapCopy = dir / "terrain.map", config = dir / "view.cfg", path = dir / "flight.path";
+    std::filesystem::copy_file(map(), mapCopy);
+    std::filesystem::copy_file(flight(), path);
+    std::ofstream(config) << "lod_error = 2\n";
+    std::filesystem::create_directories(dir / "rec");
+    std::ofstream(dir / "rec" / "frames.csv") << "frame,time_s\n0,0\n";
+    const std::filesystem::path csv = dir / "rec" / "frames.csv";
+    auto bytes = [](const std::filesystem::path& file) {
+        std::ifstream in(file, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    const std::string mapBytes = bytes(mapCopy), configBytes = bytes(config), pathBytes = bytes(path),
+                      csvBytes = bytes(csv);
+    struct Case {
+        std::vector<std::string> args;
+        std::string says;
+    };
+    const std::string m = mapCopy.string();
+    const Case cases[] = {
+        {{m, "--set", "log_file=" + m}, "refusing"},
+        {{config.string(), m, "--set", "log_file=" + config.string()}, "refusing"},
+        {{m, "--set", "camera_path=" + path.string(), "--set", "log_file=" + path.string()}, "refusing"},
+        // A recording's CSV given as an argument is neither a map nor a config: an error, never overwritten.
+        {{csv.string(), m, "--set", "camera_path=" + path.string(), "--set", "video_mode=true", "--set",
+          "image_path=" + (dir / "rec").string(), "--set", "video_frames=1"},
+         "is neither a map"},
+    };
+    for (const Case& c : cases) {
+        auto run = test::runProgram(TERRAIN_TENGINE_EXE, c.args);
+        EXPECT_NE(run.exitCode, 0) << c.args.back() << ":\n" << run.output;
+        EXPECT_NE(run.output.find(c.says), std::string::npos) << run.output;
+        EXPECT_EQ(bytes(mapCopy), mapBytes) << c.args.back();
+        EXPECT_EQ(bytes(config), configBytes) << c.args.back();
+        EXPECT_EQ(bytes(path), pathBytes) << c.args.back();
+        EXPECT_EQ(bytes(csv), csvBytes) << c.args.back();
+    }
 }
 
 TEST_F(TengineGLTest, MissingMapIsAClearError)

@@ -801,5 +801,56 @@ TEST(TengineToolCliTest, ErrorsAndExitCodes)
     }
 }
 
+TEST(TengineToolCliTest, TextureAndExportRefuseToWriteOverTheirInputs)
+{
+    test::ScratchDir dir;
+    auto built = test::runProgram(
+        kPrep, {writeSmallPng(dir).string(), "--chunk", "5", "-h", "1", "-o", (dir / "m.map").string()});
+    ASSERT_EQ(built.exitCode, 0) << built.output;
+    const std::string map = (dir / "m.map").string();
+    const test::Bytes before = test::readFileBytes(map);
+    std::filesystem::create_symlink(dir / "m.map", dir / "link.png");
+    std::filesystem::create_hard_link(dir / "m.map", dir / "hard.tif");
+    const std::string material = (std::filesystem::path(TERRAIN_MATERIALS_DIR) / "grass.mat").string();
+    std::filesystem::copy_file(material, dir / "grass.mat");
+    const std::string materialCopy = (dir / "grass.mat").string();
+    const test::Bytes materialBefore = test::readFileBytes(materialCopy);
+    const std::vector<std::string> region = {"--region", "0,0,10,10", "--spacing", "1"};
+    struct Case {
+        std::vector<std::string> args;
+        std::string names;  ///< the input the message must name as such
+    };
+    std::vector<Case> cases = {
+        {{"texture", map, "0/0/0", map}, "the map itself"},
+        {{"texture", map, "0/0/0", (dir / "link.png").string()}, "the map"},
+        {{"texture", map, "0/0/0", (dir / "." / "m.map").string()}, "the map"},
+        {{"export", map, map}, "the map itself"},
+        {{"export", map, (dir / "hard.tif").string()}, "the map"},
+        {{"export", map, materialCopy, "--material", materialCopy}, "the material"},
+    };
+    for (Case& c : cases) {
+        if (c.args[0] == "export") {
+            c.args.insert(c.args.end(), region.begin(), region.end());
+        }
+        std::string line;
+        for (const auto& a : c.args) {
+            line += " " + a;
+        }
+        auto result = test::runProgram(kTool, c.args);
+        EXPECT_EQ(result.exitCode, 1) << "tengine-tool" << line << ":\n" << result.output;
+        EXPECT_TRUE(mentions(result.output, "refusing")) << "tengine-tool" << line << ":\n" << result.output;
+        EXPECT_TRUE(mentions(result.output, c.names)) << "tengine-tool" << line << ":\n" << result.output;
+        EXPECT_EQ(test::readFileBytes(map), before) << "tengine-tool" << line << " changed the map";
+        EXPECT_EQ(test::readFileBytes(materialCopy), materialBefore) << "tengine-tool" << line;
+    }
+    // The same commands write where nothing is an input.
+    auto texture = test::runProgram(kTool, {"texture", map, "0/0/0", (dir / "t.png").string()});
+    EXPECT_EQ(texture.exitCode, 0) << texture.output;
+    std::vector<std::string> exportArgs = {"export", map, (dir / "e.tif").string()};
+    exportArgs.insert(exportArgs.end(), region.begin(), region.end());
+    auto exported = test::runProgram(kTool, exportArgs);
+    EXPECT_EQ(exported.exitCode, 0) << exported.output;
+}
+
 }  // namespace
 }  // namespace terrain

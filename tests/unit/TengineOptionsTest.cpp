@@ -3,6 +3,7 @@
 // the map argument, and warnings for unknown keys and the paper's Direct3D/Cg options.
 #include "TestSupport.h"
 #include "apps/TengineOptions.h"
+#include "quadtree/MapFormat.h"
 
 #include <gtest/gtest.h>
 
@@ -87,9 +88,7 @@ TEST(TengineOptions, DefaultsAreTheDocumentedOnes)
     EXPECT_EQ(o.videoFrames, 0);
     EXPECT_EQ(o.videoSaveEvery, 1);
     EXPECT_TRUE(o.videoFfmpeg);
-    std::vector<std::string> warnings;
-    EXPECT_TRUE(validateTengineOptions(o, warnings).ok());
-    EXPECT_TRUE(warnings.empty());
+    EXPECT_TRUE(validateTengineOptions(o).ok());
 }
 
 // ---- Valid values: one or more per key, each checked on the field it must set ----
@@ -433,10 +432,15 @@ TEST(TengineOptions, UnknownKeysWarnWithTheClosestKnownKey)
         ASSERT_EQ(warnings.size(), 1u);
         EXPECT_EQ(warnings[0], c.warning);
     }
+    // A --set was typed for this run: an unknown key there is an error, not a warning.
+    TengineOptions options;
     std::vector<std::string> warnings;
-    withSetting("lod_eror=3", &warnings);
-    ASSERT_EQ(warnings.size(), 1u);
-    EXPECT_EQ(warnings[0], "--set: unknown option 'lod_eror' ignored (did you mean 'lod_error'?)");
+    const Status set = applySetting("lod_eror=3", options, warnings);
+    ASSERT_FALSE(set.ok());
+    EXPECT_EQ(
+        set.error().message,
+        "--set: unknown option 'lod_eror' (did you mean 'lod_error'?) (see configs/tengine.cfg for every option)");
+    EXPECT_EQ(options, TengineOptions{});
 }
 
 TEST(TengineOptions, DirectXAndCgOptionsAreAcceptedWithWarnings)
@@ -491,6 +495,9 @@ TEST(TengineOptions, DefaultConfigFileSetsEveryKeyToItsDefault)
         ASSERT_TRUE(applySetting(c.setting, options, warnings).ok());
     }
     for (std::string_view key : tengineOptionKeys()) {
+        if (key == "demo_mode") {
+            continue;  // video_mode = true, set after it, turned it off: the two exclude each other
+        }
         ASSERT_NE(formatTengineOption(options, key), formatTengineOption(TengineOptions{}, key)) << key;
     }
     warnings.clear();
@@ -576,13 +583,13 @@ TEST_F(TengineOptionsCommandLine, SetAppliesInCommandLineOrder)
     EXPECT_EQ(parseOk({"--set", "image_path=\"a # b\""}).options.imagePath, "a # b");
 }
 
-TEST_F(TengineOptionsCommandLine, MapArgumentOverridesMapFileAndTheLastOneWins)
+TEST_F(TengineOptionsCommandLine, MapArgumentOverridesMapFile)
 {
     std::string a = write("a.cfg", "map_file = /maps/from_config.map\n");
     EXPECT_EQ(parseOk({a}).options.mapFile, "/maps/from_config.map");
     EXPECT_EQ(parseOk({"x.map", a}).options.mapFile, "x.map");
     EXPECT_EQ(parseOk({a, "x.map"}).options.mapFile, "x.map");
-    EXPECT_EQ(parseOk({"x.map", "y.map"}).options.mapFile, "y.map");
+    EXPECT_FALSE(parse({"x.map", "y.map"}).ok()) << "two maps are an error";
     EXPECT_EQ(parseOk({"x.map", "--set", "map_file=z.map"}).options.mapFile, "x.map");
 }
 
@@ -655,13 +662,49 @@ TEST_F(TengineOptionsCommandLine, RelationsAreCheckedAfterEverySourceIsApplied)
     EXPECT_EQ(parsed.options.cameraZFar, 1e6);
 }
 
-TEST_F(TengineOptionsCommandLine, DemoModeOverridesVideoModeWithAWarning)
+TEST_F(TengineOptionsCommandLine, OfDemoAndVideoModeTheLaterWinsWithAWarning)
 {
-    ParsedCommandLine parsed =
-        parseOk({"--set", "camera_path=p.path", "--set", "demo_mode=1", "--set", "video_mode=1"});
-    EXPECT_TRUE(parsed.options.demoMode);
-    ASSERT_EQ(parsed.warnings.size(), 1u);
-    EXPECT_EQ(parsed.warnings[0], "video_mode is ignored: demo_mode overrides it");
+    // A config's demo mode, then video mode asked for on the command line: a video (it looped forever before).
+    std::string demo = write("demo.cfg", "camera_path = p.path\ndemo_mode = true\n");
+    ParsedCommandLine video = parseOk({demo, "--set", "video_mode=1"});
+    EXPECT_TRUE(video.options.videoMode);
+    EXPECT_FALSE(video.options.demoMode);
+    ASSERT_EQ(video.warnings.size(), 1u);
+    EXPECT_EQ(video.warnings[0], "--set: video_mode = true turns demo_mode off (of the two, the later setting wins)");
+    ParsedCommandLine back =
+        parseOk({"--set", "camera_path=p.path", "--set", "video_mode=1", "--set", "demo_mode=yes"});
+    EXPECT_TRUE(back.options.demoMode);
+    EXPECT_FALSE(back.options.videoMode);
+    ASSERT_EQ(back.warnings.size(), 1u);
+    EXPECT_EQ(back.warnings[0], "--set: demo_mode = true turns video_mode off (of the two, the later setting wins)");
+    // Turning one off leaves the other as it is.
+    ParsedCommandLine off = parseOk({demo, "--set", "video_mode=0"});
+    EXPECT_TRUE(off.options.demoMode);
+    EXPECT_TRUE(off.warnings.empty());
+}
+
+TEST_F(TengineOptionsCommandLine, ArgumentsAreMapsByTheirSignatureAndConfigsByParsing)
+{
+    // A config under any name is read as one.
+    std::string settings = write("settings.txt", "lod_error = 3\n");
+    ParsedCommandLine config = parseOk({settings});
+    EXPECT_EQ(config.options.lodError, 3.0);
+    ASSERT_EQ(config.configFiles.size(), 1u);
+    // A map by its signature, whatever its name.
+    std::string map = write("terrain.bin", std::string(kMapMagic.begin(), kMapMagic.end()) + "rest");
+    EXPECT_EQ(parseOk({map}).options.mapFile, map);
+    // A file that is neither (a recording's CSV) is an error naming it, never taken as the map.
+    std::string csv = write("rec/frames.csv", "frame,time_s,fps\n0,0,12\n");
+    auto taken = parse({csv, "terrain.map"});
+    ASSERT_FALSE(taken.ok());
+    EXPECT_NE(taken.error().message.find("'" + csv + "' is neither a map"), std::string::npos) << taken.error().message;
+    auto missing = parse({(mDir / "nothing").string()});
+    ASSERT_FALSE(missing.ok());
+    EXPECT_NE(missing.error().message.find((mDir / "nothing").string()), std::string::npos) << missing.error().message;
+    // Two maps: an error, not the last one silently.
+    auto two = parse({map, "other.map"});
+    ASSERT_FALSE(two.ok());
+    EXPECT_EQ(two.error().message, "two maps on the command line, '" + map + "' and 'other.map': give one");
 }
 
 TEST_F(TengineOptionsCommandLine, HelpAndPrintConfig)
