@@ -7,16 +7,20 @@
 #include "heightfield/GdalRaster.h"
 #include "heightfield/HeightFieldIo.h"
 #include "quadtree/QuadtreeBuilder.h"
+#include "quadtree/QuantizedGrid.h"
 #include "synthesis/DetailErrorModel.h"
 #include "synthesis/DetailRecipeSetup.h"
 #include "synthesis/DetailSynthesizer.h"
 
 #include <unistd.h>
+#include <array>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -57,7 +61,9 @@ or one directory, are tiles of one mosaic: they must share CRS, resolution and g
   --raw-size WxH       size of a raw 16-bit input (required for .raw/.r16/.bin)
   --raw-signed         raw samples are signed 16-bit (default unsigned)
   --raw-big-endian     raw samples are big-endian (default little-endian)
-  --nodata V           treat the file value V as no-data (filled from neighbours)
+  --nodata V           treat the file value V as no-data (filled from neighbours), compared in the file's
+                       sample type (the value gdalinfo prints works); inf or -inf for infinite samples
+  --clamp LO,HI        heights (metres, after -v and --offset) below LO become LO, above HI become HI
   --material FILE.mat  material the viewer's detail synthesis adds below the static leaves; repeat for a
                        set, the first is the ground (default: the viewer's default, the built-in
                        grass.mat alone)
@@ -105,6 +111,11 @@ Expected<Arguments> parseArguments(int argc, char** argv)
         auto number = [&]() -> Expected<double> {
             auto text = value();
             TERRAIN_TRY(text);
+            if (arg == "--nodata" && (*text == "inf" || *text == "+inf" || *text == "-inf")) {
+                // Infinite samples marking missing data.
+                return text->front() == '-' ? -std::numeric_limits<double>::infinity()
+                                            : std::numeric_limits<double>::infinity();
+            }
             auto parsed = parseDouble(*text);
             if (!parsed.ok()) {
                 return makeError(arg, ": ", parsed.error().message);
@@ -161,20 +172,24 @@ Expected<Arguments> parseArguments(int argc, char** argv)
             auto v = number();
             TERRAIN_TRY(v);
             if (arg == "-h") {
-                if (!(*v > 0)) {
-                    return makeError("-h: spacing must be positive, got ", *v);
+                if (!(*v >= kMinSpacingMetres && *v <= kMaxSpacingMetres)) {
+                    return makeError("-h: the spacing must be in [", kMinSpacingMetres, ", ", kMaxSpacingMetres,
+                                     "] metres, got ", *v);
                 }
                 args.build.spacing = *v;
             } else if (arg == "-v") {
-                if (!(*v > 0)) {
-                    return makeError("-v: vertical scale must be positive, got ", *v);
+                if (!(*v >= 1e-9 && *v <= 1e9)) {
+                    return makeError("-v: the vertical scale must be in [1e-09, 1e+09] metres a unit, got ", *v);
                 }
                 args.build.verticalScale = *v;
             } else if (arg == "--offset") {
+                if (!(std::abs(*v) <= kMaxHeightMetres)) {
+                    return makeError("--offset: must be within +-", kMaxHeightMetres, " metres, got ", *v);
+                }
                 args.build.offset = *v;
             } else if (arg == "--max-error") {
-                if (*v < 0) {
-                    return makeError("--max-error: must be >= 0, got ", *v);
+                if (!(*v >= 0 && *v <= kMaxHeightMetres)) {
+                    return makeError("--max-error: must be in [0, ", kMaxHeightMetres, "] metres, got ", *v);
                 }
                 args.build.maxError = *v;
             } else {
@@ -186,6 +201,19 @@ Expected<Arguments> parseArguments(int argc, char** argv)
             (arg == "--chunk"          ? args.build.chunkSize
              : arg == "--texture-size" ? args.build.textureSize
                                        : args.build.threads) = *v;
+        } else if (arg == "--clamp") {
+            auto text = value();
+            TERRAIN_TRY(text);
+            const std::size_t comma = text->find(',');
+            const bool pair = comma != std::string::npos;
+            auto lo = parseDouble(pair ? text->substr(0, comma) : *text);
+            auto hi = parseDouble(pair ? text->substr(comma + 1) : std::string());
+            if (!pair || !lo.ok() || !hi.ok() || !(*lo <= *hi) || !(std::abs(*lo) <= kMaxHeightMetres) ||
+                !(std::abs(*hi) <= kMaxHeightMetres)) {
+                return makeError("--clamp: '", *text, "' is not LO,HI: two heights in metres, LO <= HI, within +-",
+                                 kMaxHeightMetres);
+            }
+            args.build.clampMetres = std::array<double, 2>{*lo, *hi};
         } else if (arg == "--memory") {
             auto text = value();
             TERRAIN_TRY(text);

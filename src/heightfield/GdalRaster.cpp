@@ -694,15 +694,14 @@ Status ElevationRaster::readRows(int j0, int rows, std::span<float> out)
                              messages.last());
         }
     }
-    const float noData = static_cast<float>(s.noData);
     const float nan = std::numeric_limits<float>::quiet_NaN();
     for (int r = 0; r < rows; ++r) {
         const int from = s.southUp ? r : rows - 1 - r;
         for (int i = 0; i < s.width; ++i) {
             const std::size_t k = static_cast<std::size_t>(from) * s.width + i;
             float v = buffer[k];
-            if (std::isnan(v) || (s.hasNoData && v == noData) ||
-                (s.userNoData && static_cast<double>(v) == *s.userNoData) || (!mask.empty() && mask[k] == 0)) {
+            if (std::isnan(v) || (s.hasNoData && isNoDataValue(v, s.noData)) ||
+                (s.userNoData && isNoDataValue(v, *s.userNoData)) || (!mask.empty() && mask[k] == 0)) {
                 v = nan;
             }
             out[static_cast<std::size_t>(r) * s.width + i] = v;

@@ -1,7 +1,9 @@
 // In-memory height fields as read from their files (paper 4.1), before any quantization.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -44,5 +46,24 @@ struct HeightField {
     float at(int i, int j) const { return samples[static_cast<std::size_t>(j) * width + i]; }
     float& at(int i, int j) { return samples[static_cast<std::size_t>(j) * width + i]; }
 };
+
+/// Whether a sample read as float equals a no-data value given as a double (the file's tag, or --nodata as
+/// gdalinfo prints it): compared in the samples' own type, the value rounded to the nearest float (a float
+/// max printed to 17 digits is float max again); beyond the float range, the infinity or float max of its
+/// sign (what a wider raster's value reads as). NaN equals nothing (NaN samples are no-data anyway).
+inline bool isNoDataValue(float sample, double noData)
+{
+    constexpr double kMax = std::numeric_limits<float>::max();
+    if (std::isnan(noData)) {
+        return false;
+    }
+    if (std::abs(noData) > kMax) {
+        // Double values rounding to float max round to it; those further out are infinite as floats.
+        const float signedMax = noData > 0 ? std::numeric_limits<float>::max() : -std::numeric_limits<float>::max();
+        return (std::isinf(sample) && (sample > 0) == (noData > 0)) ||
+               (sample == signedMax && std::abs(noData) < static_cast<double>(kMax) * (1.0 + 0x1p-24));
+    }
+    return sample == static_cast<float>(noData);
+}
 
 }  // namespace terrain

@@ -72,7 +72,7 @@ void applyNoData(HeightField& field, const HeightFieldReadOptions& options)
     }
     const double noData = *options.noData;
     for (float& sample : field.samples) {
-        if (static_cast<double>(sample) == noData) {
+        if (isNoDataValue(sample, noData)) {
             sample = std::nanf("");
         }
     }

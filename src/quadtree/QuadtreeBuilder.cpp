@@ -22,6 +22,8 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
+#include <limits>
 #include <memory>
 #include <mutex>
 
@@ -409,7 +411,19 @@ constexpr int kBandMargin = kFillRings + kRoughnessMargin;
 struct InputPlan {
     bool inMemory = true;
     int coreRows = 0;  ///< rows a band produces (a multiple of the leaf rows), out of core
+    std::optional<std::array<float, 2>> clampNative;  ///< BuildOptions::clampMetres in native units
 };
+
+/// The samples within plan.clampNative, where it is given (NaN stays NaN).
+void clampSamples(std::span<float> samples, const InputPlan& plan)
+{
+    if (plan.clampNative) {
+        const auto [lo, hi] = *plan.clampNative;
+        for (float& v : samples) {
+            v = v < lo ? lo : v > hi ? hi : v;
+        }
+    }
+}
 
 /// Calls fn(window, windowRow0, windowRows, core0, core1) for bands whose cores [core0, core1) cover the
 /// field's rows in order, each window holding its core and `margin` rows beyond it on each side (as far as
@@ -427,6 +441,7 @@ Status forEachBand(HeightRows& source, HeightField* field, const InputPlan& plan
         const int w0 = std::max(0, core0 - margin), w1 = std::min(height, core1 + margin);
         buffer.resize(static_cast<std::size_t>(w1 - w0) * width);
         TERRAIN_TRY(source.readRows(w0, w1 - w0, buffer));
+        clampSamples(buffer, plan);
         TERRAIN_TRY(fn(buffer, w0, w1 - w0, core0, core1));
     }
     return {};
@@ -516,8 +531,9 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     } else {
         warn("the file gives no sample spacing and -h was not given: using 1 m");
     }
-    if (!(spacing > 0) || !std::isfinite(spacing)) {
-        return makeError("sample spacing ", spacing, " m must be a positive finite number");
+    if (!(spacing >= kMinSpacingMetres && spacing <= kMaxSpacingMetres)) {
+        return makeError("sample spacing ", spacing, " m", info.spacing ? " (the file's)" : "", " must be in [",
+                         kMinSpacingMetres, ", ", kMaxSpacingMetres, "] m");
     }
     double scale = 1.0;
     if (info.verticalScale) {
@@ -618,6 +634,21 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
         }
         field = &whole;
     }
+    if (options.clampMetres) {
+        const double base = info.verticalOffset + options.offset;
+        const auto [lo, hi] = *options.clampMetres;
+        if (!(lo <= hi && std::abs(lo) <= kMaxHeightMetres && std::abs(hi) <= kMaxHeightMetres)) {
+            return makeError("--clamp ", lo, ",", hi, ": LO <= HI, both within +-", kMaxHeightMetres, " m");
+        }
+        auto native = [&](double metres) {
+            constexpr double kMax = std::numeric_limits<float>::max();
+            return static_cast<float>(std::clamp((metres - base) / scale, -kMax, kMax));
+        };
+        plan.clampNative = std::array<float, 2>{native(lo), native(hi)};
+        if (field) {
+            clampSamples(field->samples, plan);
+        }
+    }
 
     // Pass 1: the valid samples' statistics and the far fill's block means.
     progress(0.0, "reading");
@@ -632,6 +663,10 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     if (statistics.valid() == 0) {
         return makeError("height field has no valid sample (every sample is no-data)");
     }
+    if (!(scale > 0) || !std::isfinite(scale)) {
+        return makeError("vertical scale ", scale, " must be a positive finite number");
+    }
+    TERRAIN_TRY(checkSampleRange(statistics, scale, info.verticalOffset + options.offset));
     const FarFillGrid far = statistics.valid() < samples ? farBuilder.finish() : FarFillGrid{};
 
     auto quantization = chooseQuantization(
@@ -655,8 +690,14 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     header.quantizerBin = quantization->bin;
     header.maxErrorBound = quantization->errorBound;
     if (options.maxError > 0 && quantization->bin == 1 && quantization->errorBound == 0) {
-        warn("--max-error " + std::to_string(options.maxError) + " m is below one height step (" +
-             std::to_string(quantization->step) + " m): storing losslessly");
+        char message[200];
+        std::snprintf(message, sizeof message,
+                      options.maxError < quantization->step
+                          ? "--max-error %g m is below one height step (%g m): storing losslessly"
+                          : "--max-error %g m: the heights fill the 16-bit codes at a step of %g m, leaving no "
+                            "room for lossy codes: storing losslessly",
+                      options.maxError, quantization->step);
+        warn(message);
     }
 
     // Pass 2: fill, roughness, codes (the padding replicating the last column and row), filled squares.

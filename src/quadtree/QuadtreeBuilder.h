@@ -7,6 +7,7 @@
 #include "quadtree/LeafRoughness.h"
 #include "quadtree/MapFormat.h"
 
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -16,12 +17,19 @@
 
 namespace terrain {
 
+/// The sample spacings a map may have (metres): a micrometre to 1000 km.
+inline constexpr double kMinSpacingMetres = 1e-6;
+inline constexpr double kMaxSpacingMetres = 1e6;
+
 struct BuildOptions {
     int chunkSize = 65;                   ///< N: isValidChunkSize, 2^k + 1 in [3, kMaxChunkSize = 1025]
     std::optional<double> spacing;        ///< -h: metres between samples, used when the file has none
     std::optional<double> verticalScale;  ///< -v: metres per native unit, used when the file has none
     double offset = 0.0;                  ///< --offset: metres added after scaling
     double maxError = 0.0;                ///< --max-error: L-infinity bound in metres, 0 = lossless
+    /// --clamp LO,HI: heights (metres, after -v and --offset) below LO become LO, above HI become HI, before
+    /// anything else sees them (infinite samples included); LO <= HI.
+    std::optional<std::array<double, 2>> clampMetres;
     /// --height-codec: kHeightCodingKobbeltResidual (lossless or within maxError) or kHeightCodingPifs (seed
     /// 003's fractal code: lossy, its error measured and stored; needs maxError 0, chunks >= 9, the build in
     /// memory).

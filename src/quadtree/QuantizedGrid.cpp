@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -43,14 +44,88 @@ void SampleStatistics::addRows(int j0, int rows, std::span<const float> samples)
             if (std::isnan(v)) {
                 continue;
             }
-            mLo = std::min<double>(mLo, v);
-            mHi = std::max<double>(mHi, v);
+            if (std::isinf(v)) {
+                if (mInfinite++ == 0) {
+                    mFirstInfinite = v;
+                    mFirstInfiniteAt = {x, j0 + r};
+                }
+                continue;
+            }
+            if (v < mLo) {
+                mLo = v;
+                mLoAt = {x, j0 + r};
+            }
+            if (v > mHi) {
+                mHi = v;
+                mHiAt = {x, j0 + r};
+            }
             ++mValid;
             if ((rowStart + x) % mStride == 0) {
                 mSubsample.push_back(v);
             }
         }
     }
+}
+
+Status checkSampleRange(const SampleStatistics& statistics, double scale, double baseOffset)
+{
+    TERRAIN_EXPECTS(statistics.valid() > 0 && scale > 0.0, "valid samples and a positive scale");
+    auto sample = [](std::array<int, 2> at) {
+        return "sample (" + std::to_string(at[0]) + ", " + std::to_string(at[1]) +
+               ") (column, row from the south-west corner)";
+    };
+    if (statistics.infinite() > 0) {
+        const bool positive = statistics.firstInfinite() > 0;
+        return makeError(statistics.infinite(), " sample(s) are infinite, the first ", positive ? "+inf" : "-inf",
+                         " at ", sample(statistics.firstInfiniteAt()), ": if they mark missing data, give --nodata ",
+                         positive ? "inf" : "-inf", "; to keep them within a range, --clamp LO,HI (metres)");
+    }
+    // The terrain's bulk: from the subsample's median (every sample of a small field) up and down as long as
+    // no gap between consecutive values is wider than g = 10 median absolute deviations, at least 10 km (no
+    // relief on Earth has such a gap, and an island missed by the subsample is not taken for a spike).
+    std::vector<double> s = statistics.subsample();
+    if (s.empty()) {
+        s.push_back(statistics.lo());
+    }
+    std::sort(s.begin(), s.end());
+    const std::size_t middle = s.size() / 2;
+    const double median = s[middle];
+    std::vector<double> deviation(s.size());
+    std::transform(s.begin(), s.end(), deviation.begin(), [&](double v) { return std::abs(v - median); });
+    std::nth_element(deviation.begin(), deviation.begin() + static_cast<std::ptrdiff_t>(middle), deviation.end());
+    const double g = std::max(10.0 * deviation[middle], 1e4 / scale);
+    std::size_t top = middle, bottom = middle;
+    while (top + 1 < s.size() && s[top + 1] - s[top] <= g) {
+        ++top;
+    }
+    while (bottom > 0 && s[bottom] - s[bottom - 1] <= g) {
+        --bottom;
+    }
+    const double q0 = s[bottom], q1 = s[top], fence = g;
+    auto metres = [&](double native) { return baseOffset + scale * native; };
+    auto outlier = [&](bool high) {
+        const double v = high ? statistics.hi() : statistics.lo();
+        char value[64];
+        std::snprintf(value, sizeof value, "%.9g", v);  // a float's value exactly as --nodata reads it
+        char range[160];
+        std::snprintf(range, sizeof range, "which lies within %.6g m to %.6g m", metres(q0), metres(q1));
+        return makeError("the ", high ? "highest" : "lowest", " sample, ", value, " (", metres(v), " m) at ",
+                         sample(high ? statistics.hiAt() : statistics.loAt()), ", lies far ", high ? "above" : "below",
+                         " the rest of the terrain (", range, "): if it marks missing data, give --nodata ", value,
+                         "; to keep it within a range, --clamp LO,HI (metres)");
+    };
+    if (statistics.hi() > q1 + fence) {
+        return outlier(true);
+    }
+    if (statistics.lo() < q0 - fence) {
+        return outlier(false);
+    }
+    const double lo = metres(statistics.lo()), hi = metres(statistics.hi());
+    if (!(std::abs(lo) <= kMaxHeightMetres && std::abs(hi) <= kMaxHeightMetres)) {
+        return makeError("the heights range from ", lo, " m to ", hi, " m (vertical scale ", scale, ", offset ",
+                         baseOffset, " m): beyond +-", kMaxHeightMetres, " m; check -v and --offset");
+    }
+    return {};
 }
 
 double latticeTolerance(double lo, double hi)
@@ -126,6 +201,7 @@ Expected<Quantization> chooseQuantization(const SampleStatistics& statistics, bo
     }
     TERRAIN_EXPECTS(statistics.valid() > 0, "some sample must be valid");
     const double lo = statistics.lo(), hi = statistics.hi();
+    TERRAIN_EXPECTS(std::isfinite(lo) && std::isfinite(hi), "finite samples (checkSampleRange)");
     const double range = hi - lo;
 
     Quantization q;
@@ -144,8 +220,9 @@ Expected<Quantization> chooseQuantization(const SampleStatistics& statistics, bo
         // Lossless: one code per native unit; the lossy margin must still fit.
         q.nativePerCode = 1.0;
         q.step = scale;
-        auto e = static_cast<std::uint32_t>(std::floor(maxError / q.step + 1e-9));
-        e = std::min<std::uint32_t>(e, static_cast<std::uint32_t>((kMaxCodes - range) / 2));
+        // In double first: a huge maxError must not overflow the cast.
+        const auto e = static_cast<std::uint32_t>(
+            std::min(std::floor(maxError / q.step + 1e-9), std::floor((kMaxCodes - range) / 2)));
         q.margin = e;
         q.bin = 2 * e + 1;
         q.errorBound = e * q.step;
@@ -162,7 +239,9 @@ Expected<Quantization> chooseQuantization(const SampleStatistics& statistics, bo
         for (;;) {
             q.step = q.nativePerCode * scale;
             double remaining = maxError - q.step / 2;
-            auto e = remaining > 0 ? static_cast<std::uint32_t>(std::floor(remaining / q.step + 1e-9)) : 0u;
+            auto e = remaining > 0
+                         ? static_cast<std::uint32_t>(std::min(std::floor(remaining / q.step + 1e-9), kMaxCodes))
+                         : 0u;
             if (range / q.nativePerCode + 2.0 * e + 1 <= kMaxCodes) {
                 q.margin = e;
                 q.bin = 2 * e + 1;
@@ -183,6 +262,10 @@ Expected<Quantization> chooseQuantization(const HeightField& field, double scale
     if (statistics.valid() == 0) {
         return makeError("height field has no valid sample (every sample is no-data)");
     }
+    if (!(scale > 0) || !std::isfinite(scale)) {
+        return makeError("vertical scale ", scale, " must be a positive finite number");
+    }
+    TERRAIN_TRY(checkSampleRange(statistics, scale, baseOffset));
     return chooseQuantization(statistics, field.integerSamples, scale, baseOffset, maxError,
                               [&](double g) -> Expected<std::optional<double>> {
                                   return latticeDeviation(field.samples, statistics.lo(), statistics.hi(), g);

@@ -9,6 +9,7 @@
 #include "quadtree/HeightCodec.h"
 #include "quadtree/MapFormat.h"
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -30,25 +31,50 @@ struct Quantization {
 };
 
 /// What the quantization is chosen from, gathered from a field's rows in order (a whole field or bands of
-/// rows streamed from disk give the same): the range of the valid samples, their count and a subsample of
-/// them (every sample whose row-major index is a multiple of a stride, for the lattice test).
+/// rows streamed from disk give the same): the range of the valid samples, where its ends lie, their count and
+/// a subsample of them (every sample whose row-major index is a multiple of a stride, for the lattice test
+/// and the bulk's range), and the infinite samples, which are not valid.
 class SampleStatistics {
 public:
     SampleStatistics(int width, int height);
-    /// Rows [j0, j0 + rows), width samples each, rows fed in increasing order. NaN samples are skipped.
+    /// Rows [j0, j0 + rows), width samples each, rows fed in increasing order. NaN samples are skipped,
+    /// infinite ones counted apart.
     void addRows(int j0, int rows, std::span<const float> samples);
     double lo() const { return mLo; }
     double hi() const { return mHi; }
+    /// The first sample (column, row; row 0 the south row) holding lo(), and hi().
+    std::array<int, 2> loAt() const { return mLoAt; }
+    std::array<int, 2> hiAt() const { return mHiAt; }
     std::uint64_t valid() const { return mValid; }
     const std::vector<double>& subsample() const { return mSubsample; }
+    /// Samples that are +inf or -inf, and the first of them (value, column, row).
+    std::uint64_t infinite() const { return mInfinite; }
+    float firstInfinite() const { return mFirstInfinite; }
+    std::array<int, 2> firstInfiniteAt() const { return mFirstInfiniteAt; }
 
 private:
     int mWidth;
     std::uint64_t mStride;
     double mLo, mHi;
+    std::array<int, 2> mLoAt{}, mHiAt{};
     std::uint64_t mValid = 0;
     std::vector<double> mSubsample;
+    std::uint64_t mInfinite = 0;
+    float mFirstInfinite = 0.0f;
+    std::array<int, 2> mFirstInfiniteAt{};
 };
+
+/// The widest an input's heights may range in metres, either side of 0 (10,000 km: more than any planet's
+/// relief; finer quantities, the float positions the viewer draws with, stay meaningful within it).
+inline constexpr double kMaxHeightMetres = 1e7;
+
+/// Refuses, before anything is quantized, samples that would destroy the quantization, with what to do about
+/// them: infinite samples; a lowest or highest sample that lies far outside the rest of the terrain (the
+/// subsample's values around its median with no gap wider than 10 median absolute deviations, at least
+/// 10 km: an untagged no-data value such as -32768 or float max, or a spike, more than that gap beyond them),
+/// naming where it is and suggesting --nodata (its value, as the file holds it) or --clamp; and heights (baseOffset +
+/// scale x native) beyond kMaxHeightMetres, naming -v and --offset. Precondition: statistics.valid() > 0, scale > 0.
+Status checkSampleRange(const SampleStatistics& statistics, double scale, double baseOffset);
 
 /// The lattice step g of float samples that may all lie on lo + k g (k < 65535) up to float rounding:
 /// estimated from the subsample (its smallest gap, refined on values ever farther from lo); empty when the

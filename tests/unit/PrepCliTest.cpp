@@ -4,6 +4,7 @@
 // tengine-tool's exit codes.
 #include "MapTestSupport.h"
 #include "apps/DetailSetup.h"
+#include "heightfield/GdalRaster.h"
 #include "heightfield/HeightFieldIo.h"
 #include "heightfield/Image.h"
 #include "synthesis/DetailRecipeSetup.h"
@@ -357,6 +358,28 @@ TEST(PrepCliTest, BadArgumentsAndInputsAreErrorsNamingTheCulprit)
         {{small, "--height-codec", "pifs", "--max-error", "2"}, "--max-error has no effect with --height-codec pifs"},
         {{small, "--height-codec", "pifs", "--chunk", "5"}, "chunk size of at least 9"},
         {{small, "--height-codec", "pifs", "--out-of-core"}, "--height-codec pifs builds in memory"},
+        // Every number at its extremes: refused by name, never a crash.
+        {{small, "-h", "1e308"}, "-h: the spacing must be in"},
+        {{small, "-h", "1e-300"}, "-h: the spacing must be in"},
+        {{small, "-h", "inf"}, "-h"},
+        {{small, "-h", "nan"}, "-h"},
+        {{small, "-h", "3.4028235e38"}, "-h: the spacing must be in"},
+        {{small, "-v", "1e308"}, "-v: the vertical scale must be in"},
+        {{small, "-v", "1e-300"}, "-v: the vertical scale must be in"},
+        {{small, "-v", "1e8"}, "check -v and --offset"},
+        {{small, "--offset", "1e308"}, "--offset: must be within"},
+        {{small, "--offset", "-1.7976931348623157e308"}, "--offset: must be within"},
+        {{small, "--offset", "9.99e6", "-v", "1000"}, "check -v and --offset"},
+        {{small, "--max-error", "1e308"}, "--max-error: must be in"},
+        {{small, "--max-error", "inf"}, "--max-error"},
+        {{small, "--nodata", "nan"}, "--nodata"},
+        {{small, "--clamp", "5"}, "--clamp: '5' is not LO,HI"},
+        {{small, "--clamp", "9,1"}, "--clamp: '9,1' is not LO,HI"},
+        {{small, "--clamp", "0,1e308"}, "--clamp: '0,1e308' is not LO,HI"},
+        {{small, "--chunk", "9223372036854775807"}, "--chunk"},
+        {{small, "--threads", "-1"}, "thread count -1"},
+        {{small, "--texture-size", "1e9"}, "--texture-size"},
+        {{small, "--memory", "99999999999999999999G"}, "--memory"},
     };
     for (const Case& c : cases) {
         std::string line;
@@ -370,6 +393,59 @@ TEST(PrepCliTest, BadArgumentsAndInputsAreErrorsNamingTheCulprit)
             << "prep" << line << ": output does not mention '" << c.mentions << "':\n"
             << result.output;
         EXPECT_TRUE(mapsAndTemporaries(dir).empty()) << "prep" << line << " left " << mapsAndTemporaries(dir).front();
+    }
+}
+
+TEST(PrepCliTest, FloatRastersWithInfiniteOrUntaggedNoDataSamplesAreRefusedWithTheFix)
+{
+    test::ScratchDir dir;
+    RasterGrid grid;
+    grid.width = 64;
+    grid.height = 64;
+    auto raster = [&](const std::string& name, float bad, int count) {
+        std::vector<float> heights(64 * 64);
+        for (int j = 0; j < 64; ++j) {
+            for (int i = 0; i < 64; ++i) {
+                heights[static_cast<std::size_t>(j) * 64 + i] =
+                    1000.0f + 200.0f * std::sin(static_cast<float>(i) / 9.0f) * std::cos(static_cast<float>(j) / 7.0f);
+            }
+        }
+        std::fill_n(heights.begin() + 640, count, bad);
+        const auto path = dir / name;
+        EXPECT_TRUE(writeFloat32GeoTiff(path, grid, heights).ok());
+        return path.string();
+    };
+    const float floatMax = std::numeric_limits<float>::max();
+    const std::string untagged = raster("fmax.tif", floatMax, 40),
+                      inf = raster("inf.tif", std::numeric_limits<float>::infinity(), 1),
+                      spike = raster("spike.tif", 1e30f, 1);
+    const std::string out = (dir / "out.map").string();
+    struct Case {
+        std::vector<std::string> args;
+        int exitCode;
+        std::string mentions;
+    };
+    const Case cases[] = {
+        {{untagged, "-o", out}, 1, "--nodata 3.40282347e+38"},
+        // The value as gdalinfo prints it (17 digits) and as the error suggests it both work.
+        {{untagged, "--nodata", "3.40282346638529011e+38", "-o", out}, 0, "40 no-data samples filled"},
+        {{untagged, "--nodata", "3.40282347e+38", "-o", out}, 0, "40 no-data samples filled"},
+        {{inf, "-o", out}, 1, "1 sample(s) are infinite"},
+        {{inf, "--nodata", "inf", "-o", out}, 0, "1 no-data samples filled"},
+        {{inf, "--clamp", "0,2000", "-o", out}, 0, "prep: wrote"},
+        {{spike, "-o", out}, 1, "--nodata 1.00000002e+30"},
+        {{spike, "--clamp", "-100,5000", "-o", out}, 0, "prep: wrote"},
+    };
+    for (const Case& c : cases) {
+        std::string line;
+        for (const auto& a : c.args) {
+            line += " " + a;
+        }
+        std::filesystem::remove(out);
+        auto result = test::runProgram(kPrep, c.args);
+        EXPECT_EQ(result.exitCode, c.exitCode) << "prep" << line << ":\n" << result.output;
+        EXPECT_TRUE(mentions(result.output, c.mentions)) << "prep" << line << ":\n" << result.output;
+        EXPECT_EQ(std::filesystem::exists(out), c.exitCode == 0) << "prep" << line;
     }
 }
 
