@@ -34,6 +34,14 @@ Expected<ScratchMapping> ScratchMapping::create(const std::filesystem::path& dir
         ::close(fd);
         return makeError(dir.string(), ": cannot size a scratch file of ", bytes, " bytes: ", std::strerror(error));
     }
+    // Reserved now: a sparse file would take its blocks at the first write to each page, and a full disk
+    // then kills the process with SIGBUS instead of an error.
+    if (const int reserved = ::posix_fallocate(fd, 0, static_cast<off_t>(bytes)); reserved != 0) {
+        ::close(fd);
+        return makeError(dir.string(), ": cannot reserve a scratch file of ", bytes,
+                         " bytes: ", std::strerror(reserved),
+                         reserved == ENOSPC ? " (the disk is full: free space there, or give more --memory)" : "");
+    }
     void* data = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
     const int error = errno;
     ::close(fd);  // the mapping keeps the file

@@ -3,6 +3,7 @@
 #include "quadtree/PifsCodec.h"
 
 #include "core/MappedCopy.h"
+#include "core/Memory.h"
 #include "quadtree/TextureCodec.h"
 
 #include <fcntl.h>
@@ -189,6 +190,9 @@ Expected<std::unique_ptr<MapFile>> MapFile::open(const std::filesystem::path& pa
                          " nodes ends at byte ", header->directoryOffset + header->directoryBytes,
                          " (truncated or extended)");
     }
+    // The directory as read and as decoded, before allocating either.
+    TERRAIN_TRY(checkAllocation(header->directoryBytes + std::uint64_t{header->nodeCount} * sizeof(DirectoryEntry),
+                                name + ": the directory of " + std::to_string(header->nodeCount) + " nodes"));
     std::vector<std::uint8_t> directoryBytes(header->directoryBytes);
     TERRAIN_TRY(preadAll(fd.get(), header->directoryOffset, directoryBytes.size(), directoryBytes.data(), name));
     auto directory = decodeDirectory(directoryBytes, *header, name);

@@ -447,6 +447,13 @@ Expected<MapHeader> decodeHeader(std::span<const std::uint8_t> bytes, const std:
         return bad("directory of ", h.nodeCount, " nodes at offset ", h.directoryOffset, " with ", h.directoryBytes,
                    " bytes is inconsistent");
     }
+    // A quadtree of L levels has at most (4^L - 1) / 3 nodes, and each node's data takes a byte at least.
+    const std::uint64_t mostNodes = ((std::uint64_t{1} << (2 * h.levels)) - 1) / 3;  // levels <= 24
+    if (h.nodeCount > mostNodes || h.nodeCount > h.directoryOffset - h.nodeAreaOffset()) {
+        return bad("header claims ", h.nodeCount, " nodes, more than ", h.levels, " levels hold (",
+                   std::min(mostNodes, h.directoryOffset - h.nodeAreaOffset()),
+                   " at most, a byte of node data each before the directory)");
+    }
     return h;
 }
 

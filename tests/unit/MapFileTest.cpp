@@ -652,11 +652,11 @@ TEST(MapFileTest, OversizedHeaderFieldsAreRefusedBeforeAllocating)
         {"texture size 2^31 + 1", {{28, 4, (1ull << 31) + 1}}, "texture size 2147483649"},
         {"2^32 - 1 nodes, directory past the end",
          {{116, 4, allNodes}, {128, 8, allNodes * 48}},
-         "directory of 4294967295 nodes"},
+         "4294967295 nodes"},
         // offset + size wraps around 2^64 to the file's size: would read a 192 GiB directory.
         {"2^32 - 1 nodes, directory offset wrapping to the file's end",
          {{116, 4, allNodes}, {128, 8, allNodes * 48}, {120, 8, fileSize - allNodes * 48}},
-         "directory of 4294967295 nodes"},
+         "4294967295 nodes"},
         {"directory of 2^63 bytes", {{128, 8, 1ull << 63}}, "9223372036854775808 bytes"},
         // Accepted by the header: the largest chunks, levels and textures the format allows.
         {"roughness block of 2^32 - 1 bytes", {{244, 4, 0xffffffff}}, "roughness block of 4294967295 bytes"},
@@ -694,6 +694,52 @@ TEST(MapFileTest, OversizedHeaderFieldsAreRefusedBeforeAllocating)
         }
     }
     ::testing::Test::RecordProperty("checked", checked);
+}
+
+TEST(MapFileTest, ADirectoryOfMoreNodesThanTheTreeOrMemoryHoldsIsRefusedBeforeAllocating)
+{
+    // 2^31 nodes in a (sparse) file large enough to hold their directory: with the map's own levels more than
+    // the tree has; with 24 levels and 2 GiB of node area, more than memory holds. Both ended in bad_alloc.
+    test::ScratchDir dir;
+    const Bytes good = test::readFileBytes(buildSmallMap(dir));
+    const std::uint64_t nodes = 1ull << 31;
+    const std::uint64_t nodeArea = test::readLe(good, 120, 8);  // the directory offset the map has
+    struct Case {
+        const char* what;
+        std::uint32_t levels;  ///< 0: the map's own
+        std::uint64_t directoryOffset;
+        const char* mentions;
+    };
+    const Case cases[] = {
+        {"2^31 nodes in the map's levels", 0, nodeArea, "header claims 2147483648 nodes"},
+        {"2^31 nodes in 24 levels", 24, nodeArea + nodes, "the directory of 2147483648 nodes"},
+    };
+    for (const Case& c : cases) {
+        Bytes bad = good;
+        test::writeLe(bad, 116, nodes, 4);
+        test::writeLe(bad, 128, nodes * 48, 8);
+        test::writeLe(bad, 120, c.directoryOffset, 8);
+        if (c.levels > 0) {
+            test::writeLe(bad, 24, c.levels, 4);
+            test::writeLe(bad, 244, 0, 4);  // a map of 24 levels has no roughness block
+            test::writeLe(bad, 248, 0, 4);
+        }
+        test::writeLe(bad, 252, zlibCrc(std::span(bad).first(252)), 4);
+        const auto path = dir / "claims.map";
+        test::writeFileBytes(path, bad);
+        std::filesystem::resize_file(path, c.directoryOffset + nodes * 48);  // sparse: no disk used
+        for (ReaderKind kind : kReaders) {
+            SCOPED_TRACE(std::string(c.what) + ", " + readerName(kind));
+            const auto run = test::runWithMemoryLimit([&] {
+                auto map = MapFile::open(path, kind);
+                return map.ok() ? std::string("accepted") : "refused: " + map.error().message;
+            });
+            ASSERT_EQ(run.outcome, test::LimitedRun::Outcome::Returned) << test::describe(run);
+            EXPECT_EQ(run.text.rfind("refused: " + path.string() + ": ", 0), 0u) << test::describe(run);
+            EXPECT_TRUE(mentions(run.text, c.mentions)) << run.text << "\ndoes not mention " << c.mentions;
+        }
+        std::filesystem::remove(path);
+    }
 }
 
 TEST(MapFileTest, DamagedDirectoryBytesAreAChecksumError)
