@@ -280,7 +280,7 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
     std::uint64_t oracleRefined = 0, oracleRefinedWithinTau = 0;
     double worst = 0.0, sum = 0.0;
     std::uint64_t points = 0, refined = 0, refinedWithinTau = 0;
-    std::size_t framesOverTau = 0, framesShort = 0;
+    std::size_t framesOverTau = 0, framesShort = 0, framesBelow = 0;
     struct LevelFigures {
         std::size_t nodes = 0, held = 0, dynamicNodes = 0;
         double sumBound = 0.0, sumMeasured = 0.0, worstRatio = 0.0;
@@ -326,6 +326,11 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
                                     " (t = " + std::to_string(t) + " s): "
                               : std::string("--camera: ")) +
                         "the camera is not over the terrain: " + ground.error().message);
+        } else if (camera.position.z < ground->height) {
+            // Measured all the same (the viewer draws it so), but said: the figures are of the underside.
+            ++framesBelow;
+            std::fprintf(err, "tengine-tool: warning: frame %zu (t = %.2f s): the camera is %.1f m below the terrain\n",
+                         frame, t, ground->height - camera.position.z);
         }
         FrameStats stats;
         for (int round = 0; round < 256; ++round) {
@@ -433,6 +438,12 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
                          oracle->maxPixels, oracle->refined.size(), oracle->refinedWithinTau, oracle->overTau);
         }
         std::fflush(out);
+    }
+    if (framesBelow > 0) {
+        std::fprintf(out,
+                     "# camera below the terrain in %zu of %zu frames: those figures are of the terrain seen "
+                     "from below\n",
+                     framesBelow, frames);
     }
     if (framesShort > 0) {
         std::fprintf(err,

@@ -419,7 +419,8 @@ std::vector<OptionSpec> makeOptionTable()
                            above(0), "metres"));
     t.push_back(realOption("camera_z_far", kGroupCamera, "Distance to the far clipping plane.", &O::cameraZFar,
                            above(0), "metres"));
-    t.back().expected = "a number > camera_z_near (metres)";  // the relation is checked by validate()
+    // The relations are checked by validate().
+    t.back().expected = "a number > camera_z_near, at most 2^24 times it (metres)";
     t.push_back(realOption("camera_min_clearance", kGroupCamera,
                            "In free flight the camera stays at least this high above the surface being drawn "
                            "(demo and video mode fly their path as given, with a warning where it goes below).",
@@ -786,11 +787,21 @@ void writeSetting(std::ostringstream& out, std::string_view prefix, std::string_
     out << " " << (quote ? "\"" : "") << value << (quote ? "\"" : "") << "\n";
 }
 
+/// The most camera_z_far / camera_z_near a 24-bit depth buffer resolves to the far plane: 2^24.
+constexpr double kMaxDepthRange = 16777216.0;
+
 Status validate(const TengineOptions& o)
 {
     if (!(o.cameraZFar > o.cameraZNear)) {
         return makeError("camera_z_far (", formatNumber(o.cameraZFar), ") must be greater than camera_z_near (",
                          formatNumber(o.cameraZNear), ")");
+    }
+    // A 24-bit depth buffer tells a point at distance d from the far plane while 2 near / d > 2^-24: beyond
+    // that ratio the far terrain (all of it, past a point) lands on the cleared depth and is not drawn.
+    if (!(o.cameraZFar / o.cameraZNear <= kMaxDepthRange)) {
+        return makeError("camera_z_far / camera_z_near is ", formatNumber(o.cameraZFar / o.cameraZNear),
+                         ": the depth buffer cannot tell distances apart beyond ", formatNumber(kMaxDepthRange),
+                         " (the far terrain would not be drawn); raise camera_z_near or lower camera_z_far");
     }
     if (o.demoMode && o.cameraPath.empty()) {
         return makeError("demo_mode needs a camera_path");

@@ -2,6 +2,7 @@
 #include "apps/DataDirectories.h"
 #include "apps/DetailSetup.h"
 #include "apps/ErrorCommand.h"
+#include "core/AtomicFile.h"
 #include "core/Memory.h"
 #include "core/OutputGuard.h"
 #include "core/Parse.h"
@@ -465,6 +466,9 @@ int main(int argc, char** argv)
                 refuseInputAsOutput(command == "texture" ? "texture PNG" : "exported GeoTIFF", output, inputs);
             !refused.ok()) {
             return fail(command + ": " + refused.error().message);
+        }
+        if (auto writable = checkOutputPath(output); !writable.ok()) {
+            return fail(command + ": " + writable.error().message);
         }
     }
     auto map = MapFile::open(args[1], reader);

@@ -11,14 +11,46 @@
 
 namespace terrain {
 
-namespace {
-std::filesystem::path temporaryNameFor(const std::filesystem::path& path)
+std::filesystem::path temporaryOutputName(const std::filesystem::path& path, std::string_view extension)
 {
     // Unique per process and per call, so concurrent writers of different outputs never collide.
     static std::atomic<unsigned> counter{0};
-    auto name = path.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-    return path.parent_path() / name;
+    const std::string suffix =
+        ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + std::string(extension);
+    // Within the longest name a directory entry may have, however long the output's own name is.
+    std::string base = path.filename().string();
+    base.resize(std::min(base.size(), kMaxFileNameBytes - suffix.size()));
+    return path.parent_path() / (base + suffix);
 }
+
+Status checkOutputPath(const std::filesystem::path& path)
+{
+    const std::string name = path.filename().string();
+    if (name.empty() || name == "." || name == "..") {
+        return makeError(path.string(), ": cannot create output file: no file name (give one)");
+    }
+    if (name.size() > kMaxFileNameBytes) {
+        return makeError(path.string(), ": cannot create output file: its name is ", name.size(),
+                         " bytes long, more than the ", kMaxFileNameBytes, " a file name may have");
+    }
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) {
+        return makeError(path.string(), ": cannot create output file: it is a directory (give a file name in it)");
+    }
+    const std::filesystem::path directory =
+        path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path();
+    if (!std::filesystem::is_directory(directory, ec)) {
+        return makeError(path.string(), ": cannot create output file: the directory ", directory.string(),
+                         " does not exist");
+    }
+    if (::access(directory.c_str(), W_OK | X_OK) != 0) {
+        return makeError(path.string(), ": cannot create output file in ", directory.string(), ": ",
+                         std::strerror(errno));
+    }
+    return {};
+}
+
+namespace {
 
 /// strerror plus what the user can do about the errors a full disk or a size limit gives.
 std::string describeWriteError(int error)
@@ -73,6 +105,8 @@ Expected<AtomicFile> AtomicFile::create(const std::filesystem::path& path)
 {
     // Preferably an unnamed file in the target directory (O_TMPFILE): if the process dies before commit,
     // even by SIGKILL, nothing at all is left behind. Filesystems without it get a named temporary.
+    // What would only fail at the rename, after all the work: checked first.
+    TERRAIN_TRY(checkOutputPath(path));
     auto directory = path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path();
     int fd = ::open(directory.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0644);
     if (fd >= 0) {
@@ -82,7 +116,7 @@ Expected<AtomicFile> AtomicFile::create(const std::filesystem::path& path)
         }
         ::close(fd);
     }
-    auto temporary = temporaryNameFor(path);
+    auto temporary = temporaryOutputName(path);
     std::FILE* file = std::fopen(temporary.c_str(), "wb");
     if (!file) {
         return makeError(path.string(), ": cannot create output file: ", std::strerror(errno));
@@ -172,7 +206,7 @@ Status AtomicFile::commit()
     if (mTemporaryPath.empty()) {
         // Give the unnamed file a name next to the target, then rename that over the target (linkat
         // cannot replace an existing file).
-        auto temporary = temporaryNameFor(mPath);
+        auto temporary = temporaryOutputName(mPath);
         auto procPath = "/proc/self/fd/" + std::to_string(::fileno(mFile));
         if (::linkat(AT_FDCWD, procPath.c_str(), AT_FDCWD, temporary.c_str(), AT_SYMLINK_FOLLOW) != 0) {
             int linkError = errno;
@@ -186,7 +220,8 @@ Status AtomicFile::commit()
     std::error_code ec;
     std::filesystem::rename(mTemporaryPath, mPath, ec);
     if (ec) {
-        std::filesystem::remove(mTemporaryPath, ec);
+        std::error_code removed;  // its own: the rename's reason is the one to report
+        std::filesystem::remove(mTemporaryPath, removed);
         return makeError(mPath.string(), ": cannot rename temporary output into place: ", ec.message());
     }
     return {};

@@ -12,8 +12,21 @@
 #include <cstdio>
 #include <filesystem>
 #include <span>
+#include <string_view>
 
 namespace terrain {
+
+/// The longest name a directory entry may have (NAME_MAX on Linux file systems).
+inline constexpr std::size_t kMaxFileNameBytes = 255;
+
+/// Whether an output can be created at `path`, checked before any work is done for it: a file name of at most
+/// kMaxFileNameBytes, not a directory, in an existing directory this process may write to. The error names
+/// the path and what is wrong (the system's reason where it gives one).
+Status checkOutputPath(const std::filesystem::path& path);
+
+/// A temporary name beside `path` for writing it, unique per process and call, ending in `extension` (short),
+/// within kMaxFileNameBytes however long the output's own name is.
+std::filesystem::path temporaryOutputName(const std::filesystem::path& path, std::string_view extension = "");
 
 class AtomicFile {
 public:

@@ -1,6 +1,7 @@
 // Rasters through GDAL's C++ API (issue 15; research and the API facts used here: docs/gdal-notes.md).
 #include "heightfield/GdalRaster.h"
 
+#include "core/AtomicFile.h"
 #include "core/Memory.h"
 
 #include <cpl_conv.h>
@@ -922,8 +923,9 @@ Status writeFloat32GeoTiff(const std::filesystem::path& path, const RasterGrid& 
     if (driver == nullptr) {
         return makeError(path.string(), ": this GDAL has no GTiff driver");
     }
+    TERRAIN_TRY(checkOutputPath(path));
     // A temporary name in the same directory, ending in .tif (GTiff checks nothing, but sidecars follow it).
-    const std::filesystem::path temporary = path.string() + ".partial.tif";
+    const std::filesystem::path temporary = temporaryOutputName(path, ".tif");
     CPLStringList create;
     create.SetNameValue("TILED", "YES");
     create.SetNameValue("COMPRESS", "DEFLATE");
@@ -983,7 +985,8 @@ Status writeFloat32GeoTiff(const std::filesystem::path& path, const RasterGrid& 
     std::error_code ec;
     std::filesystem::rename(temporary, path, ec);
     if (ec) {
-        std::filesystem::remove(temporary, ec);
+        std::error_code removed;  // its own: the rename's reason is the one to report
+        std::filesystem::remove(temporary, removed);
         return makeError(path.string(), ": cannot rename the finished file into place: ", ec.message());
     }
     return {};

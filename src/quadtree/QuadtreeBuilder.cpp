@@ -476,6 +476,8 @@ Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, c
 Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, const std::filesystem::path& output)
 {
     const auto start = std::chrono::steady_clock::now();
+    // Before the build: an output that cannot be created would only fail when the map is written.
+    TERRAIN_TRY(checkOutputPath(output));
     auto warn = [&](const std::string& message) {
         if (options.warn) {
             options.warn(message);
@@ -602,22 +604,37 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
         // Bands: a quarter of the budget for the band (samples, fill and mask bytes), at least a leaf row and
         // 256 rows; per thread a subtree's square of codes and its encoded nodes.
         const std::uint64_t rowBytes = std::uint64_t{static_cast<std::uint32_t>(width)} * 6;
-        const std::uint64_t bandRows = std::max<std::uint64_t>(budget / 4 / rowBytes, 1);
-        const int leafRowsPerBand = static_cast<int>(
-            std::max<std::uint64_t>({bandRows > 2 * kBandMargin ? (bandRows - 2 * kBandMargin) / cells : 0,
-                                     static_cast<std::uint64_t>(256 / cells), std::uint64_t{1}}));
-        plan.coreRows = leafRowsPerBand * cells;
+        // The rows of a band for a budget, and what the build then needs: the band grows with the budget.
+        auto coreRowsFor = [&](std::uint64_t b) {
+            const std::uint64_t bandRows = std::max<std::uint64_t>(b / 4 / rowBytes, 1);
+            const int leafRowsPerBand = static_cast<int>(
+                std::max<std::uint64_t>({bandRows > 2 * kBandMargin ? (bandRows - 2 * kBandMargin) / cells : 0,
+                                         static_cast<std::uint64_t>(256 / cells), std::uint64_t{1}}));
+            return leafRowsPerBand * cells;
+        };
         const std::uint64_t square = std::min<std::uint64_t>(gridSize, 4096 + 2 * cells);
         const std::uint64_t perThread = square * square * 6;  // its codes, encoded nodes and textures
-        const std::uint64_t needed = (static_cast<std::uint64_t>(plan.coreRows) + 2 * kBandMargin) * rowBytes +
-                                     static_cast<std::uint64_t>(options.threads) * perThread + fixedBytes +
-                                     samples / (kFillBlock * kFillBlock) * 16 +
-                                     QuantizedGrid::coarseLatticeBytes(gridSize, coarseShift) +
-                                     (std::uint64_t{4} << 20);
-        if (needed > budget) {
+        auto neededFor = [&](std::uint64_t b) {
+            return (static_cast<std::uint64_t>(coreRowsFor(b)) + 2 * kBandMargin) * rowBytes +
+                   static_cast<std::uint64_t>(options.threads) * perThread + fixedBytes +
+                   samples / (kFillBlock * kFillBlock) * 16 + QuantizedGrid::coarseLatticeBytes(gridSize, coarseShift) +
+                   (std::uint64_t{4} << 20);
+        };
+        plan.coreRows = coreRowsFor(budget);
+        if (neededFor(budget) > budget) {
+            // The least budget that covers what it itself needs (the need grows by a quarter of the budget, so
+            // following the need converges), rounded up to a MiB: following the advice works.
+            std::uint64_t advice = neededFor(budget);
+            for (int k = 0; k < 200 && neededFor(advice) > advice; ++k) {
+                advice = neededFor(advice);
+            }
+            if (!options.forceOutOfCore) {
+                advice = std::min(advice, inMemoryBytes);  // the whole build in memory may need less
+            }
+            advice = (advice + (std::uint64_t{1} << 20) - 1) >> 20 << 20;
             return makeError("the memory budget of ", formatBytes(budget), " is too small for a ", width, "x", height,
-                             " input on ", options.threads, " thread(s) even out of core: it needs about ",
-                             formatBytes(needed), " (--memory, fewer --threads)");
+                             " input on ", options.threads, " thread(s) even out of core: --memory ", advice >> 20,
+                             "M is enough (or fewer --threads)");
         }
     }
     HeightField whole;

@@ -79,5 +79,59 @@ TEST(AtomicFileTest, UnwritableDirectoryIsAClearError)
     EXPECT_NE(file.error().message.find("/nonexistent-dir/x/out.map"), std::string::npos);
 }
 
+TEST(AtomicFileTest, OutputsThatCannotBeCreatedAreRefusedBeforeAnyWork)
+{
+    test::ScratchDir dir;
+    std::filesystem::create_directory(dir / "sub");
+    struct Case {
+        std::filesystem::path path;
+        std::string says;
+    };
+    const Case cases[] = {
+        {dir / "sub", "it is a directory"},
+        {dir.path() / "", "no file name"},
+        {dir / std::string(256, 'n'), "its name is 256 bytes long, more than the 255"},
+        {dir / "missing" / "out.map", "the directory " + (dir / "missing").string() + " does not exist"},
+    };
+    for (const Case& c : cases) {
+        const Status checked = checkOutputPath(c.path);
+        ASSERT_FALSE(checked.ok()) << c.path;
+        EXPECT_NE(checked.error().message.find(c.says), std::string::npos) << checked.error().message;
+        auto file = AtomicFile::create(c.path);
+        ASSERT_FALSE(file.ok()) << c.path;
+        EXPECT_NE(file.error().message.find(c.says), std::string::npos) << file.error().message;
+    }
+    EXPECT_TRUE(checkOutputPath(dir / std::string(255, 'n')).ok());
+    EXPECT_EQ(dir.list(), std::vector<std::string>{"sub"}) << "nothing is created by the checks";
+}
+
+TEST(AtomicFileTest, TheLongestNamesAreWrittenTheirTemporariesStayWithinTheLimit)
+{
+    test::ScratchDir dir;
+    const std::string longest(255, 'x');
+    EXPECT_LE(temporaryOutputName(dir / longest).filename().string().size(), kMaxFileNameBytes);
+    EXPECT_LE(temporaryOutputName(dir / longest, ".tif").filename().string().size(), kMaxFileNameBytes);
+    EXPECT_TRUE(temporaryOutputName(dir / longest, ".tif").string().ends_with(".tif"));
+    EXPECT_NE(temporaryOutputName(dir / "a"), temporaryOutputName(dir / "a")) << "unique per call";
+    ASSERT_TRUE(writeFileAtomically(dir / longest, std::vector<std::uint8_t>{1, 2, 3}).ok());
+    EXPECT_EQ(readAll(dir / longest), std::string("\x01\x02\x03"));
+}
+
+TEST(AtomicFileTest, AFailedRenameSaysWhy)
+{
+    // The target becomes a non-empty directory between create and commit: the rename fails, and the message
+    // keeps its reason (it said "Success": the temporary's removal overwrote the error).
+    test::ScratchDir dir;
+    auto file = AtomicFile::create(dir / "out");
+    ASSERT_TRUE(file.ok()) << file.error().message;
+    file->write("data", 4);
+    std::filesystem::create_directories(dir / "out" / "inside");
+    const Status committed = file->commit();
+    ASSERT_FALSE(committed.ok());
+    EXPECT_EQ(committed.error().message.find("Success"), std::string::npos) << committed.error().message;
+    EXPECT_NE(committed.error().message.find("directory"), std::string::npos) << committed.error().message;
+    EXPECT_EQ(dir.list(), std::vector<std::string>{"out"}) << "no temporary is left";
+}
+
 }  // namespace
 }  // namespace terrain

@@ -1003,6 +1003,15 @@ TEST_F(ErrorMeterCommandTest, RunsOnAMapAndRefusesCamerasOffIt)
     EXPECT_EQ(std::sscanf(last.c_str(), "error: max %lf px", &max), 1) << last;
     EXPECT_GT(max, 0.0);
     EXPECT_NE(out.find("# tau 2 px, 320x240"), std::string::npos) << out;
+    EXPECT_EQ(out.find("below the terrain"), std::string::npos) << out;
+    EXPECT_EQ(err.find("below the terrain"), std::string::npos) << err;
+
+    // Under the terrain: measured, and said (it printed normal-looking figures without a word).
+    const double ground = test::openMap(mMapPath)->header().heightOffset - 1000.0;
+    EXPECT_EQ(run("256,100," + std::to_string(ground) + ",0,30", out, err), 0) << err;
+    EXPECT_NE(err.find("frame 0 (t = 0.00 s): the camera is"), std::string::npos) << err;
+    EXPECT_NE(err.find("m below the terrain"), std::string::npos) << err;
+    EXPECT_NE(out.find("# camera below the terrain in 1 of 1 frames"), std::string::npos) << out;
 }
 
 }  // namespace

@@ -157,6 +157,25 @@ TEST(OutOfCoreTest, BudgetTooSmallEvenOutOfCoreIsAnErrorThatLeavesNoFile)
     EXPECT_NE(message.find("--memory"), std::string::npos) << message;
     EXPECT_FALSE(std::filesystem::exists(path));
     EXPECT_TRUE(std::filesystem::is_empty(dir.path())) << "no temporary or scratch file left behind";
+
+    // The advice is a fixed point: following it once works (it moved each time it was followed: 212, then
+    // 250, 260.5, 261.3 MiB), in memory or with --out-of-core. And it is the least that works: 1 MiB less fails.
+    for (bool outOfCore : {false, true}) {
+        SCOPED_TRACE(outOfCore ? "--out-of-core" : "in memory if it fits");
+        options.forceOutOfCore = outOfCore;
+        options.memoryBudget = std::uint64_t{4} << 20;
+        auto refused = buildMap(holedField(), options, path);
+        ASSERT_FALSE(refused.ok());
+        const std::string& advice = refused.error().message;
+        const std::size_t at = advice.find("--memory ");
+        ASSERT_NE(at, std::string::npos) << advice;
+        const std::uint64_t advised = std::stoull(advice.substr(at + 9)) << 20;
+        options.memoryBudget = advised;
+        auto followed = buildMap(holedField(), options, dir / "followed.map");
+        EXPECT_TRUE(followed.ok()) << "--memory " << (advised >> 20) << "M: " << followed.error().message;
+        options.memoryBudget = advised - (std::uint64_t{1} << 20);
+        EXPECT_FALSE(buildMap(holedField(), options, dir / "less.map").ok()) << "the advice is the least budget";
+    }
 }
 
 TEST(OutOfCoreTest, ByteSizesTakeKMGSuffixesAndRejectTheRest)

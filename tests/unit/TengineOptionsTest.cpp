@@ -312,7 +312,7 @@ TEST(TengineOptions, InvalidValuesAreErrorsSayingWhatIsExpected)
         {"camera_fov=179", "a number in (1, 179) (degrees)"},
         {"camera_z_near=0", "a number > 0 (metres)"},
         {"camera_min_clearance=-1", "a number >= 0 (metres)"},
-        {"camera_z_far=-5", "a number > camera_z_near (metres)"},
+        {"camera_z_far=-5", "a number > camera_z_near, at most 2^24 times it (metres)"},
         {"camera_position=1, 2", "empty or three numbers 'x, y, z' (metres)"},
         {"camera_position=1, 2, 3, 4", "empty or three numbers 'x, y, z' (metres)"},
         {"camera_position=1, two, 3", "empty or three numbers 'x, y, z' (metres)"},
@@ -641,6 +641,13 @@ TEST_F(TengineOptionsCommandLine, Errors)
         {{"--set", "camera_z_far=0.5"}, "camera_z_far (0.5) must be greater than camera_z_near (1)"},
         {{"--set", "camera_z_near=10", "--set", "camera_z_far=10"},
          "camera_z_far (10) must be greater than camera_z_near (10)"},
+        // Accepted before, drawing nothing: the depth buffer cannot resolve such a range.
+        {{"--set", "camera_z_far=1e300"},
+         "camera_z_far / camera_z_near is 1e+300: the depth buffer cannot tell distances apart beyond 16777216 "
+         "(the far terrain would not be drawn); raise camera_z_near or lower camera_z_far"},
+        {{"--set", "camera_z_near=1e-30"},
+         "camera_z_far / camera_z_near is 2e+35: the depth buffer cannot tell distances apart beyond 16777216 "
+         "(the far terrain would not be drawn); raise camera_z_near or lower camera_z_far"},
         {{"--set", "demo_mode=on"}, "demo_mode needs a camera_path"},
         {{"--set", "video_mode=on"}, "video_mode needs a camera_path"},
         {{"--set", "video_measure_error_every=5"},
