@@ -902,6 +902,9 @@ Expected<ParsedCommandLine> parseTengineCommandLine(const std::vector<std::strin
             return makeError("unknown argument '", arg, "' (see --help)");
         } else {
             // A map by its signature, a config by parsing (any name); anything else is an error naming it.
+            if (std::error_code ec; std::filesystem::is_directory(arg, ec)) {
+                return makeError("'", arg, "' is a directory, not a map or a config file");
+            }
             const ArgumentKind kind = classifyArgument(arg);
             if (kind == ArgumentKind::Map) {
                 if (mapArgument) {

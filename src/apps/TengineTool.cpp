@@ -653,8 +653,13 @@ int main(int argc, char** argv)
         const auto& r = *region;
         const double s = *exportSpacing;
         const double nx = std::floor((r[2] - r[0]) / s + 1e-9) + 1, ny = std::floor((r[3] - r[1]) / s + 1e-9) + 1;
-        if (nx * ny > 1e9) {
-            return fail("export: " + std::to_string(nx) + " x " + std::to_string(ny) + " samples is too many");
+        if (!(nx * ny <= 1e9) || !(nx <= 1e6) || !(ny <= 1e6)) {
+            char message[200];
+            std::snprintf(message, sizeof message,
+                          "export: %.6g x %.6g samples is too many (at most 1e9, 1e6 a side): a larger --spacing or a "
+                          "smaller --region",
+                          nx, ny);
+            return fail(message);
         }
         RasterGrid grid;
         grid.width = static_cast<int>(nx);

@@ -48,9 +48,10 @@ void toBytes(const double* c, std::uint8_t* rgb)
 HeightColouring::HeightColouring(const QuantizedGrid& grid, const MapHeader& header, double heightMin, double heightMax)
     : mGrid(grid), mTable(static_cast<std::size_t>(kTableSteps) * kTableSteps * 3)
 {
-    heightMax = std::max(heightMax, heightMin + header.heightStep);
+    // In codes, at least one: heights far from 0 may differ by less than a double resolves there.
     mCodeMin = (heightMin - header.heightOffset) / header.heightStep;
-    mHeightStepsPerCode = (kTableSteps - 1) * header.heightStep / (heightMax - heightMin);
+    const double codeRange = std::max((heightMax - header.heightOffset) / header.heightStep - mCodeMin, 1.0);
+    mHeightStepsPerCode = (kTableSteps - 1) / codeRange;
     mSlopeStepsPerCode = (kTableSteps - 1) * header.heightStep / (2 * header.sampleSpacing) / kTableMaxSlope;
     // The palette depends on height fraction and slope only: tabulate it once.
     for (int i = 0; i < kTableSteps; ++i) {
@@ -79,8 +80,8 @@ const std::uint8_t* HeightColouring::colourAt(std::int64_t x, std::int64_t y) co
     };
     const double dx = code(std::min(x + 1, last), y) - code(std::max<std::int64_t>(x - 1, 0), y);
     const double dy = code(x, std::min(y + 1, last)) - code(x, std::max<std::int64_t>(y - 1, 0));
-    const auto i =
-        static_cast<int>(std::clamp((code(x, y) - mCodeMin) * mHeightStepsPerCode + 0.5, 0.0, kTableSteps - 1.0));
+    const double t = (code(x, y) - mCodeMin) * mHeightStepsPerCode + 0.5;
+    const auto i = static_cast<int>(std::isfinite(t) ? std::clamp(t, 0.0, kTableSteps - 1.0) : 0.0);
     const auto j =
         static_cast<int>(std::min(std::sqrt(dx * dx + dy * dy) * mSlopeStepsPerCode + 0.5, kTableSteps - 1.0));
     return &mTable[(static_cast<std::size_t>(i) * kTableSteps + j) * 3];

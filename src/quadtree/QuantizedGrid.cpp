@@ -125,6 +125,13 @@ Status checkSampleRange(const SampleStatistics& statistics, double scale, double
         return makeError("the heights range from ", lo, " m to ", hi, " m (vertical scale ", scale, ", offset ",
                          baseOffset, " m): beyond +-", kMaxHeightMetres, " m; check -v and --offset");
     }
+    // 65535 height steps over the relief must stay apart where the heights lie: a relief finer than 2^-30 of
+    // its distance from 0 would quantize to steps that doubles (and the viewer's positions) cannot resolve.
+    const double relief = hi - lo, magnitude = std::max(std::abs(lo), std::abs(hi));
+    if (relief > 0.0 && relief < std::ldexp(magnitude, -30)) {
+        return makeError("the heights span only ", relief, " m at ", lo, " m (vertical scale ", scale, ", offset ",
+                         baseOffset, " m): finer than positions resolve that far from 0; check -v and --offset");
+    }
     return {};
 }
 

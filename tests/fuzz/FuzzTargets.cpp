@@ -2,12 +2,15 @@
 
 #include "apps/TengineOptions.h"
 #include "core/ConfigFile.h"
+#include "heightfield/GdalRaster.h"
 #include "heightfield/HeightFieldIo.h"
+#include "heightfield/HeightRows.h"
 #include "heightfield/Image.h"
 #include "heightfield/NoDataFill.h"
 #include "lod/CameraPath.h"
 #include "quadtree/MapFile.h"
 #include "quadtree/MapVerifier.h"
+#include "quadtree/QuadtreeBuilder.h"
 #include "synthesis/Material.h"
 
 #include <sys/mman.h>
@@ -250,6 +253,107 @@ void fuzzCameraPath(std::span<const std::uint8_t> data)
     }
 }
 
+void fuzzElevation(std::span<const std::uint8_t> data)
+{
+    if (data.size() < 4) {
+        return;
+    }
+    const int width = 2 + data[0] % 32, height = 2 + data[1] % 32;
+    std::vector<float> samples(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 100.0f);
+    const auto bytes = data.subspan(4);
+    for (std::size_t k = 0; k < samples.size() && 4 * k + 4 <= bytes.size(); ++k) {
+        std::memcpy(&samples[k], bytes.data() + 4 * k, 4);
+    }
+    // A scratch directory per process (GDAL writes and reads files by name), removed at exit.
+    struct ScratchDirectory {
+        std::filesystem::path path;
+        ScratchDirectory()
+        {
+            std::string pattern = (std::filesystem::temp_directory_path() / "fuzz-elevation-XXXXXX").string();
+            if (::mkdtemp(pattern.data()) == nullptr) {
+                std::perror("fuzz: mkdtemp");
+                std::abort();
+            }
+            path = pattern;
+        }
+        ~ScratchDirectory()
+        {
+            std::error_code ec;
+            std::filesystem::remove_all(path, ec);
+        }
+    };
+    static const ScratchDirectory scratch;
+    const auto tif = scratch.path / "in.tif", map = scratch.path / "out.map";
+    RasterGrid grid;
+    grid.width = width;
+    grid.height = height;
+    grid.step = 30.0;
+    if (!writeFloat32GeoTiff(tif, grid, samples).ok()) {
+        return;
+    }
+    ElevationReadOptions read;
+    if (data[2] % 3 == 1) {
+        read.noData = samples[0];
+    } else if (data[2] % 3 == 2) {
+        read.noData = std::numeric_limits<double>::infinity();
+    }
+    const std::filesystem::path inputs[] = {tif};
+    auto raster = ElevationRaster::open(inputs, read);
+    if (!raster.ok()) {
+        return;
+    }
+    RasterRows rows(std::move(raster).value());
+    BuildOptions options;
+    options.chunkSize = 5;
+    options.threads = 1;
+    options.zlibLevel = 1;
+    const std::uint8_t extremes = data[3];
+    // The extremes each option's range ends at, as prep lets them through.
+    if (extremes & 1) {
+        options.verticalScale = (extremes & 2) ? 1e9 : 1e-9;
+    }
+    if (extremes & 4) {
+        options.offset = (extremes & 8) ? 1e7 : -1e7;
+    }
+    if (extremes & 16) {
+        options.maxError = (extremes & 32) ? 1e7 : 1e-3;
+    }
+    if (extremes & 64) {
+        options.clampMetres = std::array<double, 2>{-50.0, (extremes & 128) ? 1e7 : 500.0};
+    }
+    auto built = buildMap(rows, options, map);
+    if (built.ok()) {
+        auto opened = MapFile::open(map, ReaderKind::Stream);
+        if (!opened.ok()) {
+            std::fprintf(stderr, "fuzz: a map the builder wrote does not open: %s\n", opened.error().message.c_str());
+            std::abort();
+        }
+        const std::vector<std::string> problems = verifyMap(**opened);
+        if (!problems.empty()) {
+            std::fprintf(stderr, "fuzz: a map the builder wrote does not verify: %s\n", problems.front().c_str());
+            std::abort();
+        }
+    }
+    std::error_code ec;
+    std::filesystem::remove(map, ec);
+}
+
+void fuzzTengineArguments(std::span<const std::uint8_t> data)
+{
+    std::vector<std::string> arguments;
+    std::string_view text = asText(data);
+    while (!text.empty() && arguments.size() < 64) {
+        const std::size_t end = std::min(text.find('\0'), text.size());
+        arguments.emplace_back(text.substr(0, end));
+        text.remove_prefix(std::min(end + 1, text.size()));
+    }
+    auto parsed = parseTengineCommandLine(arguments);
+    if (parsed.ok()) {
+        (void)checkOutputsAreNotInputs(*parsed, {});
+        (void)tengineConfigText(parsed->options);
+    }
+}
+
 std::span<const Target> targets()
 {
     static constexpr Target kTargets[] = {
@@ -261,6 +365,8 @@ std::span<const Target> targets()
         {"config", fuzzConfig},
         {"material", fuzzMaterial},
         {"camera_path", fuzzCameraPath},
+        {"elevation", fuzzElevation},
+        {"tengine_arguments", fuzzTengineArguments},
     };
     return kTargets;
 }

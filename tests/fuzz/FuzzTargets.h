@@ -38,6 +38,14 @@ void fuzzConfig(std::span<const std::uint8_t> data);
 void fuzzMaterial(std::span<const std::uint8_t> data);
 /// Camera path files: parsed and evaluated (clamped and looping) over and beyond their time range.
 void fuzzCameraPath(std::span<const std::uint8_t> data);
+/// Elevation through GDAL with extreme samples: data[0] and data[1] give the raster's width and height (2 to
+/// 33), data[2] a --nodata choice (none, the first sample's value, +inf) and data[3] the options' extremes
+/// (-v, --offset, --max-error, --clamp); the rest are float32 samples of any bit pattern (NaN, +-inf, float
+/// max, denormals), written as a GeoTIFF and built into a map by prep's builder, which then verifies.
+void fuzzElevation(std::span<const std::uint8_t> data);
+/// tengine's command line: the arguments separated by NUL bytes, parsed as tengine does (maps, configs,
+/// --set), and what a successful parse hands on: the output check and the config text.
+void fuzzTengineArguments(std::span<const std::uint8_t> data);
 
 /// Every target, in a fixed order.
 std::span<const Target> targets();

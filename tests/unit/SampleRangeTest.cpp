@@ -114,6 +114,9 @@ TEST(SampleRangeTest, HeightsBeyondTheWidestRangeNameTheScaleAndOffset)
     EXPECT_TRUE(mentions(rangeOf(field, 1e6), "check -v and --offset"));
     EXPECT_TRUE(mentions(rangeOf(field, 1.0, 2e7), "check -v and --offset"));
     EXPECT_TRUE(rangeOf(field, 1.0, -9e6).ok());
+    // A relief of 4e-7 m at -1e7 m: steps no position resolves there (it crashed the texture sampler).
+    EXPECT_TRUE(mentions(rangeOf(field, 1e-9, -1e7), "finer than positions resolve"));
+    EXPECT_TRUE(rangeOf(field, 1e-9, 0.0).ok()) << "the same relief near 0 is fine";
 }
 
 TEST(SampleRangeTest, NoDataIsComparedInTheSamplesOwnType)

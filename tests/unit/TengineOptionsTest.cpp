@@ -708,6 +708,12 @@ TEST_F(TengineOptionsCommandLine, ArgumentsAreMapsByTheirSignatureAndConfigsByPa
     auto missing = parse({(mDir / "nothing").string()});
     ASSERT_FALSE(missing.ok());
     EXPECT_NE(missing.error().message.find((mDir / "nothing").string()), std::string::npos) << missing.error().message;
+    // A directory is neither (it read as an empty config).
+    auto directory = parse({mDir.path().string()});
+    ASSERT_FALSE(directory.ok());
+    std::string expected = mDir.path().string();
+    expected.insert(0, 1, '\'').append("' is a directory, not a map or a config file");
+    EXPECT_EQ(directory.error().message, expected);
     // Two maps: an error, not the last one silently.
     auto two = parse({map, "other.map"});
     ASSERT_FALSE(two.ok());
