@@ -1,6 +1,6 @@
 #version 330 core
 #ifdef PIXEL_COUNTS
-// Visible pixels per drawn node (issue 16; Özak & Demir, seed 001, method 2): each fragment that passes the
+// Visible pixels per drawn node (Özak & Demir, seed 001, method 2): each fragment that passes the
 // depth test adds one to its node's counter. The test must come before the program runs, or occluded
 // fragments would count too (their side effect happens whatever the later test decides).
 #extension GL_ARB_shader_storage_buffer_object : require

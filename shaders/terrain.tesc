@@ -1,5 +1,5 @@
 #version 400 core
-// Tessellation control (issue 13): the block's level and its sides' lattices come from the CPU
+// Tessellation control: the block's level and its sides' lattices come from the CPU
 // (lod/TessellationLevels.h, chooseBlockLevels, one 16-bit code per block of every drawn node), so what is
 // drawn is exactly what the error meter measures. A block at level t is tessellated uniformly into
 // (B / 2^t)^2 cells (all six levels equal: no transition triangles); a skirt patch into B / 2^t columns. Culled

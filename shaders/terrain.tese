@@ -1,5 +1,5 @@
 #version 400 core
-// Tessellation evaluation (issue 13): the vertices of a block at level t, or of a border skirt, from the
+// Tessellation evaluation: the vertices of a block at level t, or of a border skirt, from the
 // node's data in the pools, with the same geomorph, normals and outputs as the chunk vertex program
 // (terrain.vert; terrain.frag shades both). A vertex on a block side whose lattice is coarser than t is
 // snapped onto that lattice (lod/BlockErrors.h, snapToLattice and tessellatedVertex compute the same), so the

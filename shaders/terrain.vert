@@ -1,7 +1,7 @@
 #version 330 core
 // Chunk vertex program (paper 3.2.8-3.2.9), one instance per drawn node: the shared template mesh becomes
 // the node by scale, camera-relative translation and the node's heights (eq. 3.7). Node data lives in the
-// renderer's pools (issue 13): the node's surface window in one layer of a texture array, its constants in
+// renderer's pools: the node's surface window in one layer of a texture array, its constants in
 // a texture buffer, so all nodes go in one instanced draw. Every vertex geomorphs between the parent's
 // surface and its own height (eq. 3.4, morph factor of eq. 3.5), and its normal with it. The parent's
 // surface is the node's own even samples (they are the parent's samples) along the template triangulation;

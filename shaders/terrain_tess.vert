@@ -1,5 +1,5 @@
 #version 400 core
-// Tessellation mode (render_mode = tessellation, issue 13): one patch per tessellation block of a drawn node
+// Tessellation mode (render_mode = tessellation): one patch per tessellation block of a drawn node
 // and one per block side on the node's border (its skirt), one instance per node. This stage only hands the
 // patch number and the node's constants (the same per-instance attributes as terrain.vert) to the control
 // shader (terrain.tesc); terrain.tese makes the vertices.

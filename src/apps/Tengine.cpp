@@ -451,7 +451,7 @@ Expected<FrameError> measureShownError(Scene& scene, const Camera& camera, const
     const DepthSurface surface(TerrainRenderer::readDepth(camera.viewportWidth, camera.viewportHeight),
                                camera.viewportWidth, camera.viewportHeight, camera);
     if (scene.clipmap) {
-        // lod_mode = clipmap: the rings' surface as drawn, against the same reference (issue 17).
+        // lod_mode = clipmap: the rings' surface as drawn, against the same reference.
         MeasuredVisibility visibility;
         visibility.shows = [&surface](const glm::dvec3& point) { return surface.shows(point); };
         return scene.meter->measureSurface(
@@ -771,7 +771,7 @@ int run(const ParsedCommandLine& parsed, const StopSignals& stop)
         const auto frameStart = std::chrono::steady_clock::now();
         // Seconds on the viewer's clock, never decreasing (video mode: the frame's time).
         const double clock = video || demo ? time : std::chrono::duration<double>(now - start).count();
-        // Visibility (issue 16): the pixel counts of the frames drawn long enough ago, then what they hide.
+        // Visibility: the pixel counts of the frames drawn long enough ago, then what they hide.
         FrameVisibility visibility;
         double moved = 0.0;  // metres from where the depth tested against was drawn
         if (scene->visibility) {

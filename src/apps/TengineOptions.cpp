@@ -508,7 +508,7 @@ std::vector<OptionSpec> makeOptionTable()
     t.push_back({"render_mode", kGroupDisplay,
                  "How nodes become triangles: chunks draws every selected node's template mesh in full (3.2.9); "
                  "tessellation cuts each node into blocks of 8 x 8 quads that the GPU tessellates, each as coarse "
-                 "as its share of tau allows (issue 13; needs OpenGL 4.0, else chunks with a line saying so). "
+                 "as its share of tau allows (needs OpenGL 4.0, else chunks with a line saying so). "
                  "Tessellation is the default: on the demo paths it draws 6-11x fewer triangles than chunks within "
                  "the same measured error, and llvmpipe draws its frames 25-30% faster.",
                  "chunks or tessellation",

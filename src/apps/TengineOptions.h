@@ -39,7 +39,7 @@ struct TengineOptions {
     ReaderKind reader = ReaderKind::MemoryMapped;  ///< reader: stream | memory_mapped
     int workerThreads = 1;                         ///< worker_threads: >= 0; 0 loads on the render thread
     int requestQueueSize = 8;                      ///< request_queue_size: node groups waiting, >= 1
-    bool visibilityLod = false;                    ///< visibility_lod: hidden terrain is not refined (issue 16)
+    bool visibilityLod = false;                    ///< visibility_lod: hidden terrain is not refined
     int visibilityHiddenFrames = 4;                ///< visibility_hidden_frames: dark frames before hidden, [1, 64]
     double visibilityRevealSeconds = 0.1;          ///< visibility_reveal_seconds: morph-in per level, > 0
 
@@ -77,8 +77,8 @@ struct TengineOptions {
     /// in software (Auto: llvmpipe draws RG8 faster; a GPU decodes RGTC2 for free).
     enum class Compression { Auto, On, Off };
     Compression normalMapCompression = Compression::Auto;
-    bool tessellation = true;                 ///< render_mode: true tessellation (issue 13), false chunks
-    bool clipmap = false;                     ///< lod_mode: false quadtree, true clipmap (seed 002, issue 17)
+    bool tessellation = true;                 ///< render_mode: true tessellation, false chunks
+    bool clipmap = false;                     ///< lod_mode: false quadtree, true clipmap (seed 002)
     int clipmapSamples = 255;                 ///< clipmap_samples: n = 2^k - 1 in [15, 1023]
     double clipmapFinestSpacing = 1.0;        ///< clipmap_finest_spacing: metres, > 0
     double clipmapMorphSeconds = 0.3;         ///< clipmap_morph_seconds: >= 0

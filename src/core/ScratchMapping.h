@@ -1,4 +1,4 @@
-// A scratch array too large for memory (prep's out-of-core build, issue 15): an unnamed temporary file,
+// A scratch array too large for memory (prep's out-of-core build): an unnamed temporary file,
 // mapped shared, so the kernel writes pages back to disk instead of holding them in the process. The file
 // has no name (O_TMPFILE, else unlinked at once): nothing is left behind, even after a crash.
 #pragma once

@@ -1,4 +1,4 @@
-// Rasters through GDAL's C++ API (issue 15; research and the API facts used here: docs/gdal-notes.md).
+// Rasters through GDAL's C++ API (research and the API facts used here: docs/gdal-notes.md).
 #include "heightfield/GdalRaster.h"
 
 #include "core/AtomicFile.h"

@@ -1,4 +1,4 @@
-// Rasters through GDAL (issue 15): elevation from any raster GDAL reads (one file, a mosaic of tiles, a
+// Rasters through GDAL: elevation from any raster GDAL reads (one file, a mosaic of tiles, a
 // VRT), reprojected block by block when it is geographic; georeferenced imagery resampled onto a map's
 // texel lattice; geographic <-> map coordinates; float32 GeoTIFF output. GDAL's headers stay in the .cpp.
 //

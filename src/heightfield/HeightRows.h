@@ -1,4 +1,4 @@
-// Where prep reads heights from (issue 15): a field's description and its rows on demand, so a build can
+// Where prep reads heights from: a field's description and its rows on demand, so a build can
 // stream an input larger than memory through in bands instead of holding it whole.
 #pragma once
 

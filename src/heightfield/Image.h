@@ -34,7 +34,7 @@ enum class PngCompression { Small, Fast };
 Status writePngImage(const std::filesystem::path& path, const Image& image,
                      PngCompression compression = PngCompression::Small);
 
-/// How two images of the same size differ (issue 16: frames drawn with and without visibility_lod).
+/// How two images of the same size differ (frames drawn with and without visibility_lod).
 struct ImageDifference {
     std::size_t pixels = 0;     ///< in each image
     std::size_t identical = 0;  ///< pixels whose channels are all equal

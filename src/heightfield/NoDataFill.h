@@ -1,5 +1,5 @@
 // Filling no-data samples (NaN) before a height field is quantized, the same whether the field is held
-// whole or streamed through in bands of rows (out-of-core prep, issue 15).
+// whole or streamed through in bands of rows (out-of-core prep).
 //
 // A hole at Chebyshev distance d <= kFillRings from valid data takes, ring by ring, the mean of its
 // 8-neighbours that are valid or of an earlier ring (a hole is filled smoothly from its rim). A hole farther

@@ -1,4 +1,4 @@
-// How a terrain's roughness scales with distance, measured from its own samples (issue 14), so detail
+// How a terrain's roughness scales with distance, measured from its own samples, so detail
 // synthesis can continue that law below the data's spacing.
 //
 // The measure is slope-free: the midpoint deviation d(x, r) = h(x) - (h(x - r) + h(x + r)) / 2 along

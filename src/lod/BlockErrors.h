@@ -1,4 +1,4 @@
-// Per-block simplification errors of a node, for the tessellation render mode (issue 13; Yusov & Shevtsov,
+// Per-block simplification errors of a node, for the tessellation render mode (Yusov & Shevtsov,
 // seed 000, section 5: the errors lambda^(d) of each tessellation block). A node of N x N samples is cut
 // into blocks of B x B quads; drawing a block from every 2^d-th sample (d = 1 .. log2 B) moves its surface
 // by at most lambda(d) metres vertically. Pure: no GL.

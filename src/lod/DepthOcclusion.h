@@ -1,4 +1,4 @@
-// Whether boxes lay hidden behind what a frame drew, from that frame's depth buffer (issue 16, visibility_lod):
+// Whether boxes lay hidden behind what a frame drew, from that frame's depth buffer (visibility_lod):
 // the test for nodes that have no pixel counts of their own yet (new in view, just split), so that terrain
 // appearing behind a ridge is not refined, loaded or synthesized for the frames until its counts say so
 // (Özak & Demir, seed 001, test the previous frame's results; the box against its depth is the conservative

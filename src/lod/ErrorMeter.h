@@ -1,4 +1,4 @@
-// The screen-space error the viewer really draws (issue 12, closed-loop LOD): the vertical distance between
+// The screen-space error the viewer really draws (closed-loop LOD): the vertical distance between
 // the drawn surface (every selected node with its morph, eq. 3.4) and a reference surface, projected to
 // pixels at each point's own distance and direction, the way Yusov & Shevtsov project their error segments
 // (seed 000, section 5). Pure: no GL; nodes come from the streamer (drawn) and a NodeSource (reference).
@@ -85,7 +85,7 @@ struct OracleSelection {
     std::size_t refinedWithinTau = 0;
 };
 
-/// What a frame drawn with visibility_lod (issue 16) showed, for measuring it (ErrorMeter::measure).
+/// What a frame drawn with visibility_lod showed, for measuring it (ErrorMeter::measure).
 struct MeasuredVisibility {
     /// The drawing's block test (tessellation mode, TerrainRenderer::draw's `occluded`): the meter picks the
     /// blocks' levels as the renderer did. Hidden nodes (SelectedNode::hidden) take every block's coarsest
@@ -124,7 +124,7 @@ public:
     /// The height (metres above the map's offset) another method draws at world (x, y), or nothing where it
     /// draws nothing: lod_mode = clipmap's surface (ClipmapTerrain::drawnHeight).
     using DrawnSurface = std::function<std::optional<double>(double x, double y)>;
-    /// Measures a frame drawn by another method than the quadtree selection (issue 17: geometry clipmaps)
+    /// Measures a frame drawn by another method than the quadtree selection (geometry clipmaps)
     /// against the same reference: the reference refined from the root as for measure() (static leaves, then
     /// dynamic nodes until they converge), at every vertex of its leaves in view. Exact where the drawn
     /// triangles nest with the leaves' (clipmap rings use the quadtree's grids), the points in between not

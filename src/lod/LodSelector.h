@@ -65,7 +65,7 @@ private:
 using ChildrenResident = std::function<bool(const NodeId& parent)>;
 
 /// Whether node `id` has shown no pixel for long enough that its hidden terrain need not be refined
-/// (visibility_lod, issue 16; NodeVisibility::hidden). Empty function: nothing is hidden.
+/// (visibility_lod; NodeVisibility::hidden). Empty function: nothing is hidden.
 using NodeHidden = std::function<bool(const NodeId& id)>;
 
 /// Whether node `id` is held at its own detail this frame although the error test would refine it: it is
@@ -118,7 +118,7 @@ double lodDistanceFactor(const Camera& camera, double tauPixels);
 /// grows with the pitch, and looking down it shrinks towards the bottom of the image (unused here).
 double verticalErrorFactor(const Camera& camera);
 
-/// The distance eq. 3.3 and eq. 3.5 use (issue 12: a pixel bound everywhere in the image): the smallest eye
+/// The distance eq. 3.3 and eq. 3.5 use (a pixel bound everywhere in the image): the smallest eye
 /// depth of `box` (its corners against the view direction, at least the near plane) divided by K =
 /// verticalErrorFactor(camera). A vertical error of delta metres anywhere in the box then covers at most
 /// delta * S / (2 tan(fov / 2)) / lodDistance pixels, so lodDistance >= delta * C keeps it within tau. The

@@ -65,7 +65,7 @@ using ChildrenKnown = std::function<bool(const NodeId&)>;
 /// Levels of resident children below a node whose boxes the depth test may use in its place.
 constexpr int kOcclusionLevels = 2;
 
-/// The selection's question (issue 16) from both measures. Without `occlusion` (the depth of the latest
+/// The selection's question from both measures. Without `occlusion` (the depth of the latest
 /// measured frame; null when there is none): a node's own pixel counts (NodeVisibility::hidden). With it, a
 /// node is hidden when its counts do not show it visible and its surface, refined as far as it can be, lay
 /// behind that depth: its nested box in `tree` (resident nodes' heights) is occluded, or, where

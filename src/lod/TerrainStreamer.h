@@ -24,7 +24,7 @@ struct StreamerOptions {
     /// detail_velocity_limit (3.4.4): no new dynamic nodes while the camera moves faster than this many of
     /// their sample spacings per second; 0 = no limit. Static nodes are always loaded.
     double velocityLimit = 0.0;
-    /// visibility_reveal_seconds (issue 16): with visibility, a node drawn for the first time below a node
+    /// visibility_reveal_seconds: with visibility, a node drawn for the first time below a node
     /// that was hidden less than kRevealWindowSeconds ago morphs in from its parent's surface over this long,
     /// and is not refined before it has (the next level then morphs in the same way): cresting a ridge
     /// refines the terrain behind it a level each this many seconds, morphed, instead of popping the levels
@@ -35,7 +35,7 @@ struct StreamerOptions {
 /// How long after a node was last hidden the nodes first drawn below it morph in (StreamerOptions::revealSeconds).
 inline constexpr double kRevealWindowSeconds = 2.0;
 
-/// What the viewer saw of the nodes it drew (issue 16, visibility_lod) and when, for one update.
+/// What the viewer saw of the nodes it drew (visibility_lod) and when, for one update.
 struct FrameVisibility {
     NodeHidden hidden;  ///< nodes not to refine (NodeVisibility::hidden); empty: none
     double time = 0.0;  ///< seconds on the viewer's clock (video mode: the frame's time); never decreasing
@@ -69,13 +69,13 @@ public:
     /// One frame: collect finished loads, select for `camera` at tau pixels, request what is missing.
     /// `cameraSpeed` (metres per second, >= 0) feeds the velocity limit.
     FrameStats update(const Camera& camera, double tauPixels, double cameraSpeed = 0.0);
-    /// The same with visibility (issue 16): `visibility.hidden` nodes are not refined and request nothing;
+    /// The same with visibility: `visibility.hidden` nodes are not refined and request nothing;
     /// nodes first drawn below a node hidden in the last kRevealWindowSeconds morph in over
     /// StreamerOptions::revealSeconds from their parent's surface (their SelectedNode::morph is at most the
     /// time since then over revealSeconds) and are not refined before that (NodeHeld).
     FrameStats update(const Camera& camera, double tauPixels, double cameraSpeed, const FrameVisibility& visibility);
 
-    /// Clipmap mode (issue 17, lod/ClipmapTerrain.h): no selection (it stays empty). Keeps the `wanted` nodes and
+    /// Clipmap mode (lod/ClipmapTerrain.h): no selection (it stays empty). Keeps the `wanted` nodes and
     /// their ancestors resident and, for each one missing, asks for the children of its deepest resident
     /// ancestor that can have them, coarse levels first (within the cache's room). FrameStats::requested counts
     /// the groups asked for (or wanted and deferred), inserted / refused / synthesized what arrived.

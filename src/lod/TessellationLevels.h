@@ -1,4 +1,4 @@
-// The tessellation render mode's levels for the blocks of a drawn node (issue 13, part 2; Yusov & Shevtsov,
+// The tessellation render mode's levels for the blocks of a drawn node (Yusov & Shevtsov,
 // seed 000, section 5, with their edge-centre projection replaced by the selector's bound projection).
 //
 // Each block is tessellated uniformly at its level t (cells of 2^t samples). Where two blocks meet, the
@@ -57,7 +57,7 @@ inline std::uint64_t skirtPatchTriangles(int f)
     return f == 1 ? 2 : 4 * static_cast<std::uint64_t>(f) - 2;
 }
 
-/// Whether a box lay wholly behind what the previous frame drew (DepthOcclusion::occluded; issue 16).
+/// Whether a box lay wholly behind what the previous frame drew (DepthOcclusion::occluded).
 using BoxOccluded = std::function<bool(const Aabb&)>;
 
 /// The levels of the blocks of a node whose box is `node` (its square and height range), for `camera` at
@@ -70,7 +70,7 @@ BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node
                               const BoxOccluded& occluded = {});
 
 /// The levels a selected node is drawn with (TerrainRenderer::draw, and ErrorMeter::measure measuring it): a
-/// `hidden` node's (SelectedNode::hidden, issue 16) every block at its coarsest, the others' chooseBlockLevels.
+/// `hidden` node's (SelectedNode::hidden) every block at its coarsest, the others' chooseBlockLevels.
 BlockLevels drawnBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels,
                              bool hidden, const BoxOccluded& occluded);
 

@@ -1,5 +1,5 @@
-// The roughness law of each static leaf (issue 14), measured from a field held whole or streamed through in
-// bands of whole leaf rows (out-of-core prep, issue 15): both give the same map bytes.
+// The roughness law of each static leaf, measured from a field held whole or streamed through in
+// bands of whole leaf rows (out-of-core prep): both give the same map bytes.
 #pragma once
 
 #include "heightfield/HeightField.h"

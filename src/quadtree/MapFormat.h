@@ -25,10 +25,10 @@ inline constexpr std::array<std::uint8_t, 8> kMapMagic = {0x89, 'T', 'M', 'A', '
 /// Version written. 2 added detail_delta_c to the directory entries (3.4.1); 3 the detail recipe block
 /// after the header (what those errors were estimated for); 4 (same layout) measured errors: delta_c is the
 /// largest distance to the leaves below, nested with max, and the leaves' detail errors come from the
-/// synthesis model (issue 12); 5 the roughness block (each static leaf's RoughnessLaw, issue 14) and the
+/// synthesis model; 5 the roughness block (each static leaf's RoughnessLaw) and the
 /// recipe's roughness flag. Versions 1 to 4 are still read: they have no roughness (the synthesis below
 /// their leaves is subdivision and materials only, as they were made for). 6 the georeference block (the
-/// CRS of the world coordinates, issue 15; the source description shrinks to 88 bytes to make room).
+/// CRS of the world coordinates; the source description shrinks to 88 bytes to make room).
 inline constexpr std::uint32_t kMapVersion = 6;
 /// Version 4 errors nest as delta_c(node) = max(measured, kErrorNesting x the children's largest): a parent's
 /// error stays a quarter above its children's, so every split has a geomorph range (eq. 3.5 morphs a node

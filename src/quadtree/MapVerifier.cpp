@@ -92,7 +92,7 @@ private:
         if (mProgress) {
             mProgress(static_cast<double>(mDone) / static_cast<double>(mMap.directory().size()));
         }
-        const bool measured = mMap.header().version >= 4;  // errors measured directly (issue 12)
+        const bool measured = mMap.header().version >= 4;  // errors measured directly
         if (entry.hasChildren) {
             std::array<StaticNode, 4> children;
             std::vector<StaticNode> below;

@@ -212,7 +212,7 @@ public:
         }
         summary.deltaM = static_cast<float>(simplificationError(id) * mHeader.heightStep);
         // The measured distance to the finest data, nested with max and a margin for the geomorph
-        // (kErrorNesting; issue 12: eq. 3.1 summed delta_m over the levels, an upper bound of this that grows
+        // (kErrorNesting; eq. 3.1 summed delta_m over the levels, an upper bound of this that grows
         // with every level). Fractal coding stores neither the node nor the leaves as the input has them: the
         // distance between what they store is at most the input's plus both their coding errors.
         const double codecError = mPifs ? static_cast<double>(mPifs->errorCodes(id)) + summary.leafCodecError : 0.0;

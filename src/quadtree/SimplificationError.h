@@ -40,7 +40,7 @@ double simplificationErrorCodes(int chunkSize, Sample&& sample)
 /// delta_m in codes of static node `id` from the quantized grid. Requires id.level + 1 < header.levels.
 double simplificationErrorCodes(const QuantizedGrid& grid, const MapHeader& header, const NodeId& id);
 
-/// The measured error of static node `id` in codes (issue 12, in place of eq. 3.1's sum): the largest vertical
+/// The measured error of static node `id` in codes (in place of eq. 3.1's sum): the largest vertical
 /// distance from the node's surface (its samples of `grid`, along the template triangulation) to the finest
 /// surface stored below it, the stored leaves (`hasChildren` tells which nodes have children). The leaves'
 /// grids nest in the node's, so both surfaces are linear on the leaves' triangles and the largest distance is

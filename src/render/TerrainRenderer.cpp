@@ -1,5 +1,5 @@
 // Drawing the selected chunks: template mesh (3.2.9, eq. 3.7), geomorphing (3.2.8, eq. 3.4-3.6), skirts
-// (3.2.6), zigzag index buffer (3.2.10), front to back (3.2.11), node data in pools (4.2.3, issue 13).
+// (3.2.6), zigzag index buffer (3.2.10), front to back (3.2.11), node data in pools (4.2.3).
 #include "render/TerrainRenderer.h"
 
 #include "heightfield/Image.h"

@@ -48,7 +48,7 @@ struct RenderStats {
 
 /// The node pools' size and formats.
 struct PoolOptions {
-    std::size_t slots = 512;  ///< nodes: the cache's capacity (memory_budget or quad_cache_size)
+    std::size_t slots = 512;      ///< nodes: the cache's capacity (memory_budget or quad_cache_size)
     bool compressColour = false;  ///< DXT1 colour layers (node_texture_compression), where the GL has S3TC
     /// render_mode = tessellation: blocks of kTessellationBlockQuads quads tessellated at the levels
     /// chooseBlockLevels picks (lod/TessellationLevels.h); needs GL 4.0 (tessellationSupported()) and nodes
@@ -61,7 +61,7 @@ struct PoolOptions {
     /// Normal maps as RGTC2 blocks (normal_map_compression; lod/NodeTextures.h, compressRgtc2): 1 byte a
     /// texel instead of RG8's 2.
     bool compressNormals = false;
-    /// Count each drawn node's visible pixels (issue 16, visibility_lod; takePixelCounts()): needs GL 4.3 or
+    /// Count each drawn node's visible pixels (visibility_lod; takePixelCounts()): needs GL 4.3 or
     /// its shader storage and early fragment test extensions (pixelCountsSupported()).
     bool pixelCounts = false;
     /// Layers of each texture array (0: GL_MAX_ARRAY_TEXTURE_LAYERS): more slots take more arrays per pool.

@@ -1,4 +1,4 @@
-// The error of synthesized detail from the synthesis model (paper 3.4.1; issue 12, replacing "half the error
+// The error of synthesized detail from the synthesis model (paper 3.4.1, replacing "half the error
 // of the parent"): how far the surface synthesized below a node (DetailSynthesizer.h: subdivision of the base
 // plus material displacement and the roughness continued) can lie from the node's own triangulated surface:
 //

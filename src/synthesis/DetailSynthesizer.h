@@ -8,7 +8,7 @@
 // without a parent) is measured on its own base; a dynamic child interpolates its parent's slopes, so
 // below the static leaves every sample keeps one placement at every depth and the synthesized surface
 // converges to one continuous function (no sample carries weights from a coarser slope than its
-// neighbours: issue 12 measured such spikes of up to 3 m of rock in grass). A dynamic child's even
+// neighbours: tengine-tool error measured such spikes of up to 3 m of rock in grass). A dynamic child's even
 // samples therefore copy the parent's displacement (the same inputs give the same value) and the others
 // are evaluated. So (1) a dynamic child's even samples equal its parent's samples, base and displacement,
 // and geomorphing to the parent's surface is exact; (2) two neighbouring nodes compute every shared sample
@@ -40,7 +40,7 @@ struct DetailSettings {
     /// detail_add_material: the materials whose displacement is added; null adds none (subdivision only).
     /// At most kMaxDetailMaterials materials (the renderer blends that many detail textures).
     std::shared_ptr<const MaterialSet> materials;
-    /// detail_roughness with a map that measured its roughness (issue 14): the terrain's own roughness
+    /// detail_roughness with a map that measured its roughness: the terrain's own roughness
     /// continued below the static leaves (RoughnessNoise.h), added to the displacement of dynamic nodes.
     /// Null: none (detail_roughness off, or a map without a roughness block).
     std::shared_ptr<const RoughnessNoise> roughness = nullptr;

@@ -3,7 +3,7 @@
 // DetailSynthesizer.h) deviates from the leaf's own surface. The exact value would need every descendant
 // down to infinity, so it is estimated as the paper does, by stochastic sampling: a few random detail
 // additions below the leaf, keeping the largest deviation found. prep used it for the map's detail_delta_c
-// until the synthesis model (DetailErrorModel.h, issue 12) replaced it; it stays as an independent
+// until the synthesis model (DetailErrorModel.h) replaced it; it stays as an independent
 // reference for that model in the tests.
 #pragma once
 

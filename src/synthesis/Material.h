@@ -47,7 +47,7 @@ struct Material {
     MaterialPlacement placement;
     std::shared_ptr<const Fractal> displacement;    ///< null for kind None (zero displacement)
     std::shared_ptr<const BasisTable> bitmapTable;  ///< bitmap-* kinds: the basis (relativeTo rebuilds with it)
-    /// relative_amplitude (issue 14): > 0, over a map with roughness laws the displacement's size follows the
+    /// relative_amplitude: > 0, over a map with roughness laws the displacement's size follows the
     /// terrain's own roughness at each place: it is scaled so that its RMS midpoint deviation at a lag of
     /// its wavelength is relativeAmplitude times the law's there (DetailSynthesizer::materialScales), and its
     /// octaves as coarse as the data's spacing are left out (relativeTo). 0: absolute, `amplitude` metres

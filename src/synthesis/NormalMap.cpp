@@ -1,4 +1,4 @@
-// Per-node normal maps (paper 4.2.4, Appendix A dynamic_texture_size; issue 14).
+// Per-node normal maps (paper 4.2.4, Appendix A dynamic_texture_size).
 #include "synthesis/NormalMap.h"
 
 #include "core/Check.h"

@@ -1,5 +1,5 @@
 // Per-node normal maps (paper 4.2.4: "a texture with lighting information is created for the node";
-// Appendix A, dynamic_texture_size; issue 14): the unit normals of the surface that the levels below a node
+// Appendix A, dynamic_texture_size): the unit normals of the surface that the levels below a node
 // draw, sampled on a texel grid finer than the node's samples, so the lighting shows detail finer than the
 // node's triangles. Made on the worker threads with the node.
 //

@@ -1,4 +1,4 @@
-// The terrain's own roughness continued below its data (issue 14): noise whose amplitude follows the power
+// The terrain's own roughness continued below its data: noise whose amplitude follows the power
 // law prep measured around each static leaf (heightfield/Roughness.h, quadtree/MapFormat.h RoughnessGrid),
 // from the data's spacing s0 downwards.
 //
