@@ -20,8 +20,6 @@ namespace terrain {
 
 namespace {
 
-constexpr double kDegrees = std::numbers::pi / 180.0;
-
 }  // namespace
 
 Status parseCameraArgument(const std::string& value, Camera& camera)
@@ -44,8 +42,8 @@ Status parseCameraArgument(const std::string& value, Camera& camera)
         return makeError("--camera: '", value, "' is not X,Y,Z,YAW,PITCH (metres and degrees, pitch in [-90, 90])");
     }
     camera.position = {parts[0], parts[1], parts[2]};
-    camera.yaw = parts[3] * kDegrees;
-    camera.pitch = parts[4] * kDegrees;
+    camera.yaw = parts[3] * kRadiansPerDegree;
+    camera.pitch = parts[4] * kRadiansPerDegree;
     return {};
 }
 
@@ -188,7 +186,7 @@ Expected<ErrorCommand> parseErrorCommand(const std::filesystem::path& mapFile, c
     command.fps = fps ? *fps : static_cast<double>(o.framesPerSecond);
     command.lens.viewportWidth = o.windowWidth;
     command.lens.viewportHeight = o.windowHeight;
-    command.lens.verticalFov = o.cameraFov * kDegrees;
+    command.lens.verticalFov = o.cameraFov * kRadiansPerDegree;
     command.lens.nearPlane = o.cameraZNear;
     command.lens.farPlane = o.cameraZFar;
     return command;

@@ -50,7 +50,6 @@ namespace {
 
 using namespace terrain;
 
-constexpr double kDegrees = std::numbers::pi / 180.0;
 /// How far around a box the previous frame's depth must hide it (DepthOcclusion): the image moves in the frames
 /// between that depth and the one drawn with it (kPixelCountLag), most at silhouettes a low flight crosses.
 constexpr int kOcclusionMarginPixels = 8;
@@ -88,7 +87,7 @@ private:
 SceneStyle styleFrom(const TengineOptions& o)
 {
     SceneStyle style;
-    const double az = o.sunAzimuth * kDegrees, el = o.sunElevation * kDegrees;
+    const double az = o.sunAzimuth * kRadiansPerDegree, el = o.sunElevation * kRadiansPerDegree;
     style.sunDirection = glm::vec3(static_cast<float>(std::sin(az) * std::cos(el)),
                                    static_cast<float>(std::cos(az) * std::cos(el)), static_cast<float>(std::sin(el)));
     style.hazeDistance = o.hazeDistance > 0 ? static_cast<float>(o.hazeDistance) : 1e30f;
@@ -499,7 +498,7 @@ Camera initialCamera(const TengineOptions& o, const Scene& scene)
     Camera camera;
     camera.viewportWidth = scene.window->width();
     camera.viewportHeight = scene.window->height();
-    camera.verticalFov = o.cameraFov * kDegrees;
+    camera.verticalFov = o.cameraFov * kRadiansPerDegree;
     camera.nearPlane = o.cameraZNear;
     camera.farPlane = o.cameraZFar;
     const double extent = header.nodeSizeAt(0);
@@ -510,8 +509,8 @@ Camera initialCamera(const TengineOptions& o, const Scene& scene)
         camera.position = {header.originX + extent / 2, header.originY + extent / 2 - extent * 0.6,
                            top + extent * 0.25};
     }
-    camera.yaw = o.cameraYaw * kDegrees;
-    camera.pitch = o.cameraPitch * kDegrees;
+    camera.yaw = o.cameraYaw * kRadiansPerDegree;
+    camera.pitch = o.cameraPitch * kRadiansPerDegree;
     return camera;
 }
 

@@ -8,6 +8,10 @@
 
 namespace terrain {
 
+/// Angles: radians in one degree, and degrees in one radian.
+inline constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
+inline constexpr double kDegreesPerRadian = 180.0 / 3.14159265358979323846;
+
 struct Camera {
     glm::dvec3 position{0.0};                 ///< metres, world space
     double yaw = 0.0;                         ///< radians, any value (wraps)

@@ -18,7 +18,6 @@ namespace terrain {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kDegrees = 180.0 / kPi;
 /// Largest |coordinate| in metres and |time| in seconds a keyframe may hold: a million kilometres and
 /// thirty years are beyond any terrain or flight, and small enough that the spline arithmetic (squared
 /// distances, ghost points 2 p1 - p2) stays finite. Found by fuzzing (tests/data/fuzz/camera_path).
@@ -44,7 +43,7 @@ std::string keyframeProblem(const CameraKeyframe& k)
         }
     }
     if (std::abs(k.pitch) > kPi / 2 + 1e-12) {
-        return "pitch " + formatNumber(k.pitch * kDegrees) + " degrees is outside [-90, 90]";
+        return "pitch " + formatNumber(k.pitch * kDegreesPerRadian) + " degrees is outside [-90, 90]";
     }
     return {};
 }
@@ -160,7 +159,7 @@ Expected<CameraPath> CameraPath::parse(std::string_view text, const std::string&
         if (std::abs(v[5]) > 90.0) {
             return makeError(name, ":", lineNumber, ": pitch ", v[5], " is outside [-90, 90] degrees");
         }
-        const CameraKeyframe key{v[0], {v[1], v[2], v[3]}, v[4] / kDegrees, v[5] / kDegrees};
+        const CameraKeyframe key{v[0], {v[1], v[2], v[3]}, v[4] / kDegreesPerRadian, v[5] / kDegreesPerRadian};
         if (const std::string problem = keyframeProblem(key); !problem.empty()) {
             return makeError(name, ":", lineNumber, ": ", problem);
         }
@@ -252,8 +251,8 @@ CameraPose CameraPath::evaluateLooping(double time) const
 std::string formatKeyframe(const CameraKeyframe& key)
 {
     return formatNumber(key.time) + " " + formatNumber(key.position.x) + " " + formatNumber(key.position.y) + " " +
-           formatNumber(key.position.z) + " " + formatNumber(key.yaw * kDegrees) + " " +
-           formatNumber(key.pitch * kDegrees);
+           formatNumber(key.position.z) + " " + formatNumber(key.yaw * kDegreesPerRadian) + " " +
+           formatNumber(key.pitch * kDegreesPerRadian);
 }
 
 Status appendKeyframe(const std::filesystem::path& path, const CameraKeyframe& key)

@@ -32,7 +32,6 @@
 namespace terrain {
 namespace {
 
-constexpr double kDegrees = std::numbers::pi / 180.0;
 const std::filesystem::path kMaterials = TERRAIN_MATERIALS_DIR;
 
 // ---- An independent projection ----
@@ -97,8 +96,8 @@ Camera makeCamera(glm::dvec3 position, double yawDegrees, double pitchDegrees)
 {
     Camera camera;
     camera.position = position;
-    camera.yaw = yawDegrees * kDegrees;
-    camera.pitch = pitchDegrees * kDegrees;
+    camera.yaw = yawDegrees * kRadiansPerDegree;
+    camera.pitch = pitchDegrees * kRadiansPerDegree;
     camera.farPlane = 100000.0;
     return camera;
 }
@@ -776,7 +775,7 @@ TEST(ErrorMeterDetailTest, ReferenceReachesTheDeepestDynamicLevel)
     auto ground = staticHeightAt(*map, 0.4 * size, 0.3 * size);
     ASSERT_TRUE(ground.ok());
     Camera camera = makeCamera({0.4 * size, 0.3 * size, ground->height + 160.0}, 15.0, -35.0);
-    camera.verticalFov = 50.0 * kDegrees;
+    camera.verticalFov = 50.0 * kRadiansPerDegree;
     camera.viewportWidth = 640;
     camera.viewportHeight = 480;
     settle(*streamer, camera, tau);
@@ -949,7 +948,7 @@ TEST_F(ErrorMeterCommandTest, OptionsApplyInOrderAndTauWins)
     EXPECT_EQ(parsed->lens.viewportWidth, 320);
     EXPECT_EQ(parsed->lens.viewportHeight, 200);
     EXPECT_EQ(parsed->options.windowWidth, 320) << "--size overrides the config's window_width";
-    EXPECT_NEAR(parsed->lens.verticalFov, 45.0 * kDegrees, 1e-12);
+    EXPECT_NEAR(parsed->lens.verticalFov, 45.0 * kRadiansPerDegree, 1e-12);
     EXPECT_EQ(parsed->lens.nearPlane, 2.0);
     EXPECT_EQ(parsed->lens.farPlane, TengineOptions{}.cameraZFar);
     EXPECT_EQ(parsed->fps, 12.0);

@@ -17,8 +17,6 @@
 namespace terrain {
 namespace {
 
-constexpr double kDegrees = std::numbers::pi / 180.0;
-
 std::vector<float> hills(int n, int seed, double roughness)
 {
     std::vector<float> s(static_cast<std::size_t>(n) * n);
@@ -36,8 +34,8 @@ Camera cameraAt(glm::dvec3 position, double yaw, double pitch)
 {
     Camera camera;
     camera.position = position;
-    camera.yaw = yaw * kDegrees;
-    camera.pitch = pitch * kDegrees;
+    camera.yaw = yaw * kRadiansPerDegree;
+    camera.pitch = pitch * kRadiansPerDegree;
     camera.farPlane = 1e6;
     return camera;
 }
