@@ -102,8 +102,12 @@ SceneStyle styleFrom(const TengineOptions& o)
 /// the frame; held keys are still read with glfwGetKey for smooth movement.
 class KeyPresses {
 public:
+    /// `window` null (headless): no keys.
     explicit KeyPresses(GLFWwindow* window) : mWindow(window)
     {
+        if (!window) {
+            return;
+        }
         glfwSetWindowUserPointer(window, this);
         glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int) {
             if (action == GLFW_PRESS) {
@@ -113,6 +117,9 @@ public:
     }
     ~KeyPresses()
     {
+        if (!mWindow) {
+            return;
+        }
         glfwSetKeyCallback(mWindow, nullptr);
         glfwSetWindowUserPointer(mWindow, nullptr);
     }

@@ -1,5 +1,6 @@
-// A window with an OpenGL 3.3+ core context (GLFW) and the GL function loader (libepoxy). Headless runs
-// use it under Xvfb, where Mesa's llvmpipe provides OpenGL 4.5 core.
+// An OpenGL 3.3+ core context and the GL function loader (libepoxy): a window (GLFW) to look at, or, for
+// video mode and tests, a headless context with no window system at all (EGL's surfaceless platform, e.g.
+// Mesa's llvmpipe with OpenGL 4.5 core) that draws into a framebuffer object of the same size.
 #pragma once
 
 #include "core/Expected.h"
@@ -15,21 +16,25 @@ namespace terrain {
 struct WindowOptions {
     int width = 1280;
     int height = 720;
-    bool visible = true;  ///< false: an offscreen-sized hidden window (video mode, tests)
+    /// false: headless (video mode, tests): an EGL context with no window system drawing into a framebuffer
+    /// object of width x height; where EGL has no such context, a hidden GLFW window (needs a display).
+    bool visible = true;
     std::string title = "tengine";
     bool vsync = false;
 };
 
 class GlWindow {
 public:
-    /// Initialises GLFW, opens the window and makes its context current. Fails with a message saying what
-    /// is missing (no display, no OpenGL 3.3 core). One window per process.
+    /// Opens the window (or the headless context) and makes its context current. Fails with a message saying
+    /// what is missing (no display, no OpenGL 3.3 core, no headless EGL). One per process.
     static Expected<std::unique_ptr<GlWindow>> create(const WindowOptions& options);
     ~GlWindow();
     GlWindow(const GlWindow&) = delete;
     GlWindow& operator=(const GlWindow&) = delete;
 
+    /// The GLFW window; null when headless (no input, nothing to show).
     GLFWwindow* handle() const { return mWindow; }
+    bool headless() const { return mHeadless != nullptr; }
     bool shouldClose() const;
     void requestClose();
     void swapBuffers();
@@ -41,8 +46,13 @@ public:
     std::string description() const;
 
 private:
-    explicit GlWindow(GLFWwindow* window) : mWindow(window) {}
+    struct Headless;
+    explicit GlWindow(GLFWwindow* window);
+    explicit GlWindow(std::unique_ptr<Headless> headless);
+    static Expected<std::unique_ptr<GlWindow>> createHeadless(const WindowOptions& options);
     GLFWwindow* mWindow = nullptr;
+    std::unique_ptr<Headless> mHeadless;
+    bool mCloseRequested = false;
 };
 
 /// True when a display is available for windows (DISPLAY or WAYLAND_DISPLAY set).
