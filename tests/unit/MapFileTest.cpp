@@ -650,9 +650,7 @@ TEST(MapFileTest, OversizedHeaderFieldsAreRefusedBeforeAllocating)
         {"chunk size 2^31 + 1", {{16, 4, (1ull << 31) + 1}}, "chunk size 2147483649"},
         {"2^32 - 1 levels", {{24, 4, 0xffffffff}}, "level count 4294967295"},
         {"texture size 2^31 + 1", {{28, 4, (1ull << 31) + 1}}, "texture size 2147483649"},
-        {"2^32 - 1 nodes, directory past the end",
-         {{116, 4, allNodes}, {128, 8, allNodes * 48}},
-         "4294967295 nodes"},
+        {"2^32 - 1 nodes, directory past the end", {{116, 4, allNodes}, {128, 8, allNodes * 48}}, "4294967295 nodes"},
         // offset + size wraps around 2^64 to the file's size: would read a 192 GiB directory.
         {"2^32 - 1 nodes, directory offset wrapping to the file's end",
          {{116, 4, allNodes}, {128, 8, allNodes * 48}, {120, 8, fileSize - allNodes * 48}},
