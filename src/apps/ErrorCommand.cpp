@@ -1,7 +1,6 @@
 #include "apps/ErrorCommand.h"
 
-#include "apps/DetailSetup.h"
-#include "apps/NodeBudget.h"
+#include "apps/ViewerSession.h"
 #include "core/Parse.h"
 #include "lod/CameraPath.h"
 #include "lod/ErrorMeter.h"
@@ -17,10 +16,6 @@
 #include <unordered_map>
 
 namespace terrain {
-
-namespace {
-
-}  // namespace
 
 Status parseCameraArgument(const std::string& value, Camera& camera)
 {
@@ -192,217 +187,36 @@ Expected<ErrorCommand> parseErrorCommand(const std::filesystem::path& mapFile, c
     return command;
 }
 
-int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::filesystem::path& builtInMaterials,
-                    std::FILE* out, std::FILE* err)
-{
-    auto fail = [&](const std::string& message) {
-        std::fprintf(err, "tengine-tool: error: %s\n", message.c_str());
-        return 1;
-    };
-    const TengineOptions& o = command.options;
-    const MapHeader& header = map.header();
-    for (const auto& warning : command.warnings) {
-        std::fprintf(err, "tengine-tool: warning: %s\n", warning.c_str());
-    }
-    std::vector<std::string> warnings;
-    auto synthesizer = makeDetailSynthesizer(o, header, builtInMaterials, warnings);
-    for (const auto& warning : warnings) {
-        std::fprintf(err, "tengine-tool: warning: %s\n", warning.c_str());
-    }
-    if (!synthesizer.ok()) {
-        return fail(synthesizer.error().message);
-    }
-    if (*synthesizer && header.hasDetailErrors()) {
-        auto recipe = viewerDetailRecipe(o, **synthesizer, builtInMaterials);
-        if (!recipe.ok()) {
-            return fail(recipe.error().message);
-        }
-        const auto files = synthesizedMaterialFiles(o, **synthesizer, builtInMaterials);
-        if (auto mismatch = detailRecipeMismatch(header, map.name(), *recipe, files)) {
-            std::fprintf(err, "tengine-tool: warning: %s\n", mismatch->c_str());
-        }
-    }
-    std::optional<CameraPath> path;
-    if (!command.path.empty()) {
-        auto loaded = CameraPath::load(command.path);
-        if (!loaded.ok()) {
-            return fail(loaded.error().message);
-        }
-        path = std::move(loaded).value();
-    }
+namespace {
 
-    // render_mode = tessellation: the selection spends part of tau and the blocks the rest (as tengine does).
-    const double blockPixels = o.tessellation ? o.lodError * o.tessellationShare : 0.0;
-    const double nodePixels = o.lodError - blockPixels;
-    TerrainNodeSource source(map,
-                             {synthesizer->get(), o.lodMinimumSpacing, o.tessellation ? kTessellationBlockQuads : 0});
-    StreamerOptions streamerOptions;
-    // The viewer's cache: its nodes' CPU bytes are those of its own source (normal maps included; auto
-    // compression taken as on a software rasterizer, where no GL can be asked: RG8, the larger).
-    TerrainNodeSource viewerSource(
-        map, {synthesizer->get(), o.lodMinimumSpacing, o.tessellation ? kTessellationBlockQuads : 0,
-              o.dynamicTextureSize, true, compressNormalMaps(o, true)});
-    auto root = viewerSource.loadRoot();
-    if (!root.ok()) {
-        return fail(root.error().message);
-    }
-    const CacheChoice cache =
-        chooseCacheSize(o, header, *synthesizer ? (*synthesizer)->settings().materials.get() : nullptr, true,
-                        compressNormalMaps(o, true), residentBytes(**root), kSlotsWithoutContext);
-    streamerOptions.cacheSize = cache.nodes;
-    streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
-    streamerOptions.workers = o.workerThreads;
-    streamerOptions.velocityLimit = 0.0;  // the loader runs to completion every frame
-    auto streamer = TerrainStreamer::create(source, extentOf(header), streamerOptions);
-    if (!streamer.ok()) {
-        return fail(streamer.error().message);
-    }
-    std::string loadError;
-    (*streamer)->onLoadError([&](const std::string& message) {
-        if (loadError.empty()) {
-            loadError = message;
-        }
-    });
-    const double tau = o.lodError;
-    // The reference nodes are the same nodes without the tessellation errors they do not need.
-    // Reference surfaces: heights only (no bounds, normal maps or tessellation errors).
-    TerrainNodeSource referenceSource(map, {synthesizer->get(), o.lodMinimumSpacing, 0, 0, false});
-    ErrorMeter meter(header, referenceSource, {tau / 8.0, 1024, 16});
+/// Per level, the selected nodes' bounds against their measured errors (--levels).
+struct LevelFigures {
+    std::size_t nodes = 0, held = 0, dynamicNodes = 0;
+    double sumBound = 0.0, sumMeasured = 0.0, worstRatio = 0.0;
+    NodeId worst;
+    std::vector<double> ratios;
+};
 
-    const std::size_t frames =
-        path ? static_cast<std::size_t>(std::floor(path->duration() * command.fps + 1e-9)) + 1 : std::size_t{1};
-    const auto trianglesPerNode = static_cast<std::uint64_t>(trianglesPerChunk(static_cast<int>(header.chunkSize)));
-    PixelHistogram histogram;
-    std::vector<std::uint64_t> triangles, oracleTriangles;
-    double oracleWorst = 0.0;
-    std::uint64_t oracleRefined = 0, oracleRefinedWithinTau = 0;
-    double worst = 0.0, sum = 0.0;
-    std::uint64_t points = 0, refined = 0, refinedWithinTau = 0;
-    std::size_t framesOverTau = 0, framesShort = 0, framesBelow = 0;
-    struct LevelFigures {
-        std::size_t nodes = 0, held = 0, dynamicNodes = 0;
-        double sumBound = 0.0, sumMeasured = 0.0, worstRatio = 0.0;
-        NodeId worst;
-        std::vector<double> ratios;
-    };
-    std::vector<LevelFigures> levels(NodeId::kMaxLevel + 1);
-    LodSelection atOwnDetail;                                       // geomorph = false: what the renderer draws
-    std::unordered_map<std::uint64_t, BlockLevels> previousLevels;  // --pops
-    std::vector<LevelSwitch> switches;
-    std::vector<float> pops;  // px
-    std::fprintf(out,
-                 "# tau %g px, %dx%d, fov %g deg, detail %s; reference: refined until a level changes it by "
-                 "< %g px\n",
-                 tau, command.lens.viewportWidth, command.lens.viewportHeight, o.cameraFov, *synthesizer ? "on" : "off",
-                 tau / 8.0);
-    std::fprintf(out, "# %s\n", cache.description.c_str());
-    if (command.pops) {
-        if (!o.tessellation) {
-            return fail(
-                "--pops measures the tessellation blocks' level switches: --set render_mode=tessellation "
-                "(chunks morph every switch, eq. 3.5)");
-        }
-        std::fprintf(out, "# frame  time(s)  largest pop(px)  triangles  nodes\n");
-    } else {
-        std::fprintf(out,
-                     "# frame  time(s)  max(px)  p99(px)  mean(px)  triangles  nodes  refined  within-tau  "
-                     "worst: node, metres\n");
-    }
-    for (std::size_t frame = 0; frame < frames; ++frame) {
-        Camera camera = command.lens;
-        double t = 0.0;
-        if (path) {
-            t = path->startTime() + static_cast<double>(frame) / command.fps;
-            path->evaluate(t).applyTo(camera);
-        } else {
-            camera.position = command.camera->position;
-            camera.yaw = command.camera->yaw;
-            camera.pitch = command.camera->pitch;
-        }
-        if (auto ground = staticHeightAt(map, camera.position.x, camera.position.y); !ground.ok()) {
-            return fail((path ? command.path.string() + ": frame " + std::to_string(frame) +
-                                    " (t = " + std::to_string(t) + " s): "
-                              : std::string("--camera: ")) +
-                        "the camera is not over the terrain: " + ground.error().message);
-        } else if (camera.position.z < ground->height) {
-            // Measured all the same (the viewer draws it so), but said: the figures are of the underside.
-            ++framesBelow;
-            std::fprintf(err, "tengine-tool: warning: frame %zu (t = %.2f s): the camera is %.1f m below the terrain\n",
-                         frame, t, ground->height - camera.position.z);
-        }
-        FrameStats stats;
-        for (int round = 0; round < 256; ++round) {
-            stats = (*streamer)->update(camera, nodePixels, 0.0);
-            if (stats.requested == stats.deferred || !loadError.empty()) {
-                break;
-            }
-            (*streamer)->drain();
-        }
-        if (!loadError.empty()) {
-            return fail(loadError);
-        }
-        framesShort += stats.deferred > 0 ? 1 : 0;
-        const TerrainStreamer& s = **streamer;
-        const LodSelection* drawn = &s.selection();
-        if (!o.geomorph) {  // the renderer then draws every node at its own detail
-            atOwnDetail = unmorphed(s.selection());
-            drawn = &atOwnDetail;
-        }
-        if (command.pops) {
-            // The blocks' level switches since the previous frame, each at its size on screen now.
-            std::unordered_map<std::uint64_t, BlockLevels> now;
-            std::uint64_t drawnTriangles = 0;
-            const VerticalSegmentProjector projector(camera);
-            double framePop = 0.0;
-            for (const SelectedNode& selected : drawn->nodes) {
-                const NodePtr node = s.node(selected.id);
-                BlockLevels blockLevels =
-                    chooseBlockLevels(*node->tessellation, extentOf(header).box(selected.id, node->zMin, node->zMax),
-                                      camera, blockPixels);
-                drawnTriangles += blockLevels.triangles();
-                if (auto it = previousLevels.find(selected.id.key()); it != previousLevels.end()) {
-                    const int n = static_cast<int>(header.chunkSize);
-                    const std::vector<float> samples =
-                        morphedSamples(*node, n, selected.id.isRoot() ? 1.0f : selected.morph);
-                    switches.clear();
-                    levelSwitches(samples, n, it->second, blockLevels, switches);
-                    const double spacing = selected.size / (n - 1);
-                    for (const LevelSwitch& w : switches) {
-                        const double x = camera.position.x + selected.cameraRelativeOrigin.x + w.lx * spacing;
-                        const double y = camera.position.y + selected.cameraRelativeOrigin.y + w.ly * spacing;
-                        const double z = header.heightOffset + nodeSurfaceAt(*node, n, w.lx, w.ly);
-                        const double px = projector.pixels(x, y, z, w.metres);
-                        if (px >= 0.0) {
-                            pops.push_back(static_cast<float>(px));
-                            framePop = std::max(framePop, px);
-                        }
-                    }
-                }
-                now.emplace(selected.id.key(), std::move(blockLevels));
-            }
-            previousLevels = std::move(now);
-            triangles.push_back(drawnTriangles);
-            std::fprintf(out, "%7zu %8.2f %8.3f %10llu %6zu\n", frame, t, framePop,
-                         static_cast<unsigned long long>(drawnTriangles), drawn->nodes.size());
-            continue;
-        }
-        auto measured = meter.measure(
-            *drawn, [&s](const NodeId& id) { return s.node(id); }, camera, tau, blockPixels);
-        if (!measured.ok()) {
-            return fail(measured.error().message);
-        }
-        const FrameError& e = *measured;
+/// The measured frames' figures, summed over the frames.
+class ErrorTally {
+public:
+    explicit ErrorTally(double tau) : mTau(tau), mLevels(NodeId::kMaxLevel + 1) {}
+
+    /// Adds a frame of `triangles` drawn.
+    void add(const FrameError& e, std::uint64_t triangles)
+    {
         for (float px : e.pixels) {
-            histogram.add(px);
+            mHistogram.add(px);
         }
-        worst = std::max(worst, e.maxPixels);
-        sum += e.meanPixels * static_cast<double>(e.points);
-        points += e.points;
-        refined += e.refined;
-        refinedWithinTau += e.refinedWithinTau;
-        framesOverTau += e.maxPixels > tau ? 1 : 0;
+        mWorst = std::max(mWorst, e.maxPixels);
+        mSum += e.meanPixels * static_cast<double>(e.points);
+        mPoints += e.points;
+        mRefined += e.refined;
+        mRefinedWithinTau += e.refinedWithinTau;
+        mFramesOverTau += e.maxPixels > mTau ? 1 : 0;
+        mTriangles.push_back(triangles);
         for (const auto& b : e.bounds) {
-            LevelFigures& l = levels[static_cast<std::size_t>(b.id.level)];
+            LevelFigures& l = mLevels[static_cast<std::size_t>(b.id.level)];
             ++l.nodes;
             l.dynamicNodes += b.isStatic ? 0 : 1;
             l.held += b.measured <= b.deltaC ? 1 : 0;
@@ -415,24 +229,298 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
             }
             l.ratios.push_back(ratio);
         }
+    }
+    /// Adds a frame's oracle selection of `triangles`.
+    void addOracle(const OracleSelection& oracle, std::uint64_t triangles)
+    {
+        mOracleTriangles.push_back(triangles);
+        mOracleWorst = std::max(mOracleWorst, oracle.maxPixels);
+        mOracleRefined += oracle.refined.size();
+        mOracleRefinedWithinTau += oracle.refinedWithinTau;
+    }
+    std::uint64_t lastTriangles() const { return mTriangles.back(); }
+
+    void printLevels(std::FILE* out)
+    {
+        std::fprintf(out,
+                     "# selected nodes per level: bound delta_c against the measured distance of the node's own "
+                     "surface from the reference\n");
+        std::fprintf(out,
+                     "# level  nodes  dynamic  mean bound(m)  mean measured(m)  measured/bound: median, max  "
+                     "bound held  worst node\n");
+        for (std::size_t level = 0; level < mLevels.size(); ++level) {
+            LevelFigures& l = mLevels[level];
+            if (l.nodes == 0) {
+                continue;
+            }
+            std::sort(l.ratios.begin(), l.ratios.end());
+            std::fprintf(out, "%7zu %6zu %8zu %14.4f %17.4f %15.3f %6.3f %8.1f%%  %s\n", level, l.nodes, l.dynamicNodes,
+                         l.sumBound / static_cast<double>(l.nodes), l.sumMeasured / static_cast<double>(l.nodes),
+                         l.ratios[(l.ratios.size() - 1) / 2], l.worstRatio,
+                         100.0 * static_cast<double>(l.held) / static_cast<double>(l.nodes),
+                         l.worst.toString().c_str());
+        }
+    }
+
+    /// The summary lines; `oracleBlocks` as --oracle=B, negative without --oracle.
+    void printSummary(std::FILE* out, std::uint64_t groupsMade, int oracleBlocks) const
+    {
+        const auto [median, most] = medianAndMax(mTriangles);
+        const std::size_t frames = mTriangles.size();
+        std::fprintf(out, "frames over tau: %zu of %zu\n", mFramesOverTau, frames);
+        std::fprintf(out, "refinements that bought nothing: %llu of %llu refined nodes (%.1f%%)\n",
+                     static_cast<unsigned long long>(mRefinedWithinTau), static_cast<unsigned long long>(mRefined),
+                     percent(mRefinedWithinTau, mRefined));
+        std::fprintf(out, "reference: %llu node groups made\n", static_cast<unsigned long long>(groupsMade));
+        if (oracleBlocks >= 0) {
+            const auto [oracleMedian, oracleMost] = medianAndMax(mOracleTriangles);
+            const std::string kind = oracleBlocks == 0
+                                         ? std::string("measured errors in pixels")
+                                         : std::to_string(oracleBlocks) + "x" + std::to_string(oracleBlocks) +
+                                               " blocks' measured metres at their bound distance";
+            std::fprintf(
+                out,
+                "oracle (%s, morph 1): triangles median %llu, max %llu, max %.3f px; the selection "
+                "draws %.2fx the oracle's median; its refinements that bought nothing: %llu of %llu (%.1f%%)\n",
+                kind.c_str(), static_cast<unsigned long long>(oracleMedian),
+                static_cast<unsigned long long>(oracleMost), mOracleWorst,
+                oracleMedian ? static_cast<double>(median) / static_cast<double>(oracleMedian) : 0.0,
+                static_cast<unsigned long long>(mOracleRefinedWithinTau),
+                static_cast<unsigned long long>(mOracleRefined), percent(mOracleRefinedWithinTau, mOracleRefined));
+        }
+        std::fprintf(out,
+                     "error: max %.3f px, p99 %.3f px, mean %.4f px over %zu frames; triangles median %llu, max %llu\n",
+                     mWorst, mHistogram.percentile(0.99), mPoints ? mSum / static_cast<double>(mPoints) : 0.0, frames,
+                     static_cast<unsigned long long>(median), static_cast<unsigned long long>(most));
+    }
+
+    static std::pair<std::uint64_t, std::uint64_t> medianAndMax(std::vector<std::uint64_t> values)
+    {
+        if (values.empty()) {
+            return {0, 0};
+        }
+        std::sort(values.begin(), values.end());
+        return {values[(values.size() - 1) / 2], values.back()};
+    }
+
+private:
+    static double percent(std::uint64_t part, std::uint64_t whole)
+    {
+        return whole ? 100.0 * static_cast<double>(part) / static_cast<double>(whole) : 0.0;
+    }
+
+    double mTau;
+    PixelHistogram mHistogram;
+    std::vector<std::uint64_t> mTriangles, mOracleTriangles;
+    double mWorst = 0.0, mSum = 0.0, mOracleWorst = 0.0;
+    std::uint64_t mPoints = 0, mRefined = 0, mRefinedWithinTau = 0, mOracleRefined = 0, mOracleRefinedWithinTau = 0;
+    std::size_t mFramesOverTau = 0;
+    std::vector<LevelFigures> mLevels;
+};
+
+/// --pops: the tessellation blocks' level switches between consecutive frames, each at its size on screen.
+class PopsTally {
+public:
+    /// The drawn nodes' blocks for `camera`, against the previous frame's; returns the frame's largest pop in pixels
+    /// and counts its triangles.
+    double frame(const ViewerSession& session, const Camera& camera)
+    {
+        const MapHeader& header = session.header();
+        const int n = static_cast<int>(header.chunkSize);
+        std::unordered_map<std::uint64_t, BlockLevels> now;
+        std::uint64_t drawnTriangles = 0;
+        const VerticalSegmentProjector projector(camera);
+        double framePop = 0.0;
+        for (const SelectedNode& selected : session.drawnSelection().nodes) {
+            const NodePtr node = session.node(selected.id);
+            BlockLevels blockLevels =
+                chooseBlockLevels(*node->tessellation, extentOf(header).box(selected.id, node->zMin, node->zMax),
+                                  camera, session.blockPixels());
+            drawnTriangles += blockLevels.triangles();
+            if (auto it = mPrevious.find(selected.id.key()); it != mPrevious.end()) {
+                const std::vector<float> samples =
+                    morphedSamples(*node, n, selected.id.isRoot() ? 1.0f : selected.morph);
+                mSwitches.clear();
+                levelSwitches(samples, n, it->second, blockLevels, mSwitches);
+                const double spacing = selected.size / (n - 1);
+                for (const LevelSwitch& w : mSwitches) {
+                    const double x = camera.position.x + selected.cameraRelativeOrigin.x + w.lx * spacing;
+                    const double y = camera.position.y + selected.cameraRelativeOrigin.y + w.ly * spacing;
+                    const double z = header.heightOffset + nodeSurfaceAt(*node, n, w.lx, w.ly);
+                    const double px = projector.pixels(x, y, z, w.metres);
+                    if (px >= 0.0) {
+                        mPops.push_back(static_cast<float>(px));
+                        framePop = std::max(framePop, px);
+                    }
+                }
+            }
+            now.emplace(selected.id.key(), std::move(blockLevels));
+        }
+        mPrevious = std::move(now);
+        mTriangles.push_back(drawnTriangles);
+        return framePop;
+    }
+    std::uint64_t lastTriangles() const { return mTriangles.back(); }
+
+    void printSummary(std::FILE* out, double blockPixels)
+    {
+        std::sort(mPops.begin(), mPops.end());
+        auto at = [&](double share) {
+            return mPops.empty() ? 0.0 : double{mPops[static_cast<std::size_t>(share * double(mPops.size() - 1))]};
+        };
+        const auto [median, most] = ErrorTally::medianAndMax(mTriangles);
+        std::fprintf(out,
+                     "pops: %zu points of switched blocks in %zu frames; largest %.3f px, p99 %.3f px, median %.3f px "
+                     "(blocks' budget %g px); triangles median %llu, max %llu\n",
+                     mPops.size(), mTriangles.size(), at(1.0), at(0.99), at(0.5), blockPixels,
+                     static_cast<unsigned long long>(median), static_cast<unsigned long long>(most));
+    }
+
+private:
+    std::unordered_map<std::uint64_t, BlockLevels> mPrevious;
+    std::vector<LevelSwitch> mSwitches;
+    std::vector<float> mPops;  // px
+    std::vector<std::uint64_t> mTriangles;
+};
+
+/// Frame `frame`'s camera: the path's at its time `t`, or --camera's. Errors: a camera not over the terrain. A
+/// camera below it is measured all the same (the viewer draws it so), but said: the figures are of the underside.
+Expected<Camera> frameCamera(const MapFile& map, const ErrorCommand& command, const std::optional<CameraPath>& path,
+                             std::size_t frame, double t, std::FILE* err, bool& below)
+{
+    Camera camera = command.lens;
+    if (path) {
+        path->evaluate(t).applyTo(camera);
+    } else {
+        camera.position = command.camera->position;
+        camera.yaw = command.camera->yaw;
+        camera.pitch = command.camera->pitch;
+    }
+    below = false;
+    auto ground = staticHeightAt(map, camera.position.x, camera.position.y);
+    if (!ground.ok()) {
+        return makeError(
+            path ? command.path.string() + ": frame " + std::to_string(frame) + " (t = " + std::to_string(t) + " s): "
+                 : std::string("--camera: "),
+            "the camera is not over the terrain: ", ground.error().message);
+    }
+    if (camera.position.z < ground->height) {
+        below = true;
+        std::fprintf(err, "tengine-tool: warning: frame %zu (t = %.2f s): the camera is %.1f m below the terrain\n",
+                     frame, t, ground->height - camera.position.z);
+    }
+    return camera;
+}
+
+/// The session of the measurement and the camera path (if any); errors are printed.
+struct Measurement {
+    std::unique_ptr<ViewerSession> session;
+    std::optional<CameraPath> path;
+};
+
+Expected<Measurement> openMeasurement(const MapFile& map, const ErrorCommand& command,
+                                      const std::filesystem::path& builtInMaterials, std::FILE* err)
+{
+    for (const auto& warning : command.warnings) {
+        std::fprintf(err, "tengine-tool: warning: %s\n", warning.c_str());
+    }
+    // Warnings are printed as they come; a load error ends the measurement after the frame that met it.
+    auto printWarnings = [err](const std::string& message) {
+        if (message.starts_with("warning: ")) {
+            std::fprintf(err, "tengine-tool: %s\n", message.c_str());
+        }
+    };
+    Measurement m;
+    auto session = ViewerSession::open(command.options, builtInMaterials, SessionUse::Measure, printWarnings, &map);
+    TERRAIN_TRY(session);
+    m.session = std::move(session).value();
+    auto started = m.session->startStreaming(GlCapabilities{});
+    TERRAIN_TRY(started);
+    if (!command.path.empty()) {
+        auto loaded = CameraPath::load(command.path);
+        TERRAIN_TRY(loaded);
+        m.path = std::move(loaded).value();
+    }
+    if (command.pops && !command.options.tessellation) {
+        return makeError(
+            "--pops measures the tessellation blocks' level switches: --set render_mode=tessellation "
+            "(chunks morph every switch, eq. 3.5)");
+    }
+    return m;
+}
+
+}  // namespace
+
+int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::filesystem::path& builtInMaterials,
+                    std::FILE* out, std::FILE* err)
+{
+    auto fail = [&](const std::string& message) {
+        std::fprintf(err, "tengine-tool: error: %s\n", message.c_str());
+        return 1;
+    };
+    const TengineOptions& o = command.options;
+    auto opened = openMeasurement(map, command, builtInMaterials, err);
+    if (!opened.ok()) {
+        return fail(opened.error().message);
+    }
+    ViewerSession& session = *opened->session;
+    const std::optional<CameraPath>& path = opened->path;
+    const double tau = o.lodError;
+    const std::size_t frames =
+        path ? static_cast<std::size_t>(std::floor(path->duration() * command.fps + 1e-9)) + 1 : std::size_t{1};
+    const auto trianglesPerNode =
+        static_cast<std::uint64_t>(trianglesPerChunk(static_cast<int>(session.header().chunkSize)));
+    std::fprintf(out,
+                 "# tau %g px, %dx%d, fov %g deg, detail %s; reference: refined until a level changes it by "
+                 "< %g px\n",
+                 tau, command.lens.viewportWidth, command.lens.viewportHeight, o.cameraFov,
+                 session.synthesizer() ? "on" : "off", tau / 8.0);
+    std::fprintf(out, "# %s\n", session.cache().description.c_str());
+    std::fprintf(out, command.pops ? "# frame  time(s)  largest pop(px)  triangles  nodes\n"
+                                   : "# frame  time(s)  max(px)  p99(px)  mean(px)  triangles  nodes  refined  "
+                                     "within-tau  worst: node, metres\n");
+    ErrorTally tally(tau);
+    PopsTally pops;
+    std::size_t framesShort = 0, framesBelow = 0;
+    for (std::size_t frame = 0; frame < frames; ++frame) {
+        const double t = path ? path->startTime() + static_cast<double>(frame) / command.fps : 0.0;
+        bool below = false;
+        auto camera = frameCamera(map, command, path, frame, t, err, below);
+        if (!camera.ok()) {
+            return fail(camera.error().message);
+        }
+        framesBelow += below ? 1 : 0;
+        const FrameStats stats = session.advance(*camera, t, 0.0, Settle::Complete);
+        if (session.loadErrors() > 0) {
+            return fail(session.firstLoadError());
+        }
+        framesShort += stats.deferred > 0 ? 1 : 0;
+        if (command.pops) {
+            const double framePop = pops.frame(session, *camera);
+            std::fprintf(out, "%7zu %8.2f %8.3f %10llu %6zu\n", frame, t, framePop,
+                         static_cast<unsigned long long>(pops.lastTriangles()), session.drawnSelection().nodes.size());
+            continue;
+        }
+        auto measured = session.measureDrawn(*camera);
+        if (!measured.ok()) {
+            return fail(measured.error().message);
+        }
+        const FrameError& e = *measured;
         // The meter chose the blocks' levels as the renderer does: its count is what tessellation draws.
-        triangles.push_back(o.tessellation ? e.tessellatedTriangles : e.nodes * trianglesPerNode);
+        tally.add(e, session.tessellation() ? e.tessellatedTriangles : e.nodes * trianglesPerNode);
         std::fprintf(out, "%7zu %8.2f %8.3f %8.3f %9.4f %10llu %6zu %8zu %11zu  %s %.3f\n", frame, t, e.maxPixels,
-                     e.p99Pixels, e.meanPixels, static_cast<unsigned long long>(triangles.back()), e.nodes, e.refined,
-                     e.refinedWithinTau, e.worstNode.toString().c_str(), e.maxMetres);
+                     e.p99Pixels, e.meanPixels, static_cast<unsigned long long>(tally.lastTriangles()), e.nodes,
+                     e.refined, e.refinedWithinTau, e.worstNode.toString().c_str(), e.maxMetres);
         if (command.oracle) {
-            auto oracle = meter.oracle(camera, tau, command.oracleBlocks);
+            auto oracle = session.meter()->oracle(*camera, tau, command.oracleBlocks);
             if (!oracle.ok()) {
                 return fail(oracle.error().message);
             }
-            oracleTriangles.push_back(oracle->nodes.size() * trianglesPerNode);
-            oracleWorst = std::max(oracleWorst, oracle->maxPixels);
-            oracleRefined += oracle->refined.size();
-            oracleRefinedWithinTau += oracle->refinedWithinTau;
+            tally.addOracle(*oracle, oracle->nodes.size() * trianglesPerNode);
             std::fprintf(out,
                          "        oracle: %zu nodes, %llu triangles, max %.3f px, %zu refined, %zu within tau, %zu "
                          "over tau\n",
-                         oracle->nodes.size(), static_cast<unsigned long long>(oracleTriangles.back()),
+                         oracle->nodes.size(), static_cast<unsigned long long>(oracle->nodes.size() * trianglesPerNode),
                          oracle->maxPixels, oracle->refined.size(), oracle->refinedWithinTau, oracle->overTau);
         }
         std::fflush(out);
@@ -448,70 +536,16 @@ int runErrorCommand(const MapFile& map, const ErrorCommand& command, const std::
                      "tengine-tool: warning: in %zu frame%s the node cache (%zu nodes; memory_budget, "
                      "quad_cache_size) had no room for every node the selection wanted; measured what the viewer "
                      "draws then\n",
-                     framesShort, framesShort == 1 ? "" : "s", cache.nodes);
+                     framesShort, framesShort == 1 ? "" : "s", session.cache().nodes);
     }
-    if (command.levels) {
-        std::fprintf(out,
-                     "# selected nodes per level: bound delta_c against the measured distance of the node's own "
-                     "surface from the reference\n");
-        std::fprintf(out,
-                     "# level  nodes  dynamic  mean bound(m)  mean measured(m)  measured/bound: median, max  "
-                     "bound held  worst node\n");
-        for (std::size_t level = 0; level < levels.size(); ++level) {
-            LevelFigures& l = levels[level];
-            if (l.nodes == 0) {
-                continue;
-            }
-            std::sort(l.ratios.begin(), l.ratios.end());
-            std::fprintf(out, "%7zu %6zu %8zu %14.4f %17.4f %15.3f %6.3f %8.1f%%  %s\n", level, l.nodes, l.dynamicNodes,
-                         l.sumBound / static_cast<double>(l.nodes), l.sumMeasured / static_cast<double>(l.nodes),
-                         l.ratios[(l.ratios.size() - 1) / 2], l.worstRatio,
-                         100.0 * static_cast<double>(l.held) / static_cast<double>(l.nodes),
-                         l.worst.toString().c_str());
-        }
-    }
-    std::vector<std::uint64_t> sorted = triangles;
-    std::sort(sorted.begin(), sorted.end());
-    const std::uint64_t median = sorted[(sorted.size() - 1) / 2];
     if (command.pops) {
-        std::sort(pops.begin(), pops.end());
-        std::fprintf(out,
-                     "pops: %zu points of switched blocks in %zu frames; largest %.3f px, p99 %.3f px, median %.3f px "
-                     "(blocks' budget %g px); triangles median %llu, max %llu\n",
-                     pops.size(), frames, pops.empty() ? 0.0 : double{pops.back()},
-                     pops.empty() ? 0.0 : double{pops[static_cast<std::size_t>(0.99 * double(pops.size() - 1))]},
-                     pops.empty() ? 0.0 : double{pops[(pops.size() - 1) / 2]}, blockPixels,
-                     static_cast<unsigned long long>(median), static_cast<unsigned long long>(sorted.back()));
+        pops.printSummary(out, session.blockPixels());
         return 0;
     }
-    std::fprintf(out, "frames over tau: %zu of %zu\n", framesOverTau, frames);
-    std::fprintf(out, "refinements that bought nothing: %llu of %llu refined nodes (%.1f%%)\n",
-                 static_cast<unsigned long long>(refinedWithinTau), static_cast<unsigned long long>(refined),
-                 refined ? 100.0 * static_cast<double>(refinedWithinTau) / static_cast<double>(refined) : 0.0);
-    std::fprintf(out, "reference: %llu node groups made\n", static_cast<unsigned long long>(meter.groupsMade()));
-    if (command.oracle) {
-        std::vector<std::uint64_t> sortedOracle = oracleTriangles;
-        std::sort(sortedOracle.begin(), sortedOracle.end());
-        const std::uint64_t oracleMedian = sortedOracle[(sortedOracle.size() - 1) / 2];
-        std::fprintf(
-            out,
-            "oracle (%s, morph 1): triangles median %llu, max %llu, max %.3f px; the selection "
-            "draws %.2fx the oracle's median; its refinements that bought nothing: %llu of %llu (%.1f%%)\n",
-            command.oracleBlocks == 0
-                ? "measured errors in pixels"
-                : (std::to_string(command.oracleBlocks) + "x" + std::to_string(command.oracleBlocks) +
-                   " blocks' measured metres at their bound distance")
-                      .c_str(),
-            static_cast<unsigned long long>(oracleMedian), static_cast<unsigned long long>(sortedOracle.back()),
-            oracleWorst, oracleMedian ? static_cast<double>(median) / static_cast<double>(oracleMedian) : 0.0,
-            static_cast<unsigned long long>(oracleRefinedWithinTau), static_cast<unsigned long long>(oracleRefined),
-            oracleRefined ? 100.0 * static_cast<double>(oracleRefinedWithinTau) / static_cast<double>(oracleRefined)
-                          : 0.0);
+    if (command.levels) {
+        tally.printLevels(out);
     }
-    std::fprintf(out,
-                 "error: max %.3f px, p99 %.3f px, mean %.4f px over %zu frames; triangles median %llu, max %llu\n",
-                 worst, histogram.percentile(0.99), points ? sum / static_cast<double>(points) : 0.0, frames,
-                 static_cast<unsigned long long>(median), static_cast<unsigned long long>(sorted.back()));
+    tally.printSummary(out, session.meter()->groupsMade(), command.oracle ? command.oracleBlocks : -1);
     return 0;
 }
 

@@ -338,14 +338,7 @@ int select(const MapFile& map, const ViewOptions& view)
     std::string loadError;
     (*streamer)->onLoadError([&](const std::string& message) { loadError = message; });
     // Select, load what is missing, repeat until the selection wants nothing more.
-    FrameStats stats;
-    for (int round = 0; round < 64; ++round) {
-        stats = (*streamer)->update(view.camera, view.tau);
-        if (stats.requested == 0) {
-            break;
-        }
-        (*streamer)->drain();
-    }
+    (*streamer)->settle(Settle::Complete, view.camera, view.tau);
     if (!loadError.empty()) {
         std::fprintf(stderr, "tengine-tool: %s\n", loadError.c_str());
     }

@@ -231,6 +231,31 @@ FrameStats TerrainStreamer::updateFor(std::span<const NodeId> wanted)
     return stats;
 }
 
+FrameStats TerrainStreamer::settle(Settle settle, const std::function<FrameStats()>& select,
+                                   const std::function<bool()>& unsettled)
+{
+    FrameStats stats = select();
+    if (settle == Settle::Arrived) {
+        return stats;
+    }
+    for (int round = 1; round < kMaxSettleRounds; ++round) {
+        const bool wantsMore = stats.requested > stats.deferred + stats.tooFast;
+        if (!wantsMore && !(unsettled && unsettled())) {
+            break;
+        }
+        const std::size_t synthesized = stats.synthesized + drain().synthesized;
+        stats = select();
+        stats.synthesized += synthesized;  // the frame's, all rounds together
+    }
+    return stats;
+}
+
+FrameStats TerrainStreamer::settle(Settle settle, const Camera& camera, double tauPixels, double cameraSpeed,
+                                   const FrameVisibility& visibility)
+{
+    return this->settle(settle, [&] { return update(camera, tauPixels, cameraSpeed, visibility); });
+}
+
 FrameStats TerrainStreamer::drain()
 {
     mServer.drain();

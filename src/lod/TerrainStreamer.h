@@ -58,6 +58,17 @@ struct FrameStats {
     std::size_t revealing = 0;              ///< nodes selected this frame still morphing in after a reveal
 };
 
+/// How much of what a frame wants is loaded before it is drawn.
+enum class Settle {
+    Arrived,   ///< real time: what has arrived by now; the rest comes in later frames
+    Complete,  ///< video frames and tools: load and select again until the frame wants nothing more it can have
+};
+
+/// The most select-and-load rounds of one Settle::Complete frame. A round loads the children of the nodes the
+/// last selection wanted, so the rounds are at most the levels the frame refines by (each level is one round);
+/// failed groups are never asked for again. The cap only bounds a cache that evicts what it just loaded.
+inline constexpr int kMaxSettleRounds = 256;
+
 class TerrainStreamer {
 public:
     /// `source` must outlive the streamer; `extent` places its root. Loads the root synchronously. The
@@ -84,6 +95,17 @@ public:
     /// Waits for every queued load, then takes the results into the cache (no selection); returns what it took
     /// (FrameStats::inserted, refused and synthesized; the rest 0).
     FrameStats drain();
+
+    /// One frame settled as `settle` says: runs `select` (an update or updateFor of this streamer); with
+    /// Settle::Complete, while the frame asked for groups it could load (FrameStats::requested beyond deferred and
+    /// tooFast) or `unsettled` (when given) says the frame is not final yet, waits for the loads (drain) and runs
+    /// `select` again, at most kMaxSettleRounds times. Identical runs give identical frames whatever the threads'
+    /// timing. Returns the last round's figures with FrameStats::synthesized summed over the rounds.
+    FrameStats settle(Settle settle, const std::function<FrameStats()>& select,
+                      const std::function<bool()>& unsettled = {});
+    /// settle() of update(camera, tauPixels, cameraSpeed, visibility).
+    FrameStats settle(Settle settle, const Camera& camera, double tauPixels, double cameraSpeed = 0.0,
+                      const FrameVisibility& visibility = {});
 
     const LodSelection& selection() const { return mSelection; }
     /// The resident data of a node selected this frame (or any resident node); null if not resident.

@@ -108,9 +108,7 @@ void BM_ChunkRenderer(benchmark::State& state)
     for (auto _ : state) {
         for (const Camera& camera : s.cameras) {
             // Load everything the view wants first: the measurement is drawing only.
-            for (int round = 0; round < 32 && streamer->update(camera, nodePixels).requested > 0; ++round) {
-                streamer->drain();
-            }
+            streamer->settle(Settle::Complete, camera, nodePixels);
             for (int r = 0; r < kRepeats; ++r) {
                 auto start = std::chrono::steady_clock::now();
                 RenderStats stats = renderer->draw(streamer->selection(), resident, camera, style, blockPixels);
@@ -200,9 +198,7 @@ void BM_BruteForceMesh(benchmark::State& state)
     double seconds = 0, triangles = 0;
     for (auto _ : state) {
         for (const Camera& camera : s.cameras) {
-            for (int round = 0; round < 32 && streamer->update(camera, 2.0).requested > 0; ++round) {
-                streamer->drain();
-            }
+            streamer->settle(Settle::Complete, camera, 2.0);
             std::vector<float> vertices;
             std::vector<std::uint32_t> indices;
             for (const SelectedNode& selected : streamer->selection().nodes) {

@@ -56,9 +56,7 @@ TEST_P(PoolArraysGLTest, ManySmallArraysDrawTheFrameOneArrayDraws)
     camera.yaw = 47.7 * std::numbers::pi / 180;
     camera.pitch = -8.0 * std::numbers::pi / 180;
     const double pixels = 1.0;
-    for (int round = 0; round < 64 && (*streamer)->update(camera, pixels).requested > 0; ++round) {
-        (*streamer)->drain();
-    }
+    (*streamer)->settle(Settle::Complete, camera, pixels);
     const TerrainStreamer& s = **streamer;
     const LodSelection& selection = s.selection();
     ASSERT_GT(selection.nodes.size(), 40u);

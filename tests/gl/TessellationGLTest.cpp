@@ -72,9 +72,7 @@ TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVertic
     camera.yaw = 47.7 * std::numbers::pi / 180;
     camera.pitch = -8.0 * std::numbers::pi / 180;
     const double nodePixels = 1.0, blockPixels = 1.0;
-    for (int round = 0; round < 64 && (*streamer)->update(camera, nodePixels).requested > 0; ++round) {
-        (*streamer)->drain();
-    }
+    (*streamer)->settle(Settle::Complete, camera, nodePixels);
     const TerrainStreamer& s = **streamer;
     const LodSelection& selection = s.selection();
     ASSERT_GT(selection.nodes.size(), 20u);

@@ -62,9 +62,7 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
     camera.yaw = 47.7 * std::numbers::pi / 180;
     camera.pitch = -8.0 * std::numbers::pi / 180;
     const double nodePixels = 1.0, blockPixels = 1.0;
-    for (int round = 0; round < 64 && (*streamer)->update(camera, nodePixels).requested > 0; ++round) {
-        (*streamer)->drain();
-    }
+    (*streamer)->settle(Settle::Complete, camera, nodePixels);
     const TerrainStreamer& s = **streamer;
     const ResidentNodeLookup resident = [&s](const NodeId& id) { return s.node(id); };
     const LodSelection& selection = s.selection();

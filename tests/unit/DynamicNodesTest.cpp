@@ -57,13 +57,7 @@ protected:
     /// Runs frames until the selection wants nothing more.
     static void settle(TerrainStreamer& streamer, const Camera& camera, double tau, double speed = 0.0)
     {
-        for (int round = 0; round < 200; ++round) {
-            FrameStats stats = streamer.update(camera, tau, speed);
-            if (stats.requested == stats.deferred + stats.tooFast) {
-                break;
-            }
-            streamer.drain();
-        }
+        streamer.settle(Settle::Complete, camera, tau, speed);
     }
 
     test::ScratchDir mDir;

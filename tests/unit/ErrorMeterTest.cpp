@@ -194,14 +194,8 @@ TEST(ErrorMeterProjectorTest, PointsOutsideTheFrustumGiveMinusOne)
 /// Runs frames (inline loads) until the selection wants nothing more.
 void settle(TerrainStreamer& streamer, const Camera& camera, double tau)
 {
-    for (int round = 0; round < 200; ++round) {
-        const FrameStats stats = streamer.update(camera, tau);
-        if (stats.requested == stats.deferred) {
-            return;
-        }
-        streamer.drain();
-    }
-    ADD_FAILURE() << "the streamer did not settle";
+    const FrameStats stats = streamer.settle(Settle::Complete, camera, tau);
+    EXPECT_EQ(stats.requested, stats.deferred) << "the streamer did not settle";
 }
 
 std::unique_ptr<TerrainStreamer> makeStreamer(NodeSource& source, const MapHeader& header)

@@ -207,9 +207,7 @@ TEST_F(TerrainStreamerTest, MinimumSpacingStopsRefinement)
         options.workers = 0;  // inline: deterministic
         auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
         EXPECT_TRUE(streamer.ok()) << streamer.error().message;
-        for (int round = 0; round < 32 && (*streamer)->update(camera, 0.5).requested != 0; ++round) {
-            (*streamer)->drain();
-        }
+        (*streamer)->settle(Settle::Complete, camera, 0.5);
         EXPECT_EQ((*streamer)->update(camera, 0.5).requested, 0u) << "the selection should have settled";
         int deepest = 0;
         for (const auto& node : (*streamer)->selection().nodes) {
@@ -256,11 +254,7 @@ TEST_F(TerrainStreamerTest, AHiddenNodeIsNotRefinedAndItsReturnMorphsInALevelAtA
     const double step = 1.0 / 30.0;
     // As video mode does: load what the frame wants, select again.
     auto frame = [&](const NodeHidden& hidden) {
-        FrameStats stats = s.update(camera, 2.0, 0.0, {hidden, time});
-        for (int round = 0; round < 32 && stats.requested > 0; ++round) {
-            s.drain();
-            stats = s.update(camera, 2.0, 0.0, {hidden, time});
-        }
+        const FrameStats stats = s.settle(Settle::Complete, camera, 2.0, 0.0, {hidden, time});
         time += step;
         return stats;
     };

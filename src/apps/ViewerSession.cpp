@@ -1,0 +1,248 @@
+#include "apps/ViewerSession.h"
+
+#include "apps/DetailSetup.h"
+#include "lod/HeightQuery.h"
+#include "lod/TessellationLevels.h"
+#include "synthesis/NormalMap.h"
+
+#include <algorithm>
+
+namespace terrain {
+
+namespace {
+
+/// lod_mode = clipmap: the finest ring's quadtree level, the deepest whose spacing is at least
+/// clipmap_finest_spacing (and lod_minimum_spacing), below the map's data only with synthesis.
+int clipmapFinestLevel(const TengineOptions& o, const MapHeader& header, bool synthesis)
+{
+    const double limit = std::max(o.clipmapFinestSpacing, o.lodMinimumSpacing);
+    const int deepest = synthesis ? NodeId::kMaxLevel : static_cast<int>(header.levels) - 1;
+    int level = 0;
+    while (level < deepest && header.spacingAt(level + 1) >= limit) {
+        ++level;
+    }
+    return level;
+}
+
+}  // namespace
+
+ViewerSession::ViewerSession(const TengineOptions& options, SessionUse use, std::function<void(const std::string&)> log)
+    : mOptions(options), mUse(use), mLog(std::move(log))
+{
+}
+
+ViewerSession::~ViewerSession() = default;
+
+Expected<std::unique_ptr<ViewerSession>> ViewerSession::open(const TengineOptions& options,
+                                                             const std::filesystem::path& materialsDirectory,
+                                                             SessionUse use,
+                                                             std::function<void(const std::string&)> log,
+                                                             const MapFile* map)
+{
+    std::unique_ptr<ViewerSession> session(new ViewerSession(options, use, std::move(log)));
+    if (map) {
+        session->mMap = map;
+    } else {
+        auto opened = MapFile::open(options.mapFile, options.reader);
+        TERRAIN_TRY(opened);
+        session->mOwnedMap = std::move(opened).value();
+        session->mMap = session->mOwnedMap.get();
+    }
+    const MapHeader& header = session->header();
+    const int cells = static_cast<int>(header.chunkSize) - 1;
+    // Normal maps are drawn, not measured.
+    if (use == SessionUse::View && options.dynamicTextureSize > 0 &&
+        normalMapCells(options.dynamicTextureSize) > cells << kMaxNormalMapDepth) {
+        return makeError("dynamic_texture_size ", options.dynamicTextureSize, " is more than ", 1 << kMaxNormalMapDepth,
+                         "x the ", cells, " cells of ", session->mMap->name(),
+                         "'s nodes: normal maps sample the surface at most that many levels below a node, and more "
+                         "texels would only interpolate it (at most ",
+                         cells << kMaxNormalMapDepth, ")");
+    }
+    auto synthesis = session->openSynthesis(materialsDirectory);
+    TERRAIN_TRY(synthesis);
+    return session;
+}
+
+Status ViewerSession::openSynthesis(const std::filesystem::path& materialsDirectory)
+{
+    // Detail synthesis (3.4): the synthesizer dynamic nodes are made with, null when it is off.
+    std::vector<std::string> warnings;
+    auto synthesizer = makeDetailSynthesizer(mOptions, header(), materialsDirectory, warnings);
+    for (const auto& warning : warnings) {
+        mLog("warning: " + warning);
+    }
+    TERRAIN_TRY(synthesizer);
+    mSynthesizer = std::move(synthesizer).value();
+    if (!mSynthesizer) {
+        return {};
+    }
+    if (!header().hasDetailErrors()) {
+        mLog("warning: " + mMap->name() +
+             " has no estimates of the detail error below its leaves (made by an older prep): no dynamic nodes; "
+             "run prep again to get them");
+        return {};
+    }
+    auto recipe = viewerDetailRecipe(mOptions, *mSynthesizer, materialsDirectory);
+    TERRAIN_TRY(recipe);
+    const auto files = synthesizedMaterialFiles(mOptions, *mSynthesizer, materialsDirectory);
+    if (auto mismatch = detailRecipeMismatch(header(), mMap->name(), *recipe, files)) {
+        mLog("warning: " + *mismatch);
+    }
+    return {};
+}
+
+const MaterialSet* ViewerSession::materials() const
+{
+    return mSynthesizer ? mSynthesizer->settings().materials.get() : nullptr;
+}
+
+void ViewerSession::openClipmap()
+{
+    const TengineOptions& o = mOptions;
+    const bool synthesis = mSynthesizer && header().hasDetailErrors();
+    const int finest = clipmapFinestLevel(o, header(), synthesis);
+    mClipmapLayout.emplace(extentOf(header()), static_cast<int>(header().chunkSize), o.clipmapSamples, finest, 0);
+    const MaterialSet* set = materials();
+    const bool detailTextures = set && std::any_of(set->materials().begin(), set->materials().end(),
+                                                   [](const Material& m) { return !m.detailTextures.empty(); });
+    const int normalTexels = o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0;
+    mClipmap = std::make_unique<ClipmapTerrain>(*mClipmapLayout, static_cast<int>(header().chunkSize),
+                                                static_cast<int>(header().textureSize), detailTextures, normalTexels,
+                                                o.clipmapMorphSeconds);
+}
+
+Status ViewerSession::startStreaming(const GlCapabilities& gl)
+{
+    TERRAIN_EXPECTS(!mStreamer, "the session streams already");
+    const TengineOptions& o = mOptions;
+    const bool view = mUse == SessionUse::View;
+    const bool clipmap = o.clipmap && view;
+    mTessellation = o.tessellation && !clipmap;
+    if (mTessellation && !gl.tessellation) {
+        mLog(
+            "warning: render_mode = tessellation needs OpenGL 4.0 tessellation shaders, which this GL lacks: "
+            "drawing chunks");
+        mTessellation = false;
+    }
+    mCountPixels = view && o.visibilityLod && gl.pixelCounts;
+    if (view && o.visibilityLod && clipmap) {
+        mLog("warning: lod_mode = clipmap draws no quadtree selection: visibility_lod has no effect");
+        mCountPixels = false;
+    } else if (view && o.visibilityLod && !gl.pixelCounts) {
+        mLog(
+            "warning: visibility_lod needs OpenGL 4.3 (or GL_ARB_shader_storage_buffer_object and "
+            "GL_ARB_shader_image_load_store) to count visible pixels, which this GL lacks: refining all in view");
+    }
+    if (clipmap) {
+        openClipmap();
+    }
+    mRgtc2 = compressNormalMaps(o, gl.softwareRasterizer) && !clipmap;
+    mBlockPixels = mTessellation ? o.lodError * o.tessellationShare : 0.0;
+    mNodePixels = mTessellation ? o.lodError * (1.0 - o.tessellationShare) : o.lodError;
+    const int blockQuads = mTessellation ? kTessellationBlockQuads : 0;
+    // The cache holds what the viewer's would: its nodes' CPU bytes are those of the viewer's source (a static
+    // root, which holds its height codes too, costs at least what a dynamic node does).
+    const DetailPolicy viewerPolicy{
+        mSynthesizer.get(), o.lodMinimumSpacing, blockQuads, o.dynamicTextureSize, true, mRgtc2};
+    mSource = std::make_unique<TerrainNodeSource>(
+        *mMap, view ? viewerPolicy : DetailPolicy{mSynthesizer.get(), o.lodMinimumSpacing, blockQuads});
+    auto root = view ? mSource->loadRoot() : TerrainNodeSource(*mMap, viewerPolicy).loadRoot();
+    TERRAIN_TRY(root);
+    mCache = chooseCacheSize(o, header(), materials(), gl.s3tc, mRgtc2, residentBytes(**root),
+                             clipmap ? SIZE_MAX : gl.maxSlots);
+
+    StreamerOptions streamerOptions;
+    streamerOptions.cacheSize = mCache.nodes;
+    streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
+    streamerOptions.workers = o.workerThreads;
+    streamerOptions.velocityLimit = view ? o.detailVelocityLimit : 0.0;  // measured: loaded to completion
+    streamerOptions.revealSeconds = o.visibilityRevealSeconds;
+    auto streamer = TerrainStreamer::create(*mSource, extentOf(header()), streamerOptions);
+    TERRAIN_TRY(streamer);
+    mStreamer = std::move(streamer).value();
+    mStreamer->onLoadError([this](const std::string& message) {
+        if (mLoadErrors++ == 0) {
+            mFirstLoadError = message;
+        }
+        mLog(message);
+    });
+    if (!view || o.videoMeasureErrorEvery > 0) {
+        // The reference nodes are the viewer's surfaces without the bounds, normal maps and tessellation errors
+        // they do not need.
+        mReferenceSource = std::make_unique<TerrainNodeSource>(
+            *mMap, DetailPolicy{mSynthesizer.get(), o.lodMinimumSpacing, 0, 0, false});
+        mMeter =
+            std::make_unique<ErrorMeter>(header(), *mReferenceSource, ErrorMeterOptions{o.lodError / 8.0, 1024, 16});
+    }
+    return {};
+}
+
+FrameStats ViewerSession::advance(const Camera& camera, double clock, double speed, Settle settle,
+                                  const FrameVisibility& visibility)
+{
+    TERRAIN_EXPECTS(mStreamer, "advance() before startStreaming()");
+    if (mClipmap) {
+        return advanceClipmap(camera, clock, settle);
+    }
+    FrameStats stats = mStreamer->settle(settle, camera, mNodePixels, speed, visibility);
+    if (!mOptions.geomorph) {  // the renderer then draws every node at its own detail
+        mUnmorphed = unmorphed(mStreamer->selection());
+    }
+    return stats;
+}
+
+FrameStats ViewerSession::advanceClipmap(const Camera& camera, double clock, Settle settle)
+{
+    ClipmapLayout& layout = *mClipmapLayout;
+    ClipmapTerrain& clipmap = *mClipmap;
+    TerrainStreamer& streamer = *mStreamer;
+    const ResidentNodeLookup resident = [&streamer](const NodeId& id) { return streamer.node(id); };
+    auto entered = layout.moveTo(camera.position.x, camera.position.y);
+    // The ground below from the rings as they are (the finest one covers the viewer).
+    auto firstRing = [&] {
+        const double ground = header().heightOffset + clipmap.heightAt(layout, 0, camera.position.x, camera.position.y);
+        return layout.finestActiveRing(std::max(0.0, camera.position.z - ground));
+    };
+    auto select = [&] {
+        mClipmapFirstRing = firstRing();
+        const FrameStats stats = streamer.updateFor(clipmap.wanted(layout, mClipmapFirstRing));
+        clipmap.update(layout, entered, resident, clock);
+        for (auto& rects : entered) {  // the windows moved once: later rounds only fill
+            rects.clear();
+        }
+        return stats;
+    };
+    // The rings just filled may put the ground nearer than it seemed (the first frame's were empty).
+    return streamer.settle(settle, select, [&] { return firstRing() != mClipmapFirstRing; });
+}
+
+const LodSelection& ViewerSession::drawnSelection() const
+{
+    return mOptions.geomorph ? mStreamer->selection() : mUnmorphed;
+}
+
+std::optional<double> ViewerSession::drawnHeightAt(double x, double y) const
+{
+    if (mClipmap) {
+        return header().heightOffset + mClipmap->heightAt(*mClipmapLayout, 0, x, y);
+    }
+    return terrain::drawnHeightAt(*mStreamer, header(), x, y);
+}
+
+Expected<FrameError> ViewerSession::measureDrawn(const Camera& camera, const MeasuredVisibility& visibility)
+{
+    TERRAIN_EXPECTS(mMeter, "measureDrawn() without an error meter");
+    if (mClipmap) {
+        // lod_mode = clipmap: the rings' surface as drawn, against the same reference.
+        return mMeter->measureSurface(
+            [this](double x, double y) { return mClipmap->drawnHeight(*mClipmapLayout, mClipmapFirstRing, x, y); },
+            camera, visibility);
+    }
+    const TerrainStreamer& streamer = *mStreamer;
+    return mMeter->measure(
+        drawnSelection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, mOptions.lodError,
+        mBlockPixels, visibility);
+}
+
+}  // namespace terrain
