@@ -431,7 +431,8 @@ std::vector<OptionSpec> makeOptionTable()
                            &O::cameraPath, PathKind::Input, "a path (empty: none)"));
     t.push_back({"camera_position", kGroupCamera,
                  "Where the camera starts when no path is flown, world metres (x east, y north, z up). Empty: "
-                 "above the map's centre.",
+                 "where it sees the whole terrain, looking at its centre with camera_yaw and camera_pitch (at least "
+                 "5 degrees down).",
                  "empty or three numbers 'x, y, z' (metres)",
                  [](std::string_view value, const SetContext&, O& o) {
                      if (value.empty()) {

@@ -61,9 +61,9 @@ struct TengineOptions {
     double cameraZFar = 200000.0;              ///< camera_z_far: metres, > camera_z_near
     double cameraMinClearance = 2.0;           ///< camera_min_clearance: metres, >= 0; free flight only
     std::filesystem::path cameraPath;          ///< camera_path: empty = none
-    std::optional<glm::dvec3> cameraPosition;  ///< camera_position: metres; unset = above the map's centre
+    std::optional<glm::dvec3> cameraPosition;  ///< camera_position: metres; unset = framing the whole terrain
     double cameraYaw = 0.0;                    ///< camera_yaw: degrees, 0 = north, positive turns east
-    double cameraPitch = -20.0;                ///< camera_pitch: degrees in [-90, 90], positive up
+    double cameraPitch = -45.0;                ///< camera_pitch: degrees in [-90, 90], positive up
 
     // ---- Display ----
     int windowWidth = 1280;               ///< window_width: pixels, [16, 16384]
