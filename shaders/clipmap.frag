@@ -19,11 +19,6 @@ uniform sampler2DArray uColour;          // per ring: n x n RGBA8, toroidal (REP
 uniform sampler2DArray uPreviousColour;  // what they were drawn as when their morph started
 uniform int uRing;
 uniform int uHasCoarser;
-uniform vec3 uSunDirection;
-uniform vec3 uSunColour;
-uniform vec3 uAmbient;
-uniform vec3 uHazeColour;
-uniform float uHazeDistance;
 uniform vec4 uValidRect;  // camera-relative x0, y0, x1, y1 of the input's samples
 uniform int uWireframe;
 #ifdef NORMAL_MAP
@@ -43,6 +38,7 @@ uniform vec4 uLayerOrigin[LAYER_COUNT];  // the window origin in repeats (xy) an
 #endif
 #include "detail.glsl"
 #endif
+#include "light.glsl"
 
 out vec4 fragColour;
 
@@ -85,7 +81,5 @@ void main()
 #else
     vec3 n = normalize(vNormal);
 #endif
-    vec3 light = uAmbient * (0.6 + 0.4 * n.z) + uSunColour * max(dot(n, uSunDirection), 0.0);
-    float haze = 1.0 - exp(-length(vRelative) / uHazeDistance);
-    fragColour = vec4(mix(albedo * light, uHazeColour, haze), 1.0);
+    fragColour = vec4(litAndHazed(albedo, n, vRelative), 1.0);
 }

@@ -8,7 +8,7 @@
 // from the height drawn before (uMorph: previous height, time of the change; ClipmapTerrain::drawnSample is the
 // same in C++), and the fragment program blends their colours, material weights and normals the same way.
 
-layout(location = 0) in ivec2 aGrid;  // the vertex, cells from its footprint's corner
+layout(location = GRID_LOCATION) in ivec2 aGrid;  // the vertex, cells from its footprint's corner
 
 uniform mat4 uViewProjection;    // camera-relative world -> clip
 uniform sampler2DArray uHeights; // per ring: n x n metres above the map's offset, texel = sample mod n

@@ -38,11 +38,6 @@ uniform sampler2DArray uParentNormalMaps;  // the same maps in the parent's pool
 uniform float uNormalTexels;         // texels per side of a normal map
 uniform float uNormalLayerTexels;    // texels per side of a layer (>= uNormalTexels: RGTC2 pads to a multiple of 4)
 #endif
-uniform vec3 uSunDirection;       // unit, towards the sun
-uniform vec3 uSunColour;
-uniform vec3 uAmbient;
-uniform vec3 uHazeColour;
-uniform float uHazeDistance;      // metres at which haze reaches 63 %
 #ifdef CLIP_TO_VALID
 uniform vec4 uValidRect;          // camera-relative x0, y0, x1, y1 of the input's samples (padding excluded)
 #endif
@@ -55,6 +50,7 @@ flat in vec4 vLayerOrigin[LAYER_COUNT];  // the node's corner in repeats (xy) an
 #endif
 #include "detail.glsl"
 #endif
+#include "light.glsl"
 
 out vec4 fragColour;
 
@@ -102,8 +98,5 @@ void main()
 #else
     vec3 n = normalize(vNormal);
 #endif
-    vec3 light = uAmbient * (0.6 + 0.4 * n.z) + uSunColour * max(dot(n, uSunDirection), 0.0);
-    vec3 colour = albedo * light;
-    float haze = 1.0 - exp(-length(vRelative) / uHazeDistance);
-    fragColour = vec4(mix(colour, uHazeColour, haze), 1.0);
+    fragColour = vec4(litAndHazed(albedo, n, vRelative), 1.0);
 }

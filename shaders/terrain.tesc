@@ -53,9 +53,12 @@ void main()
         block = side == 0 ? ivec2(k, 0) : side == 1 ? ivec2(b - 1, k) : side == 2 ? ivec2(k, b - 1) : ivec2(0, k);
     }
     int code = int(texelFetch(uLevels, (uFirstInstance + int(cInstance[0])) * b * b + block.y * b + block.x).r);
-    int t = code & 3;
+    int t = code & BLOCK_LEVEL_MASK;
     eBlock = ivec4(block, kind, t);
-    eSnap = ivec4((code >> 2) & 3, (code >> 4) & 3, (code >> 6) & 3, (code >> 8) & 3);
+    const int snapMask = (1 << BLOCK_SNAP_BITS) - 1;
+    eSnap = ivec4(code >> BLOCK_SNAP_SHIFT, code >> (BLOCK_SNAP_SHIFT + BLOCK_SNAP_BITS),
+                  code >> (BLOCK_SNAP_SHIFT + 2 * BLOCK_SNAP_BITS), code >> (BLOCK_SNAP_SHIFT + 3 * BLOCK_SNAP_BITS)) &
+            snapMask;
 #ifdef PIXEL_COUNTS
     eInstance = uFirstInstance + int(cInstance[0]);
 #endif
@@ -73,7 +76,7 @@ void main()
     eLayerOrigin[7] = cLayer7[0];
 #endif
     float f = float(uBlockQuads >> t);
-    if ((code & 1024) != 0) {
+    if ((code & BLOCK_CULLED_BIT) != 0) {
         f = 0.0;  // culled: the patch is dropped
     }
     if (kind == 0) {

@@ -21,17 +21,7 @@ patch in vec4 eLayerOrigin[8];
 flat out vec4 vLayerOrigin[LAYER_COUNT];
 #endif
 
-uniform mat4 uViewProjection;
-uniform float uInverseCells;
-uniform float uHeightBase;
 uniform int uBlockQuads;
-uniform sampler2DArray uHeights;
-#ifndef NORMAL_MAP
-uniform sampler2DArray uParentNormals;
-#endif
-#ifdef DETAIL
-uniform sampler2DArray uWeights;
-#endif
 
 precise out vec3 vRelative;
 #ifndef NORMAL_MAP
@@ -45,21 +35,12 @@ flat out vec2 vParentOffset;
 flat out ivec2 vSlots;
 precise gl_Position;
 
-int gSlot;
-float gLo, gRange;  // the slot's heights: lo + range * code / 65535 (render/NodeTextures.h, quantizeHeightsR16)
-float height(ivec2 p) { return gLo + gRange * texelFetch(uHeights, ivec3(p + 1, gSlot), 0).r; }
-#ifndef NORMAL_MAP
-vec2 parentNormalAt(ivec2 p) { return texelFetch(uParentNormals, ivec3(p / 2, gSlot), 0).xy; }
-#endif
+#include "surface.glsl"
+
 int snapToLattice(int c, int level) { int g = 1 << level; return (c + g / 2) / g * g; }
 
 void main()
 {
-    gSlot = int(eNode1.y);
-    gLo = eNode1.w;
-    gRange = eNode2.z;
-    float spacing = eNode0.z;
-    float morph = eNode0.w;
     int q = uBlockQuads;
     int t = eBlock.w;
     int s = 1 << t;
@@ -90,36 +71,13 @@ void main()
         drop = 1.0 - gl_TessCoord.y;
     }
 
-    ivec2 d = p & 1;
-    float own = height(p);
-    float parent = 0.5 * (height(p - d) + height(p + d));
-#ifndef NORMAL_MAP
-    vec3 ownN = vec3(-0.5 * vec2(height(p + ivec2(1, 0)) - height(p - ivec2(1, 0)),
-                                 height(p + ivec2(0, 1)) - height(p - ivec2(0, 1))) / spacing, 1.0);
-    vec2 ownNormal = ownN.xy / length(ownN);
-    vec2 parentNormal = 0.5 * (parentNormalAt(p - d) + parentNormalAt(p + d));
-    vec2 n = mix(parentNormal, ownNormal, morph);
-    vNormal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
-#endif
-    float z = uHeightBase + mix(parent, own, morph) - drop * eNode1.x;
-    vRelative = vec3(eNode0.xy + vec2(p) * spacing, z);
-    vNodeUv = vec2(p) * uInverseCells;
-    vLocal = vec2(p) * spacing;
-#ifdef DETAIL
-    vMaterials = texelFetch(uWeights, ivec3(p, gSlot), 0);
-#ifndef DETAIL_TINT_ONLY
+    emitSurfaceVertex(p, eNode0, eNode1, eNode2, drop);
+#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
     for (int k = 0; k < LAYER_COUNT; ++k) {
         vLayerOrigin[k] = eLayerOrigin[k];
     }
 #endif
-#else
-    vMaterials = vec4(0.0);
-#endif
-    vMorph = morph;
-    vParentOffset = eNode2.xy;
-    vSlots = ivec2(gSlot, int(eNode1.z));
 #ifdef PIXEL_COUNTS
     vInstance = eInstance;
 #endif
-    gl_Position = uViewProjection * vec4(vRelative, 1.0);
 }

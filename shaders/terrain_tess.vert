@@ -4,12 +4,12 @@
 // patch number and the node's constants (the same per-instance attributes as terrain.vert) to the control
 // shader (terrain.tesc); terrain.tese makes the vertices.
 
-layout(location = 0) in float aPatch;  // 0 .. B^2 - 1: block by * B + bx; B^2 + side * B + k: skirt
-layout(location = 2) in vec4 aNode0;
-layout(location = 3) in vec4 aNode1;
-layout(location = 4) in vec4 aNode2;
+layout(location = PATCH_LOCATION) in float aPatch;  // 0 .. B^2 - 1: block by * B + bx; B^2 + side * B + k: skirt
+layout(location = NODE0_LOCATION) in vec4 aNode0;
+layout(location = NODE1_LOCATION) in vec4 aNode1;
+layout(location = NODE2_LOCATION) in vec4 aNode2;
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
-layout(location = 5) in vec4 aLayerOrigin[LAYER_COUNT];
+layout(location = LAYER_ORIGIN_LOCATION) in vec4 aLayerOrigin[LAYER_COUNT];
 // Up to 8 (kMaxLayers): arrays of arrays (one per patch vertex) need GLSL 4.30.
 out vec4 cLayer0;
 out vec4 cLayer1;

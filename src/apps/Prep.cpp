@@ -430,7 +430,7 @@ int main(int argc, char** argv)
     std::printf("            for %s; %.2f s estimating (summed over threads)\n",
                 h.detailRecipe ? h.detailRecipe->describe().c_str() : "no recipe", report->leafDetailSeconds);
     std::printf("  time      %.2f s, %.1f million input samples per second (%d threads)\n", report->seconds,
-                inputSamples / report->seconds / 1e6, args->build.threads);
+                inputSamples / report->seconds / 1e6, report->threads);
     std::printf("  memory    peak %s, %s (budget %s)\n", formatBytes(peakResidentBytes()).c_str(),
                 report->outOfCore ? "out of core" : "in memory", formatBytes(report->memoryBudget).c_str());
     return 0;

@@ -311,6 +311,7 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
     windowOptions.height = o.windowHeight;
     windowOptions.visible = !(o.videoMode && !o.demoMode);
     windowOptions.title = "tengine - " + o.mapFile.filename().string();
+    windowOptions.displayLost = [&log](const std::string& message) { log(message); };
     auto window = GlWindow::create(windowOptions);
     if (!window.ok()) {
         return fail(window.error().message);

@@ -13,8 +13,11 @@ namespace terrain {
 std::uint16_t BlockLevels::code(int block) const
 {
     const auto k = static_cast<std::size_t>(block);
-    return static_cast<std::uint16_t>(level[k] | snap[4 * k] << 2 | snap[4 * k + 1] << 4 | snap[4 * k + 2] << 6 |
-                                      snap[4 * k + 3] << 8 | culled[k] << 10);
+    int code = level[k] | (culled[k] != 0 ? kBlockCulledBit : 0);
+    for (int side = 0; side < 4; ++side) {
+        code |= snap[4 * k + static_cast<std::size_t>(side)] << (kBlockSnapShift + side * kBlockSnapBits);
+    }
+    return static_cast<std::uint16_t>(code);
 }
 
 std::uint64_t BlockLevels::surfaceTriangles() const

@@ -31,6 +31,15 @@ namespace terrain {
 /// Quads per side of a tessellation block (render_mode = tessellation): 8 x 8 blocks of a 65 x 65 node.
 inline constexpr int kTessellationBlockQuads = 8;
 
+/// The fields of a block's code (BlockLevels::code), as the control shader reads them: the level t in the bits of
+/// kBlockLevelMask, then the four sides' lattices (south, east, north, west) kBlockSnapBits each from bit
+/// kBlockSnapShift, then kBlockCulledBit.
+inline constexpr int kBlockLevelMask = 3;
+inline constexpr int kBlockSnapShift = 2;
+inline constexpr int kBlockSnapBits = 2;
+inline constexpr int kBlockCulledBit = 1 << (kBlockSnapShift + 4 * kBlockSnapBits);
+static_assert(kTessellationBlockQuads <= 1 << kBlockLevelMask, "a block's levels fit the code's level field");
+
 struct BlockLevels {
     int blocksPerSide = 0;
     int blockQuads = 0;
@@ -39,7 +48,8 @@ struct BlockLevels {
     std::vector<std::uint8_t> culled;  ///< per block: 1 outside the view frustum (not drawn)
     int occludedBlocks = 0;            ///< drawn blocks made coarsest because hidden (`occluded`)
 
-    /// The block as the shaders read it: t | south << 2 | east << 4 | north << 6 | west << 8 | culled << 10.
+    /// The block as the shaders read it: t | south << 2 | east << 4 | north << 6 | west << 8 | culled << 10 (the
+    /// fields above).
     std::uint16_t code(int block) const;
     /// Triangles the tessellator makes for the node's surface patches (2 (B / 2^t)^2 a drawn block,
     /// degenerate ones included).

@@ -500,6 +500,8 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     if (options.threads < 1) {
         return makeError("thread count ", options.threads, " must be at least 1");
     }
+    // The worker threads: options.threads, fewer out of core where the memory budget holds no more.
+    int threads = options.threads;
     const bool pifs = options.heightCoding == kHeightCodingPifs;
     if (!pifs && options.heightCoding != kHeightCodingKobbeltResidual) {
         return makeError("unknown height coding ", options.heightCoding);
@@ -616,11 +618,20 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
         const std::uint64_t perThread = square * square * 6;  // its codes, encoded nodes and textures
         auto neededFor = [&](std::uint64_t b) {
             return (static_cast<std::uint64_t>(coreRowsFor(b)) + 2 * kBandMargin) * rowBytes +
-                   static_cast<std::uint64_t>(options.threads) * perThread + fixedBytes +
+                   static_cast<std::uint64_t>(threads) * perThread + fixedBytes +
                    samples / (kFillBlock * kFillBlock) * 16 + QuantizedGrid::coarseLatticeBytes(gridSize, coarseShift) +
                    (std::uint64_t{4} << 20);
         };
         plan.coreRows = coreRowsFor(budget);
+        // Each thread holds a subtree's square: as many as fit, saying so when fewer than asked.
+        while (threads > 1 && neededFor(budget) > budget) {
+            --threads;
+        }
+        if (threads < options.threads) {
+            warn("building on " + std::to_string(threads) + " thread(s) of the " + std::to_string(options.threads) +
+                 " asked: each holds a subtree of the grid, and more do not fit the memory budget of " +
+                 formatBytes(budget));
+        }
         if (neededFor(budget) > budget) {
             // The least budget that covers what it itself needs (the need grows by a quarter of the budget, so
             // following the need converges), rounded up to a MiB: following the advice works.
@@ -633,8 +644,7 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
             }
             advice = (advice + (std::uint64_t{1} << 20) - 1) >> 20 << 20;
             return makeError("the memory budget of ", formatBytes(budget), " is too small for a ", width, "x", height,
-                             " input on ", options.threads, " thread(s) even out of core: --memory ", advice >> 20,
-                             "M is enough (or fewer --threads)");
+                             " input even out of core on one thread: --memory ", advice >> 20, "M is enough");
         }
     }
     HeightField whole;
@@ -759,9 +769,9 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
             if (meter) {
                 const int ly0 = core0 / cells;
                 const int ly1 = core1 == height ? meter->leafRows() : core1 / cells;
-                meter->addLeafRows(ly0, ly1, rows, w0, wrows, options.threads);
+                meter->addLeafRows(ly0, ly1, rows, w0, wrows, threads);
             }
-            parallelFor(static_cast<std::size_t>(core1 - core0), options.threads, [&](std::size_t k) {
+            parallelFor(static_cast<std::size_t>(core1 - core0), threads, [&](std::size_t k) {
                 const int y = core0 + static_cast<int>(k);
                 const float* row = rows.data() + static_cast<std::size_t>(y - w0) * width;
                 for (int x = 0; x < width; ++x) {
@@ -803,12 +813,13 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     report.inputHeight = height;
     report.outOfCore = !plan.inMemory;
     report.memoryBudget = budget;
+    report.threads = threads;
     whole = {};  // the grid holds everything from here on
     mask = {};
 
     if (header.quantizerBin > 1) {
         progress(0.02, "reconstructing");
-        grid->reconstructLossy(header, header.quantizerBin, options.threads);
+        grid->reconstructLossy(header, header.quantizerBin, threads);
     }
 
     // -t: georeferenced imagery aligned by coordinates over the generated colours, or a PNG stretched over
@@ -866,7 +877,7 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
         progress(0.03, "fractal coding");
         header.heightCoding = kHeightCodingPifs;
         pyramid.emplace(PifsPyramid::build(
-            header, *grid, [&](int level) { return shape.nodesAt(level); }, options.threads, options.zlibLevel));
+            header, *grid, [&](int level) { return shape.nodesAt(level); }, threads, options.zlibLevel));
         header.maxErrorBound = pyramid->maxErrorCodes() * header.heightStep + quantization->errorBound;
     }
 
@@ -929,7 +940,7 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
             }
         });
     }
-    parallelFor(subtrees.size(), options.threads, [&](std::size_t i) {
+    parallelFor(subtrees.size(), threads, [&](std::size_t i) {
         auto block = std::make_unique<EncodedBlock>();
         subtreeSummaries[i] = builder.process(subtrees[i], *block, none);
         partials.codes[i] = builder.partialsOf(subtrees[i]);

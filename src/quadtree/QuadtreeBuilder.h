@@ -89,6 +89,7 @@ struct BuildReport {
     double seconds = 0.0;
     bool outOfCore = false;          ///< streamed in bands with the grid in a scratch file (BuildOptions::memoryBudget)
     std::uint64_t memoryBudget = 0;  ///< the budget it was built within, bytes
+    int threads = 1;                 ///< the worker threads it was built on (fewer than asked where memory is short)
     std::uint64_t leaves = 0;
     float maxLeafDetailError = 0.0f;   ///< metres, over the leaves (0 without leafDetailError)
     double meanLeafDetailError = 0.0;  ///< metres

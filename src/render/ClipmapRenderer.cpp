@@ -4,6 +4,7 @@
 #include "core/Aabb.h"
 #include "core/Check.h"
 #include "core/Frustum.h"
+#include "render/ShaderContract.h"
 
 #include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
@@ -42,8 +43,8 @@ ClipmapRenderer::Mesh ClipmapRenderer::makeMesh(const std::vector<GLint>& vertic
     glBindBuffer(GL_ARRAY_BUFFER, m.vertices.name());
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GLint)), vertices.data(),
                  GL_STATIC_DRAW);
-    glEnableVertexAttribArray(0);
-    glVertexAttribIPointer(0, 2, GL_INT, 0, nullptr);
+    glEnableVertexAttribArray(contract::kGridLocation);
+    glVertexAttribIPointer(contract::kGridLocation, 2, GL_INT, 0, nullptr);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.indices.name());
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
                  indices.data(), GL_STATIC_DRAW);
@@ -108,19 +109,11 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
         r->mTextureBytes += static_cast<std::size_t>(side) * side * layout.ringCount() * 4;
     }
     for (const ShaderProgram& program : r->mPrograms) {
-        program.use();
-        glUniform1i(program.uniform("uNormals"), 4);
+        contract::bindSamplerUnits(program, contract::kClipmapSamplers);
         glUniform1f(program.uniform("uNormalTexelsPerCell"), static_cast<float>(normalTexelsPerCell));
-        glUniform1i(program.uniform("uHeights"), 0);
-        glUniform1i(program.uniform("uMorph"), 5);
-        glUniform1i(program.uniform("uPreviousColour"), 6);
-        glUniform1i(program.uniform("uPreviousMaterials"), 7);
-        glUniform1i(program.uniform("uPreviousNormals"), 8);
-        glUniform1i(program.uniform("uColour"), 1);
-        glUniform1i(program.uniform("uMaterials"), 3);
         glUniform1i(program.uniform("uSamples"), n);
         if (!r->mDetail.empty()) {
-            r->mDetail.setUniforms(program, 2);
+            r->mDetail.setUniforms(program, contract::clipmap_units::kDetail);
         }
     }
 
@@ -271,32 +264,23 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
                     static_cast<float>(vx1 - camera.position.x + slack),
                     static_cast<float>(vy1 - camera.position.y + slack));
     }
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, mHeights.name());
-    glActiveTexture(GL_TEXTURE1);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, mColour.name());
-    if (mMaterials) {
-        glActiveTexture(GL_TEXTURE3);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mMaterials.name());
-    }
-    if (mNormals) {
-        glActiveTexture(GL_TEXTURE4);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mNormals.name());
-    }
-    glActiveTexture(GL_TEXTURE5);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, mMorph.name());
-    glActiveTexture(GL_TEXTURE6);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, mPreviousColour.name());
-    if (mPreviousMaterials) {
-        glActiveTexture(GL_TEXTURE7);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mPreviousMaterials.name());
-    }
-    if (mPreviousNormals) {
-        glActiveTexture(GL_TEXTURE8);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, mPreviousNormals.name());
+    namespace units = contract::clipmap_units;
+    const std::pair<int, const gl::Texture*> bindings[] = {{units::kHeights, &mHeights},
+                                                           {units::kColour, &mColour},
+                                                           {units::kMaterials, &mMaterials},
+                                                           {units::kNormals, &mNormals},
+                                                           {units::kMorph, &mMorph},
+                                                           {units::kPreviousColour, &mPreviousColour},
+                                                           {units::kPreviousMaterials, &mPreviousMaterials},
+                                                           {units::kPreviousNormals, &mPreviousNormals}};
+    for (const auto& [unit, texture] : bindings) {
+        if (*texture) {
+            glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
+            glBindTexture(GL_TEXTURE_2D_ARRAY, texture->name());
+        }
     }
     glActiveTexture(GL_TEXTURE0);
-    mDetail.bind(2);
+    mDetail.bind(units::kDetail);
     const Frustum frustum = Frustum::fromCamera(camera);
     const double fade = mDetail.fadeDistance();
     const int n = mSamples;

@@ -5,9 +5,11 @@
 #include <epoxy/gl.h>
 
 #include <GLFW/glfw3.h>
+#include <X11/Xlib.h>
 
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 
 namespace terrain {
 
@@ -30,6 +32,27 @@ void GLAPIENTRY onGlDebugMessage(GLenum, GLenum type, GLuint, GLenum severity, G
     }
 }
 #endif
+
+/// What the window's creator asked to be told when its display goes away. Xlib's handler of a broken connection
+/// is the process's, and a process has one window: set while it exists.
+std::function<void(const std::string&)>* gDisplayLost = nullptr;
+
+/// Xlib's handler of a broken connection (the default prints and calls exit(), whose destructors would race the
+/// worker threads): says so, then ends the process at once.
+int onDisplayLost(Display* display)
+{
+    const char* name = display ? DisplayString(display) : nullptr;
+    const std::string line = std::string("the display ") + (name ? name : "") +
+                             " went away (the X server ended or the connection to it broke): ending";
+    if (gDisplayLost && *gDisplayLost) {
+        (*gDisplayLost)(line);
+    } else {
+        std::fprintf(stderr, "%s\n", line.c_str());
+    }
+    std::fflush(nullptr);
+    std::_Exit(kDisplayLostStatus);
+}
+
 }  // namespace
 
 bool displayAvailable()
@@ -158,6 +181,8 @@ Expected<std::unique_ptr<GlWindow>> GlWindow::create(const WindowOptions& option
     if (glfwInit() != GLFW_TRUE) {
         return makeError("cannot initialise GLFW: ", lastGlfwError());
     }
+    // GLFW talks to X through Xlib; a Wayland build never calls this handler.
+    XSetIOErrorHandler(onDisplayLost);
     glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
     glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
     glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
@@ -183,12 +208,16 @@ Expected<std::unique_ptr<GlWindow>> GlWindow::create(const WindowOptions& option
         glDebugMessageCallback(onGlDebugMessage, nullptr);
     }
 #endif
-    return std::unique_ptr<GlWindow>(new GlWindow(window));
+    std::unique_ptr<GlWindow> created(new GlWindow(window));
+    created->mDisplayLost = options.displayLost;
+    gDisplayLost = &created->mDisplayLost;
+    return created;
 }
 
 GlWindow::~GlWindow()
 {
     if (mWindow) {
+        gDisplayLost = nullptr;
         glfwDestroyWindow(mWindow);
         glfwTerminate();
     }

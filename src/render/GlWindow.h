@@ -21,7 +21,14 @@ struct WindowOptions {
     bool visible = true;
     std::string title = "tengine";
     bool vsync = false;
+    /// A window's display going away (the X server ends, its connection breaks) ends the process, as nothing
+    /// more can be drawn or shown: this is called first, once, with a line saying so; then the process exits with
+    /// kDisplayLostStatus (the other threads are not joined: whatever must be kept is written as it happens).
+    std::function<void(const std::string&)> displayLost;
 };
+
+/// The exit status of a process whose window's display went away.
+inline constexpr int kDisplayLostStatus = 3;
 
 class GlWindow {
 public:
@@ -52,6 +59,7 @@ private:
     static Expected<std::unique_ptr<GlWindow>> createHeadless(const WindowOptions& options);
     GLFWwindow* mWindow = nullptr;
     std::unique_ptr<Headless> mHeadless;
+    std::function<void(const std::string&)> mDisplayLost;  ///< WindowOptions::displayLost
     bool mCloseRequested = false;
 };
 

@@ -1,6 +1,6 @@
-// Per-node vertex data for the template mesh (3.2.8-3.2.9): what each vertex of one node needs to
-// geomorph, computed once when the node is uploaded, so the vertex program does no texture fetches.
-// Pure CPU code: no GL here.
+// Per-node vertex data for the template mesh (3.2.8-3.2.9) on the CPU: what each vertex of one node needs to
+// geomorph, as terrain.vert computes it from the node pools' textures. The reference of that computation for
+// tests and the brute-force renderer of RenderBench; the viewer does not use it. Pure CPU code: no GL here.
 #pragma once
 
 #include "render/TemplateMesh.h"

@@ -1,5 +1,7 @@
 #include "render/ShaderProgram.h"
 
+#include "render/ShaderContract.h"
+
 #include <algorithm>
 #include <fstream>
 #include <sstream>
@@ -59,10 +61,14 @@ Expected<std::string> readShaderFile(const std::filesystem::path& file)
 
 namespace {
 
-/// Inserts the defines after the #version line (which must come first in GLSL).
+/// Inserts the C++/GLSL contract's definitions (render/ShaderContract.h) and `defines` after the #version line
+/// (which must come first in GLSL).
 std::string withDefines(const std::string& source, const std::vector<std::string>& defines)
 {
     std::string block;
+    for (const auto& d : contract::shaderContractDefines()) {
+        block += "#define " + d + "\n";
+    }
     for (const auto& d : defines) {
         block += "#define " + d + "\n";
     }

@@ -6,6 +6,7 @@
 #include "lod/NodeTextures.h"
 #include "lod/TessellationLevels.h"
 #include "quadtree/ChunkGeometry.h"
+#include "render/ShaderContract.h"
 #include "render/TemplateMesh.h"
 #include "render/ZigzagIndexBuffer.h"
 
@@ -16,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <utility>
 
 namespace terrain {
@@ -36,8 +38,9 @@ gl::Texture createLayers(GLenum internalFormat, int size, GLsizei layers, GLenum
     return texture;
 }
 
-/// Points the per-instance attributes 2 .. 2 + texels - 1 of the bound vertex array at `buffer`'s node
-/// constants, `texels` vec4s a node, starting at node `first`.
+/// Points the per-instance attributes contract::kNodeLocation .. + texels - 1 of the bound vertex array at
+/// `buffer`'s node constants (a NodeInstance, then a layer origin per detail layer: `texels` vec4s a node),
+/// starting at node `first`.
 void pointNodeConstants(const gl::Buffer& buffer, int texels, std::size_t first)
 {
     const auto stride = static_cast<GLsizei>(texels * 4 * sizeof(float));
@@ -45,18 +48,18 @@ void pointNodeConstants(const gl::Buffer& buffer, int texels, std::size_t first)
     for (int k = 0; k < texels; ++k) {
         const std::size_t offset =
             (first * static_cast<std::size_t>(texels) + static_cast<std::size_t>(k)) * 4 * sizeof(float);
-        glVertexAttribPointer(static_cast<GLuint>(2 + k), 4, GL_FLOAT, GL_FALSE, stride,
+        glVertexAttribPointer(static_cast<GLuint>(contract::kNodeLocation + k), 4, GL_FLOAT, GL_FALSE, stride,
                               reinterpret_cast<const void*>(offset));
     }
     glBindBuffer(GL_ARRAY_BUFFER, 0);
 }
 
 /// Enables the node constants as per-instance attributes of the bound vertex array (terrain.vert and
-/// terrain_tess.vert: locations 2 ..), from the first node on.
+/// terrain_tess.vert: locations contract::kNodeLocation ..), from the first node on.
 void enableNodeConstants(const gl::Buffer& buffer, int texels)
 {
     for (int k = 0; k < texels; ++k) {
-        const auto location = static_cast<GLuint>(2 + k);
+        const auto location = static_cast<GLuint>(contract::kNodeLocation + k);
         glEnableVertexAttribArray(location);
         glVertexAttribDivisor(location, 1);
     }
@@ -94,7 +97,7 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         TERRAIN_TRY(layers);
         r->mDetail = std::move(layers).value();
     }
-    r->mNodeTexels = 3 + r->mDetail.count();
+    r->mNodeTexels = contract::kNodeInstanceVec4s + r->mDetail.count();
     const bool padded = header.validWidth < header.gridSize() || header.validHeight < header.gridSize();
     std::vector<std::string> defines;
     if (padded) {
@@ -150,21 +153,13 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     }
     for (ShaderProgram& program : r->mPrograms) {
         program.use();
-        glUniform1i(program.uniform("uColour"), 0);
-        glUniform1i(program.uniform("uHeights"), 1);
-        glUniform1i(program.uniform("uDetail"), 2);
-        glUniform1i(program.uniform("uWeights"), 3);
-        glUniform1i(program.uniform("uParentNormals"), 4);
-        glUniform1i(program.uniform("uLevels"), 5);
-        glUniform1i(program.uniform("uNormalMaps"), 6);
-        glUniform1i(program.uniform("uParentColour"), 7);
-        glUniform1i(program.uniform("uParentNormalMaps"), 8);
+        contract::bindSamplerUnits(program, contract::kTerrainSamplers);
         glUniform1i(program.uniform("uBlocks"), r->mBlocks);
         glUniform1i(program.uniform("uBlockQuads"), kTessellationBlockQuads);
     }
     if (!r->mDetail.empty()) {
         for (ShaderProgram& program : r->mPrograms) {
-            r->mDetail.setUniforms(program, 2);
+            r->mDetail.setUniforms(program, contract::terrain_units::kDetail);
         }
     }
     auto sky = Sky::create(shaderDirectory);
@@ -187,13 +182,13 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     glBindBuffer(GL_ARRAY_BUFFER, r->mTemplateVertices.name());
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(mesh.vertices.size() * sizeof(TemplateVertex)),
                  mesh.vertices.data(), GL_STATIC_DRAW);
-    glEnableVertexAttribArray(0);
-    glVertexAttribIPointer(0, 2, GL_UNSIGNED_SHORT, sizeof(TemplateVertex),
+    glEnableVertexAttribArray(contract::kGridLocation);
+    glVertexAttribIPointer(contract::kGridLocation, 2, GL_UNSIGNED_SHORT, sizeof(TemplateVertex),
                            reinterpret_cast<const void*>(offsetof(TemplateVertex, i)));
-    glEnableVertexAttribArray(1);
-    glVertexAttribIPointer(1, 1, GL_UNSIGNED_BYTE, sizeof(TemplateVertex),
+    glEnableVertexAttribArray(contract::kSkirtLocation);
+    glVertexAttribIPointer(contract::kSkirtLocation, 1, GL_UNSIGNED_BYTE, sizeof(TemplateVertex),
                            reinterpret_cast<const void*>(offsetof(TemplateVertex, skirt)));
-    // Per-instance node constants: attributes 2.. from the frame's constants buffer, a node's texels apart.
+    // Per-instance node constants from the frame's constants buffer, a node's texels apart.
     r->mConstantsBuffer = gl::Buffer::create();
     enableNodeConstants(r->mConstantsBuffer, r->mNodeTexels);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, r->mTemplateIndices.name());
@@ -219,8 +214,8 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         glBindVertexArray(r->mPatchVao.name());
         glBindBuffer(GL_ARRAY_BUFFER, r->mPatchIds.name());
         glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(ids.size() * sizeof(float)), ids.data(), GL_STATIC_DRAW);
-        glEnableVertexAttribArray(0);
-        glVertexAttribPointer(0, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
+        glEnableVertexAttribArray(contract::kPatchLocation);
+        glVertexAttribPointer(contract::kPatchLocation, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
         enableNodeConstants(r->mConstantsBuffer, r->mNodeTexels);
         glBindVertexArray(0);
         r->mLevelsBuffer = gl::Buffer::create();
@@ -552,26 +547,28 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         const NodeData& node = *f.node;
         (node.isStatic ? stats.staticNodes : stats.dynamicNodes) += 1;
         float* c = mConstants.data() + count * static_cast<std::size_t>(texels) * 4;
-        c[0] = static_cast<float>(selected.cameraRelativeOrigin.x);
-        c[1] = static_cast<float>(selected.cameraRelativeOrigin.y);
-        c[2] = static_cast<float>(selected.size / (mHeader.chunkSize - 1));
-        c[3] = selected.id.isRoot() || !style.geomorph ? 1.0f : selected.morph;
+        contract::NodeInstance instance;
+        instance.originX = static_cast<float>(selected.cameraRelativeOrigin.x);
+        instance.originY = static_cast<float>(selected.cameraRelativeOrigin.y);
+        instance.spacing = static_cast<float>(selected.size / (mHeader.chunkSize - 1));
+        instance.morph = selected.id.isRoot() || !style.geomorph ? 1.0f : selected.morph;
         // Skirts hang the parent's delta_c deep: a leaf's own delta_c is zero, yet it can meet a coarser
         // neighbour whose edge lies up to that far away (3.2.6).
-        c[4] = std::max(f.parent->deltaC, node.deltaC) + static_cast<float>(mHeader.heightStep);
-        c[5] = static_cast<float>(layerOf(f.slot));
-        c[6] = static_cast<float>(layerOf(f.parentSlot));
-        c[7] = mSlotHeights[static_cast<std::size_t>(f.slot)][0];
-        c[10] = mSlotHeights[static_cast<std::size_t>(f.slot)][1];
-        c[8] = (selected.id.x & 1) ? 0.5f : 0.0f;
-        c[9] = (selected.id.y & 1) ? 0.5f : 0.0f;
+        instance.skirtDepth = std::max(f.parent->deltaC, node.deltaC) + static_cast<float>(mHeader.heightStep);
+        instance.layer = static_cast<float>(layerOf(f.slot));
+        instance.parentLayer = static_cast<float>(layerOf(f.parentSlot));
+        instance.lowest = mSlotHeights[static_cast<std::size_t>(f.slot)][0];
+        instance.heightRange = mSlotHeights[static_cast<std::size_t>(f.slot)][1];
+        instance.quadrantX = (selected.id.x & 1) ? 0.5f : 0.0f;
+        instance.quadrantY = (selected.id.y & 1) ? 0.5f : 0.0f;
+        std::memcpy(c, &instance, sizeof instance);
         if (split && f.program == static_cast<int>(kNear)) {
             // The node's corner in repeats of each layer (and of its turned copy), reduced to [0, 1).
             const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(camera.position);
             for (int k = 0; k < mDetail.count(); ++k) {
                 const glm::vec4 origin = mDetail.origin(k, corner);
                 for (int i = 0; i < 4; ++i) {
-                    c[12 + 4 * k + i] = origin[i];
+                    c[4 * (contract::kNodeInstanceVec4s + k) + i] = origin[i];
                 }
             }
         }
@@ -611,7 +608,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(mCodes.size() * sizeof(std::uint16_t)), mCodes.data(),
                      GL_STREAM_DRAW);
         glBindBuffer(GL_TEXTURE_BUFFER, 0);
-        glActiveTexture(GL_TEXTURE5);
+        glActiveTexture(GL_TEXTURE0 + contract::terrain_units::kLevels);
         glBindTexture(GL_TEXTURE_BUFFER, mLevelsTexture.name());
         glActiveTexture(GL_TEXTURE0);
         glPatchParameteri(GL_PATCH_VERTICES, 1);
@@ -652,7 +649,7 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
                     static_cast<float>(valid.y - slack), static_cast<float>(valid.z + slack),
                     static_cast<float>(valid.w + slack));
     }
-    mDetail.bind(2);
+    mDetail.bind(contract::terrain_units::kDetail);
     glActiveTexture(GL_TEXTURE0);
 
     if (counting) {
@@ -690,13 +687,17 @@ RenderStats TerrainRenderer::draw(const LodSelection& selection, const ResidentN
         }
         const PoolArrays& own = mArrays[static_cast<std::size_t>(group[1])];
         const PoolArrays& parents = mArrays[static_cast<std::size_t>(group[2])];
-        const std::pair<GLenum, const gl::Texture*> bindings[] = {
-            {GL_TEXTURE0, &own.colour},        {GL_TEXTURE1, &own.heights},    {GL_TEXTURE3, &own.weights},
-            {GL_TEXTURE4, &own.parentNormals}, {GL_TEXTURE6, &own.normalMaps}, {GL_TEXTURE7, &parents.colour},
-            {GL_TEXTURE8, &parents.normalMaps}};
+        namespace units = contract::terrain_units;
+        const std::pair<int, const gl::Texture*> bindings[] = {{units::kColour, &own.colour},
+                                                               {units::kHeights, &own.heights},
+                                                               {units::kWeights, &own.weights},
+                                                               {units::kParentNormals, &own.parentNormals},
+                                                               {units::kNormalMaps, &own.normalMaps},
+                                                               {units::kParentColour, &parents.colour},
+                                                               {units::kParentNormalMaps, &parents.normalMaps}};
         for (const auto& [unit, texture] : bindings) {
             if (*texture) {
-                glActiveTexture(unit);
+                glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
                 glBindTexture(GL_TEXTURE_2D_ARRAY, texture->name());
             }
         }

@@ -216,6 +216,59 @@ TEST_F(InteractionGLTest, RecordingStoppedBySignalKeepsEveryFrameItMade)
     }
 }
 
+TEST_F(InteractionGLTest, TheViewerEndsSayingSoWhenItsDisplayGoesAway)
+{
+    const std::filesystem::path xvfb = "/usr/bin/Xvfb";
+    ASSERT_TRUE(std::filesystem::exists(xvfb)) << "Xvfb is installed by .ci/install-deps";
+    // A display of its own, ended under the running viewer.
+    test::ScratchDir out;
+    const std::string display = ":" + std::to_string(200 + ::getpid() % 400);
+    const pid_t server = test::spawnProgram(xvfb.string(), {display, "-screen", "0", "640x480x24", "-nolisten", "tcp"},
+                                            out / "xvfb.log");
+    ASSERT_GT(server, 0);
+    ASSERT_TRUE(waitFor([&] { return std::filesystem::exists("/tmp/.X11-unix/X" + display.substr(1)); }, 30))
+        << test::readTextFile(out / "xvfb.log");
+    struct ScopedDisplay {
+        std::string saved;
+        bool had = false;
+        explicit ScopedDisplay(const std::string& value)
+        {
+            if (const char* d = std::getenv("DISPLAY")) {
+                saved = d;
+                had = true;
+            }
+            ::setenv("DISPLAY", value.c_str(), 1);
+        }
+        ~ScopedDisplay()
+        {
+            if (had) {
+                ::setenv("DISPLAY", saved.c_str(), 1);
+            } else {
+                ::unsetenv("DISPLAY");
+            }
+        }
+    };
+    pid_t viewer = -1;
+    {
+        const ScopedDisplay scoped(display);
+        viewer = test::spawnProgram(TERRAIN_TENGINE_EXE, arguments({"log_file=" + (out / "viewer.log").string()}),
+                                    out / "stdout.txt");
+    }
+    ASSERT_GT(viewer, 0);
+    ASSERT_TRUE(waitFor([&] { return contains(test::readTextFile(out / "viewer.log"), "node pools"); }, 60))
+        << test::readTextFile(out / "stdout.txt");
+    std::this_thread::sleep_for(2s);  // frames are being drawn
+    ASSERT_EQ(::kill(server, SIGTERM), 0);
+    test::waitForProgram(server, 30);
+    const auto status = test::waitForProgram(viewer, 30);
+    ASSERT_TRUE(status.has_value()) << "the viewer did not end when its display went away";
+    const std::string said = test::readTextFile(out / "viewer.log");
+    EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == kDisplayLostStatus)
+        << test::describeWaitStatus(*status) << "\n"
+        << said;
+    EXPECT_TRUE(contains(said, "the display " + display + " went away")) << said;
+}
+
 TEST_F(InteractionGLTest, KeyTapsShorterThanAFrameTakeEffect)
 {
     if (!displayAvailable()) {

@@ -144,6 +144,35 @@ TEST(OutOfCoreTest, GeoTiffReadInBlocksGivesTheInMemoryBytes)
     }
 }
 
+TEST(OutOfCoreTest, ABudgetForFewerThreadsThanAskedBuildsOnThoseAndSaysSo)
+{
+    test::ScratchDir dir;
+    BuildOptions options = test::testOptions(17, 2);
+    const test::Bytes reference = [&] {
+        FieldRows rows(holedField());
+        return build(rows, options, dir / "memory.map", false);
+    }();
+    // What one thread needs out of core, not two: built on one, with a line saying so, and the same bytes.
+    std::vector<std::string> said;
+    options.warn = [&](std::string_view message) { said.emplace_back(message); };
+    options.forceOutOfCore = true;
+    options.memoryBudget = smallBudget(1);
+    auto report = buildMap(holedField(), options, dir / "one.map");
+    ASSERT_TRUE(report.ok()) << report.error().message;
+    EXPECT_EQ(report->threads, 1);
+    EXPECT_TRUE(report->outOfCore);
+    EXPECT_TRUE(test::readFileBytes(dir / "one.map") == reference);
+    ASSERT_EQ(said.size(), 1u);
+    EXPECT_NE(said[0].find("building on 1 thread(s) of the 2 asked"), std::string::npos) << said[0];
+    // With room for both, both are used and nothing is said.
+    said.clear();
+    options.memoryBudget = smallBudget(2);
+    report = buildMap(holedField(), options, dir / "two.map");
+    ASSERT_TRUE(report.ok()) << report.error().message;
+    EXPECT_EQ(report->threads, 2);
+    EXPECT_TRUE(said.empty());
+}
+
 TEST(OutOfCoreTest, BudgetTooSmallEvenOutOfCoreIsAnErrorThatLeavesNoFile)
 {
     test::ScratchDir dir;
