@@ -410,6 +410,347 @@ int stream(const MapFile& map, const ViewOptions& view)
     return loadErrors == 0 ? 0 : 1;
 }
 
+/// `height` and `export`'s surface: the finest static level, or with `depth` the drawn surface at that level
+/// with the viewer's detail (`detail`: tengine's defaults, --material, --no-material).
+struct SurfaceRequest {
+    std::optional<int> depth;
+    TengineOptions detail;
+};
+
+/// `height`: one point (X Y, or --lonlat LON LAT) or --points FILE, then the surface's options.
+struct HeightRequest {
+    SurfaceRequest surface;
+    std::optional<std::string> pointsFile;
+    double x = 0.0, y = 0.0;
+};
+
+/// `export`: the region, spacing and output, and the surface (its depth the coarsest level as fine as the spacing
+/// unless --depth).
+struct ExportRequest {
+    SurfaceRequest surface;
+    std::string output;
+    std::array<double, 4> region{};
+    double spacing = 0.0;
+};
+
+/// The surface options from `args[first..]`: --depth D, --material M.mat, --no-material.
+Expected<SurfaceRequest> parseSurface(const std::vector<std::string>& args, std::size_t first)
+{
+    SurfaceRequest request;
+    for (std::size_t i = first; i < args.size(); ++i) {
+        const std::string& arg = args[i];
+        if (arg == "--depth" && i + 1 < args.size()) {
+            auto d = parseInteger(args[++i]);
+            if (!d.ok() || *d < 0 || *d > NodeId::kMaxLevel) {
+                return makeError("height: --depth must be an integer in [0, ", NodeId::kMaxLevel, "]");
+            }
+            request.depth = static_cast<int>(*d);
+        } else if (arg == "--material" && i + 1 < args.size()) {
+            request.detail.detailMaterials.emplace_back(args[++i]);
+        } else if (arg == "--no-material") {
+            request.detail.detailAddMaterial = false;
+        } else {
+            return makeError("height: unknown or incomplete option '", arg, "'");
+        }
+    }
+    if (!request.depth && args.size() > first) {
+        return makeError("height: --material and --no-material need --depth");
+    }
+    return request;
+}
+
+/// `height MAP` then X Y, --lonlat LON LAT or --points FILE from `args[first..]`, then the surface's options.
+Expected<HeightRequest> parseHeight(const MapFile& map, const std::vector<std::string>& args, std::size_t first)
+{
+    HeightRequest request;
+    std::size_t options = first + 2;
+    if (args.size() >= first + 2 && args[first] == "--points") {
+        request.pointsFile = args[first + 1];
+    } else if (args.size() >= first + 1 && args[first] == "--lonlat") {
+        if (args.size() < first + 3) {
+            return makeError("height --lonlat needs LON and LAT (degrees)");
+        }
+        auto lon = parseDouble(args[first + 1]);
+        auto lat = parseDouble(args[first + 2]);
+        if (!lon.ok() || !lat.ok()) {
+            return makeError("height --lonlat: ", (lon.ok() ? lat : lon).error().message);
+        }
+        const MapHeader& h = map.header();
+        auto geo = GeoConverter::create(h.crsWkt, h.crsUnitMetres);
+        if (!geo.ok()) {
+            return makeError("height --lonlat: ", map.name(), ": ", geo.error().message);
+        }
+        auto world = geo->toWorld(*lon, *lat);
+        if (!world.ok()) {
+            return makeError("height --lonlat: ", world.error().message);
+        }
+        request.x = world->first;
+        request.y = world->second;
+        options = first + 3;
+    } else {
+        if (args.size() < first + 2) {
+            return makeError("height needs X and Y (metres), or --points FILE");
+        }
+        auto px = parseDouble(args[first]);
+        auto py = parseDouble(args[first + 1]);
+        if (!px.ok() || !py.ok()) {
+            return makeError("height: ", (px.ok() ? py : px).error().message);
+        }
+        request.x = *px;
+        request.y = *py;
+    }
+    auto surface = parseSurface(args, options);
+    TERRAIN_TRY(surface);
+    request.surface = std::move(surface).value();
+    return request;
+}
+
+/// `export MAP OUT.tif --region X0,Y0,X1,Y1 --spacing S` and the surface's options, in any order after OUT.tif.
+Expected<ExportRequest> parseExport(const MapFile& map, const std::vector<std::string>& args)
+{
+    if (args.size() < 3) {
+        return makeError("export needs an output .tif");
+    }
+    ExportRequest request;
+    request.output = args[2];
+    std::vector<std::string> surfaceArgs;
+    bool haveRegion = false, haveSpacing = false, haveDepth = false;
+    for (std::size_t i = 3; i < args.size(); ++i) {
+        if (args[i] == "--region" && i + 1 < args.size()) {
+            std::size_t at = 0;
+            const std::string& text = args[++i];
+            for (int k = 0; k < 4; ++k) {
+                const std::size_t comma = k < 3 ? text.find(',', at) : text.size();
+                auto v = parseDouble(comma == std::string::npos ? std::string() : text.substr(at, comma - at));
+                if (!v.ok() || comma == std::string::npos) {
+                    return makeError("export: --region '", text, "' is not X0,Y0,X1,Y1 (metres)");
+                }
+                request.region[static_cast<std::size_t>(k)] = *v;
+                at = comma + 1;
+            }
+            const auto& r = request.region;
+            if (!(r[2] > r[0] && r[3] > r[1])) {
+                return makeError("export: --region '", text, "' needs X1 > X0 and Y1 > Y0");
+            }
+            haveRegion = true;
+        } else if (args[i] == "--spacing" && i + 1 < args.size()) {
+            auto v = parseDouble(args[++i]);
+            if (!v.ok() || !(*v > 0)) {
+                return makeError("export: --spacing must be a positive number of metres");
+            }
+            request.spacing = *v;
+            haveSpacing = true;
+        } else {
+            haveDepth = haveDepth || args[i] == "--depth";
+            surfaceArgs.push_back(args[i]);
+        }
+    }
+    if (!haveRegion || !haveSpacing) {
+        return makeError("export needs --region X0,Y0,X1,Y1 and --spacing S");
+    }
+    if (!haveDepth) {
+        int level = 0;
+        while (level < NodeId::kMaxLevel && map.header().spacingAt(level) > request.spacing * (1 + 1e-9)) {
+            ++level;
+        }
+        surfaceArgs.push_back("--depth");
+        surfaceArgs.push_back(std::to_string(level));
+    }
+    auto surface = parseSurface(surfaceArgs, 0);
+    TERRAIN_TRY(surface);
+    request.surface = std::move(surface).value();
+    return request;
+}
+
+/// The surface a request samples: the static heights, or with a depth the synthesized surface at that level, as
+/// tengine draws it. Remembers the coarsest level a point stopped at, for the note.
+class RequestedSurface {
+public:
+    static Expected<std::unique_ptr<RequestedSurface>> open(const MapFile& map, const SurfaceRequest& request,
+                                                            const std::filesystem::path& materialsDirectory)
+    {
+        std::unique_ptr<RequestedSurface> s(new RequestedSurface(map, request));
+        if (!request.depth) {
+            return s;
+        }
+        std::vector<std::string> warnings;
+        auto made = makeDetailSynthesizer(request.detail, map.header(), materialsDirectory, warnings);
+        for (const auto& warning : warnings) {
+            std::fprintf(stderr, "tengine-tool: warning: %s\n", warning.c_str());
+        }
+        TERRAIN_TRY(made);
+        s->mSynthesizer = std::move(made).value();
+        // Heights only: no error bounds (they synthesize each node's children), normal maps or tessellation errors.
+        s->mSource.emplace(map, DetailPolicy{s->mSynthesizer.get(), request.detail.lodMinimumSpacing, 0, 0, false});
+        s->mSampler.emplace(map, *s->mSource, *request.depth);
+        return s;
+    }
+
+    Expected<double> heightAt(double x, double y)
+    {
+        if (!mRequest.depth) {
+            auto sample = staticHeightAt(mMap, x, y);
+            TERRAIN_TRY(sample);
+            return sample->height;
+        }
+        auto sample = mSampler->at(x, y);
+        TERRAIN_TRY(sample);
+        if (sample->node.level < mShallowest) {
+            mShallowest = sample->node.level;
+            mStoppedAt = sample->node;
+        }
+        return sample->height;
+    }
+
+    /// Says where the surface stopped above the depth asked for (lod_minimum_spacing).
+    void noteShallower() const
+    {
+        if (mRequest.depth && mShallowest < *mRequest.depth) {
+            std::fprintf(stderr,
+                         "tengine-tool: note: the surface stops at level %d (%s); lod_minimum_spacing is %g m\n",
+                         mShallowest, mStoppedAt.toString().c_str(), mRequest.detail.lodMinimumSpacing);
+        }
+    }
+
+private:
+    RequestedSurface(const MapFile& map, const SurfaceRequest& request) : mMap(map), mRequest(request) {}
+
+    const MapFile& mMap;
+    SurfaceRequest mRequest;
+    std::unique_ptr<const DetailSynthesizer> mSynthesizer;
+    std::optional<TerrainNodeSource> mSource;
+    std::optional<SurfaceSampler> mSampler;
+    int mShallowest = NodeId::kMaxLevel + 1;  // the coarsest level a point stopped at
+    NodeId mStoppedAt;
+};
+
+/// export: the surface on the request's grid as a float32 GeoTIFF (no-data outside the terrain).
+int exportSurface(const MapFile& map, const ExportRequest& request, const std::filesystem::path& materialsDirectory)
+{
+    const auto& r = request.region;
+    const double s = request.spacing;
+    const double nx = std::floor((r[2] - r[0]) / s + 1e-9) + 1, ny = std::floor((r[3] - r[1]) / s + 1e-9) + 1;
+    if (!(nx * ny <= 1e9) || !(nx <= 1e6) || !(ny <= 1e6)) {
+        char message[200];
+        std::snprintf(message, sizeof message,
+                      "export: %.6g x %.6g samples is too many (at most 1e9, 1e6 a side): a larger --spacing or a "
+                      "smaller --region",
+                      nx, ny);
+        return fail(message);
+    }
+    auto surface = RequestedSurface::open(map, request.surface, materialsDirectory);
+    if (!surface.ok()) {
+        return fail(surface.error().message);
+    }
+    RasterGrid grid;
+    grid.width = static_cast<int>(nx);
+    grid.height = static_cast<int>(ny);
+    grid.x0 = r[0];
+    grid.y0 = r[1];
+    grid.step = s;
+    grid.crsWkt = map.header().crsWkt;
+    grid.crsUnitMetres = map.header().crsUnitMetres;
+    auto bytes = static_cast<std::uint64_t>(nx * ny * sizeof(float));
+    if (auto room = checkAllocation(bytes, "the exported grid"); !room.ok()) {
+        return fail("export: " + room.error().message);
+    }
+    std::vector<float> heights(static_cast<std::size_t>(nx * ny));
+    std::uint64_t outside = 0;
+    for (int j = 0; j < grid.height; ++j) {
+        for (int i = 0; i < grid.width; ++i) {
+            auto h = (*surface)->heightAt(grid.x0 + i * s, grid.y0 + j * s);
+            heights[static_cast<std::size_t>(j) * grid.width + i] =
+                h.ok() ? static_cast<float>(*h) : std::numeric_limits<float>::quiet_NaN();
+            outside += h.ok() ? 0 : 1;
+        }
+    }
+    if (auto written = writeFloat32GeoTiff(request.output, grid, heights); !written.ok()) {
+        return fail("export: " + written.error().message);
+    }
+    std::printf("exported %s: %d x %d samples of %g m at depth %d (%s), %llu outside the terrain (no-data)\n",
+                request.output.c_str(), grid.width, grid.height, s, *request.surface.depth,
+                grid.crsWkt.empty() ? "no CRS" : describeCrs(grid.crsWkt).c_str(),
+                static_cast<unsigned long long>(outside));
+    return 0;
+}
+
+/// height --points: one "X Y" a line from `in` (`name` in messages), a height a line out; 1 at the first bad line
+/// or point outside, naming its line.
+int heightsOfPoints(std::FILE* in, const std::string& name, RequestedSurface& surface)
+{
+    std::string line;
+    int number = 0;
+    for (int c = 0; c != EOF;) {
+        line.clear();
+        while ((c = std::fgetc(in)) != EOF && c != '\n') {
+            line.push_back(static_cast<char>(c));
+        }
+        if (c == EOF && line.empty()) {
+            break;
+        }
+        ++number;
+        const std::string text = line.substr(0, line.find('#'));
+        std::vector<std::string> fields;
+        for (std::size_t at = 0; at < text.size();) {
+            const std::size_t begin = text.find_first_not_of(" \t\r,", at);
+            if (begin == std::string::npos) {
+                break;
+            }
+            const std::size_t stop = text.find_first_of(" \t\r,", begin);
+            fields.push_back(text.substr(begin, stop == std::string::npos ? std::string::npos : stop - begin));
+            at = stop == std::string::npos ? text.size() : stop;
+        }
+        if (fields.empty()) {
+            continue;
+        }
+        auto px = fields.size() == 2 ? parseDouble(fields[0]) : Expected<double>(makeError("expected 'X Y'"));
+        auto py = fields.size() == 2 ? parseDouble(fields[1]) : Expected<double>(makeError("expected 'X Y'"));
+        if (!px.ok() || !py.ok()) {
+            std::fprintf(stderr, "tengine-tool: %s:%d: %s, found '%s'\n", name.c_str(), number,
+                         (px.ok() ? py : px).error().message.c_str(), line.c_str());
+            return 1;
+        }
+        auto h = surface.heightAt(*px, *py);
+        if (!h.ok()) {
+            std::fprintf(stderr, "tengine-tool: %s:%d: %s\n", name.c_str(), number, h.error().message.c_str());
+            return 1;
+        }
+        std::printf("%.6f\n", *h);
+    }
+    return 0;
+}
+
+/// height: the surface at one point or at the points of a file.
+int height(const MapFile& map, const HeightRequest& request, const std::filesystem::path& materialsDirectory)
+{
+    auto surface = RequestedSurface::open(map, request.surface, materialsDirectory);
+    if (!surface.ok()) {
+        return fail(surface.error().message);
+    }
+    if (!request.pointsFile) {
+        auto h = (*surface)->heightAt(request.x, request.y);
+        if (!h.ok()) {
+            return fail(h.error().message);
+        }
+        std::printf("%.6f\n", *h);
+    } else {
+        const std::string& file = *request.pointsFile;
+        FILE* in = file == "-" ? stdin : std::fopen(file.c_str(), "r");
+        if (!in) {
+            return fail("height: cannot open " + file + ": " + std::strerror(errno));
+        }
+        const int status = heightsOfPoints(in, file == "-" ? std::string("standard input") : file, **surface);
+        if (in != stdin) {
+            std::fclose(in);
+        }
+        if (status != 0) {
+            return status;
+        }
+    }
+    (*surface)->noteShallower();
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
@@ -494,262 +835,16 @@ int main(int argc, char** argv)
         }
         return texture(**map, args[2], args[3]);
     }
-    // export: OUT.tif --region ... --spacing S, then the same options as height.
-    std::optional<std::string> exportPath;
-    std::optional<std::array<double, 4>> region;
-    std::optional<double> exportSpacing;
-    std::vector<std::string> heightArgs = args;
     if (command == "export") {
-        if (args.size() < 3) {
-            return fail("export needs an output .tif");
+        auto request = parseExport(**map, args);
+        if (!request.ok()) {
+            return fail(request.error().message);
         }
-        exportPath = args[2];
-        heightArgs = {args[0], args[1]};  // then height's options (--depth, --material, --no-material)
-        for (std::size_t i = 3; i < args.size(); ++i) {
-            if (args[i] == "--region" && i + 1 < args.size()) {
-                std::array<double, 4> r{};
-                std::size_t at = 0;
-                const std::string& text = args[++i];
-                for (int k = 0; k < 4; ++k) {
-                    const std::size_t comma = k < 3 ? text.find(',', at) : text.size();
-                    auto v = parseDouble(comma == std::string::npos ? std::string() : text.substr(at, comma - at));
-                    if (!v.ok() || comma == std::string::npos) {
-                        return fail("export: --region '" + text + "' is not X0,Y0,X1,Y1 (metres)");
-                    }
-                    r[static_cast<std::size_t>(k)] = *v;
-                    at = comma + 1;
-                }
-                if (!(r[2] > r[0] && r[3] > r[1])) {
-                    return fail("export: --region '" + text + "' needs X1 > X0 and Y1 > Y0");
-                }
-                region = r;
-            } else if (args[i] == "--spacing" && i + 1 < args.size()) {
-                auto v = parseDouble(args[++i]);
-                if (!v.ok() || !(*v > 0)) {
-                    return fail("export: --spacing must be a positive number of metres");
-                }
-                exportSpacing = *v;
-            } else {
-                heightArgs.push_back(args[i]);
-            }
-        }
-        if (!region || !exportSpacing) {
-            return fail("export needs --region X0,Y0,X1,Y1 and --spacing S");
-        }
-        const MapHeader& h = (*map)->header();
-        if (std::find(heightArgs.begin(), heightArgs.end(), "--depth") == heightArgs.end()) {
-            int level = 0;
-            while (level < NodeId::kMaxLevel && h.spacingAt(level) > *exportSpacing * (1 + 1e-9)) {
-                ++level;
-            }
-            heightArgs.push_back("--depth");
-            heightArgs.push_back(std::to_string(level));
-        }
+        return exportSurface(**map, *request, materialsDirectory);
     }
-    args = heightArgs;
-    // height: X Y, or --points FILE.
-    std::optional<std::string> pointsFile;
-    double x = 0.0, y = 0.0;
-    std::size_t first = 4;
-    if (exportPath) {
-        first = 2;  // no position: the grid of the region
-    } else if (args.size() >= 4 && args[2] == "--points") {
-        pointsFile = args[3];
-    } else if (args.size() >= 3 && args[2] == "--lonlat") {
-        if (args.size() < 5) {
-            return fail("height --lonlat needs LON and LAT (degrees)");
-        }
-        auto lon = parseDouble(args[3]);
-        auto lat = parseDouble(args[4]);
-        if (!lon.ok() || !lat.ok()) {
-            return fail("height --lonlat: " + (lon.ok() ? lat : lon).error().message);
-        }
-        const MapHeader& h = (*map)->header();
-        auto geo = GeoConverter::create(h.crsWkt, h.crsUnitMetres);
-        if (!geo.ok()) {
-            return fail("height --lonlat: " + (*map)->name() + ": " + geo.error().message);
-        }
-        auto world = geo->toWorld(*lon, *lat);
-        if (!world.ok()) {
-            return fail("height --lonlat: " + world.error().message);
-        }
-        x = world->first;
-        y = world->second;
-        first = 5;
-    } else {
-        if (args.size() < 4) {
-            return fail("height needs X and Y (metres), or --points FILE");
-        }
-        auto px = parseDouble(args[2]);
-        auto py = parseDouble(args[3]);
-        if (!px.ok() || !py.ok()) {
-            return fail("height: " + (px.ok() ? py : px).error().message);
-        }
-        x = *px;
-        y = *py;
+    auto request = parseHeight(**map, args, 2);
+    if (!request.ok()) {
+        return fail(request.error().message);
     }
-    std::optional<int> depth;
-    TengineOptions detail;  // tengine's defaults: what the viewer draws
-    for (std::size_t i = first; i < args.size(); ++i) {
-        const std::string& arg = args[i];
-        if (arg == "--depth" && i + 1 < args.size()) {
-            auto d = parseInteger(args[++i]);
-            if (!d.ok() || *d < 0 || *d > NodeId::kMaxLevel) {
-                return fail("height: --depth must be an integer in [0, " + std::to_string(NodeId::kMaxLevel) + "]");
-            }
-            depth = static_cast<int>(*d);
-        } else if (arg == "--material" && i + 1 < args.size()) {
-            detail.detailMaterials.emplace_back(args[++i]);
-        } else if (arg == "--no-material") {
-            detail.detailAddMaterial = false;
-        } else {
-            return fail("height: unknown or incomplete option '" + arg + "'");
-        }
-    }
-    if (!depth && args.size() > first) {
-        return fail("height: --material and --no-material need --depth");
-    }
-    std::unique_ptr<const DetailSynthesizer> synthesizer;
-    std::optional<TerrainNodeSource> source;
-    std::optional<SurfaceSampler> sampler;
-    if (depth) {
-        std::vector<std::string> warnings;
-        auto made = makeDetailSynthesizer(detail, (*map)->header(), materialsDirectory, warnings);
-        for (const auto& warning : warnings) {
-            std::fprintf(stderr, "tengine-tool: warning: %s\n", warning.c_str());
-        }
-        if (!made.ok()) {
-            return fail(made.error().message);
-        }
-        synthesizer = std::move(made).value();
-        // Heights only: no error bounds (they synthesize each node's children), normal maps or tessellation errors.
-        source.emplace(**map, DetailPolicy{synthesizer.get(), detail.lodMinimumSpacing, 0, 0, false});
-        sampler.emplace(**map, *source, *depth);
-    }
-    int shallowest = NodeId::kMaxLevel + 1;  // the coarsest level a point stopped at, for the note
-    NodeId stoppedAt;
-    auto heightAt = [&](double px, double py) -> Expected<double> {
-        if (!depth) {
-            auto sample = staticHeightAt(**map, px, py);
-            TERRAIN_TRY(sample);
-            return sample->height;
-        }
-        auto sample = sampler->at(px, py);
-        TERRAIN_TRY(sample);
-        if (sample->node.level < shallowest) {
-            shallowest = sample->node.level;
-            stoppedAt = sample->node;
-        }
-        return sample->height;
-    };
-    if (exportPath) {
-        const auto& r = *region;
-        const double s = *exportSpacing;
-        const double nx = std::floor((r[2] - r[0]) / s + 1e-9) + 1, ny = std::floor((r[3] - r[1]) / s + 1e-9) + 1;
-        if (!(nx * ny <= 1e9) || !(nx <= 1e6) || !(ny <= 1e6)) {
-            char message[200];
-            std::snprintf(message, sizeof message,
-                          "export: %.6g x %.6g samples is too many (at most 1e9, 1e6 a side): a larger --spacing or a "
-                          "smaller --region",
-                          nx, ny);
-            return fail(message);
-        }
-        RasterGrid grid;
-        grid.width = static_cast<int>(nx);
-        grid.height = static_cast<int>(ny);
-        grid.x0 = r[0];
-        grid.y0 = r[1];
-        grid.step = s;
-        grid.crsWkt = (*map)->header().crsWkt;
-        grid.crsUnitMetres = (*map)->header().crsUnitMetres;
-        auto bytes = static_cast<std::uint64_t>(nx * ny * sizeof(float));
-        if (auto room = checkAllocation(bytes, "the exported grid"); !room.ok()) {
-            return fail("export: " + room.error().message);
-        }
-        std::vector<float> heights(static_cast<std::size_t>(nx * ny));
-        std::uint64_t outside = 0;
-        for (int j = 0; j < grid.height; ++j) {
-            for (int i = 0; i < grid.width; ++i) {
-                auto h = sampler->at(grid.x0 + i * s, grid.y0 + j * s);
-                heights[static_cast<std::size_t>(j) * grid.width + i] =
-                    h.ok() ? static_cast<float>(h->height) : std::numeric_limits<float>::quiet_NaN();
-                outside += h.ok() ? 0 : 1;
-            }
-        }
-        if (auto written = writeFloat32GeoTiff(*exportPath, grid, heights); !written.ok()) {
-            return fail("export: " + written.error().message);
-        }
-        std::printf("exported %s: %d x %d samples of %g m at depth %d (%s), %llu outside the terrain (no-data)\n",
-                    exportPath->c_str(), grid.width, grid.height, s, *depth,
-                    grid.crsWkt.empty() ? "no CRS" : describeCrs(grid.crsWkt).c_str(),
-                    static_cast<unsigned long long>(outside));
-        return 0;
-    }
-    if (!pointsFile) {
-        auto h = heightAt(x, y);
-        if (!h.ok()) {
-            return fail(h.error().message);
-        }
-        std::printf("%.6f\n", *h);
-    } else {
-        FILE* in = *pointsFile == "-" ? stdin : std::fopen(pointsFile->c_str(), "r");
-        if (!in) {
-            return fail("height: cannot open " + *pointsFile + ": " + std::strerror(errno));
-        }
-        const std::string name = *pointsFile == "-" ? std::string("standard input") : *pointsFile;
-        std::string line;
-        int number = 0;
-        int status = 0;
-        for (int c = 0; status == 0 && c != EOF;) {
-            line.clear();
-            while ((c = std::fgetc(in)) != EOF && c != '\n') {
-                line.push_back(static_cast<char>(c));
-            }
-            if (c == EOF && line.empty()) {
-                break;
-            }
-            ++number;
-            const std::size_t hash = line.find('#');
-            std::string text = line.substr(0, hash);
-            std::vector<std::string> fields;
-            for (std::size_t at = 0; at < text.size();) {
-                const std::size_t begin = text.find_first_not_of(" \t\r,", at);
-                if (begin == std::string::npos) {
-                    break;
-                }
-                const std::size_t stop = text.find_first_of(" \t\r,", begin);
-                fields.push_back(text.substr(begin, stop == std::string::npos ? std::string::npos : stop - begin));
-                at = stop == std::string::npos ? text.size() : stop;
-            }
-            if (fields.empty()) {
-                continue;
-            }
-            auto px = fields.size() == 2 ? parseDouble(fields[0]) : Expected<double>(makeError("expected 'X Y'"));
-            auto py = fields.size() == 2 ? parseDouble(fields[1]) : Expected<double>(makeError("expected 'X Y'"));
-            if (!px.ok() || !py.ok()) {
-                std::fprintf(stderr, "tengine-tool: %s:%d: %s, found '%s'\n", name.c_str(), number,
-                             (px.ok() ? py : px).error().message.c_str(), line.c_str());
-                status = 1;
-                break;
-            }
-            auto h = heightAt(*px, *py);
-            if (!h.ok()) {
-                std::fprintf(stderr, "tengine-tool: %s:%d: %s\n", name.c_str(), number, h.error().message.c_str());
-                status = 1;
-                break;
-            }
-            std::printf("%.6f\n", *h);
-        }
-        if (in != stdin) {
-            std::fclose(in);
-        }
-        if (status != 0) {
-            return status;
-        }
-    }
-    if (depth && shallowest < *depth) {
-        std::fprintf(stderr, "tengine-tool: note: the surface stops at level %d (%s); lod_minimum_spacing is %g m\n",
-                     shallowest, stoppedAt.toString().c_str(), detail.lodMinimumSpacing);
-    }
-    return 0;
+    return height(**map, *request, materialsDirectory);
 }
