@@ -219,6 +219,27 @@ void ClipmapRenderer::upload(ClipmapTerrain& terrain, int ring, ClipmapStats& st
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
 }
 
+void ClipmapRenderer::bindRingTextures() const
+{
+    namespace units = contract::clipmap_units;
+    const std::pair<int, const gl::Texture*> bindings[] = {{units::kHeights, &mHeights},
+                                                           {units::kColour, &mColour},
+                                                           {units::kMaterials, &mMaterials},
+                                                           {units::kNormals, &mNormals},
+                                                           {units::kMorph, &mMorph},
+                                                           {units::kPreviousColour, &mPreviousColour},
+                                                           {units::kPreviousMaterials, &mPreviousMaterials},
+                                                           {units::kPreviousNormals, &mPreviousNormals}};
+    for (const auto& [unit, texture] : bindings) {
+        if (*texture) {
+            glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
+            glBindTexture(GL_TEXTURE_2D_ARRAY, texture->name());
+        }
+    }
+    glActiveTexture(GL_TEXTURE0);
+    mDetail.bind(units::kDetail);
+}
+
 ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& terrain, int firstRing,
                                    const Camera& camera, const SceneStyle& style)
 {
@@ -264,23 +285,7 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
                     static_cast<float>(vx1 - camera.position.x + slack),
                     static_cast<float>(vy1 - camera.position.y + slack));
     }
-    namespace units = contract::clipmap_units;
-    const std::pair<int, const gl::Texture*> bindings[] = {{units::kHeights, &mHeights},
-                                                           {units::kColour, &mColour},
-                                                           {units::kMaterials, &mMaterials},
-                                                           {units::kNormals, &mNormals},
-                                                           {units::kMorph, &mMorph},
-                                                           {units::kPreviousColour, &mPreviousColour},
-                                                           {units::kPreviousMaterials, &mPreviousMaterials},
-                                                           {units::kPreviousNormals, &mPreviousNormals}};
-    for (const auto& [unit, texture] : bindings) {
-        if (*texture) {
-            glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
-            glBindTexture(GL_TEXTURE_2D_ARRAY, texture->name());
-        }
-    }
-    glActiveTexture(GL_TEXTURE0);
-    mDetail.bind(units::kDetail);
+    bindRingTextures();
     const Frustum frustum = Frustum::fromCamera(camera);
     const double fade = mDetail.fadeDistance();
     const int n = mSamples;

@@ -73,6 +73,8 @@ private:
     /// The footprint of w x h cells (made the first time it is asked for).
     const Mesh& footprint(std::int64_t w, std::int64_t h);
     void upload(ClipmapTerrain& terrain, int ring, ClipmapStats& stats);
+    /// Binds the rings' textures (and the detail layers) to their units (render/ShaderContract.h).
+    void bindRingTextures() const;
 
     MapHeader mHeader;
     int mSamples = 0;
