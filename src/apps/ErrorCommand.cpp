@@ -331,22 +331,20 @@ public:
         std::uint64_t drawnTriangles = 0;
         const VerticalSegmentProjector projector(camera);
         double framePop = 0.0;
-        for (const SelectedNode& selected : session.drawnSelection().nodes) {
-            const NodePtr node = session.node(selected.id);
-            BlockLevels blockLevels =
-                chooseBlockLevels(*node->tessellation, extentOf(header).box(selected.id, node->zMin, node->zMax),
-                                  camera, session.blockPixels());
-            drawnTriangles += blockLevels.triangles();
+        for (const DrawnNode& drawn : session.drawList().nodes) {
+            const SelectedNode& selected = drawn.selected;
+            const NodeData& node = *drawn.node;
+            drawnTriangles += drawn.levels.triangles();
             if (auto it = mPrevious.find(selected.id.key()); it != mPrevious.end()) {
                 const std::vector<float> samples =
-                    morphedSamples(*node, n, selected.id.isRoot() ? 1.0f : selected.morph);
+                    morphedSamples(node, n, selected.id.isRoot() ? 1.0f : selected.morph);
                 mSwitches.clear();
-                levelSwitches(samples, n, it->second, blockLevels, mSwitches);
+                levelSwitches(samples, n, it->second, drawn.levels, mSwitches);
                 const double spacing = selected.size / (n - 1);
                 for (const LevelSwitch& w : mSwitches) {
                     const double x = camera.position.x + selected.cameraRelativeOrigin.x + w.lx * spacing;
                     const double y = camera.position.y + selected.cameraRelativeOrigin.y + w.ly * spacing;
-                    const double z = header.heightOffset + nodeSurfaceAt(*node, n, w.lx, w.ly);
+                    const double z = header.heightOffset + nodeSurfaceAt(node, n, w.lx, w.ly);
                     const double px = projector.pixels(x, y, z, w.metres);
                     if (px >= 0.0) {
                         mPops.push_back(static_cast<float>(px));
@@ -354,7 +352,7 @@ public:
                     }
                 }
             }
-            now.emplace(selected.id.key(), std::move(blockLevels));
+            now.emplace(selected.id.key(), drawn.levels);
         }
         mPrevious = std::move(now);
         mTriangles.push_back(drawnTriangles);

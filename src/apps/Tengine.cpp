@@ -14,9 +14,7 @@
 #include "core/Memory.h"
 #include "core/StopSignals.h"
 #include "lod/CameraPath.h"
-#include "lod/DepthOcclusion.h"
 #include "lod/HeightQuery.h"
-#include "lod/NodeVisibility.h"
 #include "render/ClipmapRenderer.h"
 #include "render/FrameCapture.h"
 #include "render/GlWindow.h"
@@ -46,10 +44,6 @@
 namespace {
 
 using namespace terrain;
-
-/// How far around a box the previous frame's depth must hide it (DepthOcclusion): the image moves in the frames
-/// between that depth and the one drawn with it (kPixelCountLag), most at silhouettes a low flight crosses.
-constexpr int kOcclusionMarginPixels = 8;
 
 /// Messages to stderr and, when log_file is set, to the log.
 class Log {
@@ -215,7 +209,7 @@ constexpr const char* kCsvHeader =
     "error_max_px,error_p99_px,cache_short";
 
 /// Everything the viewer draws with, opened from the options in dependency order. Not movable: the renderers
-/// refer to the window's context, the session's streamer hands evictions to the renderer (so it goes first).
+/// refer to the window's context.
 struct Scene {
     std::optional<CameraPath> path;
     std::unique_ptr<GlWindow> window;
@@ -223,10 +217,6 @@ struct Scene {
     std::unique_ptr<ClipmapRenderer> clipmapRenderer;  ///< lod_mode = clipmap
     std::unique_ptr<TextOverlay> overlay;
     std::unique_ptr<ViewerSession> session;
-    /// visibility_lod, and the GL counts pixels: what the renderer's pixel counts say is hidden; else null.
-    std::unique_ptr<NodeVisibility> visibility;
-    PixelCounts pixelCounts;                  ///< reused for each frame's counts
-    std::optional<DepthOcclusion> occlusion;  ///< the depth of the latest frame measured
 
     const MapHeader& header() const { return session->header(); }
     const TerrainStreamer& streamer() const { return session->streamer(); }
@@ -244,8 +234,8 @@ GlCapabilities glCapabilities()
     return gl;
 }
 
-/// The renderer of `scene`'s session (the clipmap's rings or the quadtree's nodes), logged; its evictions wired to
-/// the node pools.
+/// The renderer of `scene`'s session (the clipmap's rings or the quadtree's nodes, a pool slot per cache slot),
+/// logged.
 Status openRenderer(Scene& scene, const TengineOptions& o, const std::filesystem::path& shaders, Log& log)
 {
     ViewerSession& session = *scene.session;
@@ -277,7 +267,6 @@ Status openRenderer(Scene& scene, const TengineOptions& o, const std::filesystem
         " bytes (heights " + std::to_string(b.heights) + ", parent normals " + std::to_string(b.normals) + ", colour " +
         std::to_string(b.colour) + ", material weights " + std::to_string(b.weights) + ", normal map " +
         std::to_string(b.normalMap) + ", constants " + std::to_string(b.constants) + ")");
-    session.streamer().onEvict([renderer = scene.renderer.get()](const NodeData& node) { renderer->release(node.id); });
     return {};
 }
 
@@ -332,9 +321,6 @@ std::unique_ptr<Scene> openScene(const ParsedCommandLine& parsed, const std::fil
         return fail(overlay.error().message);
     }
     scene->overlay = std::move(overlay).value();
-    if (scene->session->countsPixels()) {
-        scene->visibility = std::make_unique<NodeVisibility>(o.visibilityHiddenFrames);
-    }
     return scene;
 }
 
@@ -418,7 +404,7 @@ std::vector<std::string> overlayLines(bool video, std::size_t frame, double time
         std::snprintf(line, sizeof line, "nodes %zu static, %zu dynamic", render.staticNodes, render.dynamicNodes);
     }
     lines.emplace_back(line);
-    if (scene.visibility) {
+    if (scene.session->countsPixels()) {
         std::snprintf(line, sizeof line,
                       "visibility: %zu hidden, %zu requests skipped, %zu revealing, %zu blocks occluded",
                       selection.hidden, selection.requestsSkippedHidden, selection.revealing, render.occludedBlocks);
@@ -491,47 +477,10 @@ VideoRecorderOptions recorderOptions(const TengineOptions& o, std::size_t frames
     return recording;
 }
 
-/// The visibility of the frames drawn so far (visibility_lod): the pixel counts of those drawn long enough ago,
-/// what they hide, and the previous frame's depth as an occlusion test for the renderer's blocks.
-struct FrameFeedback {
-    FrameVisibility visibility;
-    BoxOccluded occluded;
-};
-
-FrameFeedback takeFeedback(Scene& scene, const Camera& camera, double clock)
-{
-    FrameFeedback feedback;
-    if (!scene.visibility) {
-        return feedback;
-    }
-    while (scene.renderer->takePixelCounts(scene.pixelCounts)) {
-        const PixelCounts& counts = scene.pixelCounts;
-        scene.visibility->record(counts.frame, counts.nodes, counts.pixels);
-        scene.occlusion.reset();
-        if (!counts.depth.empty()) {
-            scene.occlusion.emplace(counts.depth, counts.camera.viewportWidth, counts.camera.viewportHeight,
-                                    counts.camera, kOcclusionMarginPixels);
-        }
-    }
-    const TerrainStreamer& streamer = scene.streamer();
-    const double moved = scene.occlusion ? glm::length(camera.position - scene.occlusion->eye()) : 0.0;
-    feedback.visibility.hidden = hiddenFrom(
-        *scene.visibility, scene.occlusion ? &*scene.occlusion : nullptr, streamer.tree(),
-        [&streamer](const NodeId& id) { return streamer.childrenResident(id); }, moved);
-    feedback.visibility.time = clock;
-    if (scene.occlusion) {
-        feedback.occluded = [&occlusion = *scene.occlusion, moved](const Aabb& box) {
-            return occlusion.occluded(box, moved);
-        };
-    }
-    return feedback;
-}
-
 /// One frame's figures.
 struct DrawnFrame {
     FrameStats selection;
     RenderStats render;
-    BoxOccluded occluded;  ///< what the frame's depth test hid of the previous frame's (visibility_lod)
 };
 
 /// Advances the session for `camera` and draws what it selected.
@@ -540,9 +489,7 @@ DrawnFrame advanceAndDraw(Scene& scene, const Camera& camera, const FrameTime& t
 {
     DrawnFrame drawn;
     ViewerSession& session = *scene.session;
-    FrameFeedback feedback = takeFeedback(scene, camera, time.clock);
-    drawn.selection = session.advance(camera, time.clock, speed, settle, feedback.visibility);
-    drawn.occluded = std::move(feedback.occluded);
+    drawn.selection = session.advance(camera, time.clock, speed, settle, scene.renderer.get());
     if (scene.clipmapRenderer) {
         const ClipmapStats rings = scene.clipmapRenderer->draw(*session.clipmapLayout(), *session.clipmap(),
                                                                session.clipmapFirstRing(), camera, style);
@@ -552,21 +499,17 @@ DrawnFrame advanceAndDraw(Scene& scene, const Camera& camera, const FrameTime& t
         drawn.render.culledBlocks = rings.culledPieces;
         return drawn;
     }
-    const TerrainStreamer& streamer = session.streamer();
-    drawn.render = scene.renderer->draw(
-        streamer.selection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, style,
-        session.blockPixels(), nullptr, drawn.occluded);
+    drawn.render = scene.renderer->draw(session.drawList(), style);
     return drawn;
 }
 
 /// The screen-space error of what the frame just drawn shows (video_measure_error_every): the meter of
 /// tengine-tool error over the drawn surface, only at points the frame's own depth shows.
-Expected<FrameError> measureShownError(Scene& scene, const Camera& camera, const BoxOccluded& occluded)
+Expected<FrameError> measureShownError(Scene& scene, const Camera& camera)
 {
     const DepthSurface surface(TerrainRenderer::readDepth(camera.viewportWidth, camera.viewportHeight),
                                camera.viewportWidth, camera.viewportHeight, camera);
     MeasuredVisibility visibility;
-    visibility.occluded = occluded;
     visibility.shows = [&surface](const glm::dvec3& point) { return surface.shows(point); };
     return scene.session->measureDrawn(camera, visibility);
 }
@@ -624,7 +567,7 @@ public:
         }
         std::string measured = ",,";  // error_max_px, error_p99_px
         if (scene.session->meter() && frame % static_cast<std::size_t>(mO.videoMeasureErrorEvery) == 0) {
-            auto error = measureShownError(scene, camera, drawn.occluded);
+            auto error = measureShownError(scene, camera);
             TERRAIN_TRY(error);
             char columns[64];
             std::snprintf(columns, sizeof columns, ",%.3f,%.3f", error->maxPixels, error->p99Pixels);

@@ -11,6 +11,11 @@ namespace terrain {
 
 namespace {
 
+/// How far around a box the previous frame's depth must hide it (DepthOcclusion): the image moves in the frames
+/// between that depth and the one drawn with it (TerrainRenderer::kPixelCountLag), most at silhouettes a low
+/// flight crosses.
+constexpr int kOcclusionMarginPixels = 8;
+
 /// lod_mode = clipmap: the finest ring's quadtree level, the deepest whose spacing is at least
 /// clipmap_finest_spacing (and lod_minimum_spacing), below the map's data only with synthesis.
 int clipmapFinestLevel(const TengineOptions& o, const MapHeader& header, bool synthesis)
@@ -137,6 +142,9 @@ Status ViewerSession::startStreaming(const GlCapabilities& gl)
     if (clipmap) {
         openClipmap();
     }
+    if (mCountPixels) {
+        mVisibility.emplace(o.visibilityHiddenFrames);
+    }
     mRgtc2 = compressNormalMaps(o, gl.softwareRasterizer) && !clipmap;
     mBlockPixels = mTessellation ? o.lodError * o.tessellationShare : 0.0;
     mNodePixels = mTessellation ? o.lodError * (1.0 - o.tessellationShare) : o.lodError;
@@ -178,17 +186,48 @@ Status ViewerSession::startStreaming(const GlCapabilities& gl)
     return {};
 }
 
+FrameVisibility ViewerSession::takeVisibility(PixelCountSource* counts, const Camera& camera, double clock,
+                                              BoxOccluded& occluded)
+{
+    FrameVisibility visibility;
+    if (!mVisibility || counts == nullptr) {
+        return visibility;
+    }
+    while (counts->takePixelCounts(mPixelCounts)) {
+        const PixelCounts& c = mPixelCounts;
+        mVisibility->record(c.frame, c.nodes, c.pixels);
+        mOcclusion.reset();
+        if (!c.depth.empty()) {
+            mOcclusion.emplace(c.depth, c.camera.viewportWidth, c.camera.viewportHeight, c.camera,
+                               kOcclusionMarginPixels);
+        }
+    }
+    const TerrainStreamer& streamer = *mStreamer;
+    const double moved = mOcclusion ? glm::length(camera.position - mOcclusion->eye()) : 0.0;
+    visibility.hidden = hiddenFrom(
+        *mVisibility, mOcclusion ? &*mOcclusion : nullptr, streamer.tree(),
+        [&streamer](const NodeId& id) { return streamer.childrenResident(id); }, moved);
+    visibility.time = clock;
+    if (mOcclusion) {
+        occluded = [&occlusion = *mOcclusion, moved](const Aabb& box) { return occlusion.occluded(box, moved); };
+    }
+    return visibility;
+}
+
 FrameStats ViewerSession::advance(const Camera& camera, double clock, double speed, Settle settle,
-                                  const FrameVisibility& visibility)
+                                  PixelCountSource* counts)
 {
     TERRAIN_EXPECTS(mStreamer, "advance() before startStreaming()");
     if (mClipmap) {
         return advanceClipmap(camera, clock, settle);
     }
+    BoxOccluded occluded;
+    const FrameVisibility visibility = takeVisibility(counts, camera, clock, occluded);
     FrameStats stats = mStreamer->settle(settle, camera, mNodePixels, speed, visibility);
     if (!mOptions.geomorph) {  // the renderer then draws every node at its own detail
         mUnmorphed = unmorphed(mStreamer->selection());
     }
+    mDrawList = makeDrawList(drawnSelection(), *mStreamer, camera, mBlockPixels, std::move(occluded));
     return stats;
 }
 
@@ -196,6 +235,7 @@ FrameStats ViewerSession::advanceClipmap(const Camera& camera, double clock, Set
 {
     ClipmapLayout& layout = *mClipmapLayout;
     ClipmapTerrain& clipmap = *mClipmap;
+    clipmap.clearChanges();  // the previous frame drew them
     TerrainStreamer& streamer = *mStreamer;
     const ResidentNodeLookup resident = [&streamer](const NodeId& id) { return streamer.node(id); };
     auto entered = layout.moveTo(camera.position.x, camera.position.y);
@@ -241,8 +281,7 @@ Expected<FrameError> ViewerSession::measureDrawn(const Camera& camera, const Mea
     }
     const TerrainStreamer& streamer = *mStreamer;
     return mMeter->measure(
-        drawnSelection(), [&streamer](const NodeId& id) { return streamer.node(id); }, camera, mOptions.lodError,
-        mBlockPixels, visibility);
+        mDrawList, [&streamer](const NodeId& id) { return streamer.node(id); }, mOptions.lodError, visibility);
 }
 
 }  // namespace terrain

@@ -11,7 +11,10 @@
 #include "core/Expected.h"
 #include "lod/ClipmapLayout.h"
 #include "lod/ClipmapTerrain.h"
+#include "lod/DepthOcclusion.h"
+#include "lod/DrawList.h"
 #include "lod/ErrorMeter.h"
+#include "lod/NodeVisibility.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "quadtree/MapFile.h"
@@ -94,26 +97,30 @@ public:
 
     /// lod_mode = clipmap (seed 002): the rings' layout and data; null in quadtree mode.
     const ClipmapLayout* clipmapLayout() const { return mClipmapLayout ? &*mClipmapLayout : nullptr; }
+    /// The rings' data; what changed in the latest frame is ClipmapTerrain::changed().
     const ClipmapTerrain* clipmap() const { return mClipmap.get(); }
-    /// The rings' data for the renderer, which uploads what changed (and marks it so).
-    ClipmapTerrain* clipmap() { return mClipmap.get(); }
     /// The finest ring drawn in the latest frame.
     int clipmapFirstRing() const { return mClipmapFirstRing; }
 
     /// One frame of LOD for `camera`, settled as `settle` says. `clock`: seconds on the viewer's clock, never
-    /// decreasing (video mode: the frame's time); `speed`: the camera's, metres per second (the velocity limit);
-    /// `visibility`: what the frames drawn so far hide (visibility_lod). Quadtree mode selects (selection());
-    /// clipmap mode moves the rings' windows with the camera, picks the finest ring worth drawing from its height
-    /// above the ground and fills the rings with what arrived.
+    /// decreasing (video mode: the frame's time); `speed`: the camera's, metres per second (the velocity limit).
+    /// With visibility_lod (countsPixels()), `counts` is what drew the frames so far (the renderer): the pixel
+    /// counts and depth it has ready decide which nodes are hidden, and the previous frame's depth which
+    /// tessellation blocks are. Quadtree mode selects and makes the frame's draw list (drawList()); clipmap
+    /// mode moves the rings' windows with the camera, picks the finest ring worth drawing from its height
+    /// above the ground and fills the rings with what arrived (their changes: ClipmapTerrain::changed()).
     FrameStats advance(const Camera& camera, double clock, double speed, Settle settle,
-                       const FrameVisibility& visibility = {});
+                       PixelCountSource* counts = nullptr);
+    /// Quadtree mode: what the latest frame draws (lod/DrawList.h), for the renderer to draw and the meter to
+    /// measure.
+    const DrawList& drawList() const { return mDrawList; }
     /// What the renderer draws this frame: the selection, at each node's own detail with geomorph off.
     const LodSelection& drawnSelection() const;
     /// The height of the surface drawn at (x, y) (the rings in clipmap mode, else the selection's nodes), metres;
     /// empty outside the terrain or where nothing is resident.
     std::optional<double> drawnHeightAt(double x, double y) const;
-    /// The screen-space error of what the latest frame draws, measured against the meter's reference at the points
-    /// `visibility` says the frame shows. Precondition: meter().
+    /// The screen-space error of what the latest frame draws (drawList(), or the rings), measured against the
+    /// meter's reference at the points `visibility` says the frame shows. Precondition: meter().
     Expected<FrameError> measureDrawn(const Camera& camera, const MeasuredVisibility& visibility = {});
 
 private:
@@ -121,6 +128,9 @@ private:
     Status openSynthesis(const std::filesystem::path& materialsDirectory);
     void openClipmap();
     FrameStats advanceClipmap(const Camera& camera, double clock, Settle settle);
+    /// visibility_lod: takes the counts `counts` has ready; what they hide for the selection at `clock`, and
+    /// the latest depth's test of the blocks.
+    FrameVisibility takeVisibility(PixelCountSource* counts, const Camera& camera, double clock, BoxOccluded& occluded);
 
     TengineOptions mOptions;
     SessionUse mUse;
@@ -141,6 +151,10 @@ private:
     std::size_t mLoadErrors = 0;
     std::string mFirstLoadError;
     LodSelection mUnmorphed;  ///< geomorph off: the selection at each node's own detail
+    DrawList mDrawList;
+    std::optional<NodeVisibility> mVisibility;  ///< visibility_lod: the pixel counts of the frames drawn so far
+    PixelCounts mPixelCounts;                   ///< reused for each frame's counts
+    std::optional<DepthOcclusion> mOcclusion;   ///< the depth of the latest frame counted
     std::optional<ClipmapLayout> mClipmapLayout;
     std::unique_ptr<ClipmapTerrain> mClipmap;
     int mClipmapFirstRing = 0;

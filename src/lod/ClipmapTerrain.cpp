@@ -45,9 +45,11 @@ ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int t
     }
 }
 
-std::vector<LatticeRect> ClipmapTerrain::takeChanged(int ring)
+void ClipmapTerrain::clearChanges()
 {
-    return std::exchange(mRings[static_cast<std::size_t>(ring)].changed, {});
+    for (ClipmapRing& ring : mRings) {
+        ring.changed.clear();
+    }
 }
 
 std::size_t ClipmapTerrain::upsampledNodes() const

@@ -38,7 +38,7 @@ struct ClipmapRing {
     std::vector<std::uint8_t> previousColour;
     std::vector<std::uint8_t> previousMaterials;
     std::vector<std::int8_t> previousNormals;
-    std::vector<LatticeRect> changed;  ///< level-grid samples changed since the renderer last took them
+    std::vector<LatticeRect> changed;  ///< level-grid samples changed since ClipmapTerrain::clearChanges()
     float zMin = 0.0f, zMax = 0.0f;    ///< over the window, heights and morphs' previous heights
     /// A node whose samples are upsampled for now, and the update time they were first upsampled at.
     struct Upsampled {
@@ -91,8 +91,12 @@ public:
     /// Normal texels a cell of the rings (0 without normal maps).
     int normalTexelsPerCell() const { return mNormalPerCell; }
     const ClipmapRing& ring(int ring) const { return mRings[static_cast<std::size_t>(ring)]; }
-    /// Takes ring `ring`'s changed rectangles (the renderer uploads them).
-    std::vector<LatticeRect> takeChanged(int ring);
+    /// Ring `ring`'s rectangles changed since clearChanges(): what the renderer uploads, reading the rings
+    /// without changing them.
+    const std::vector<LatticeRect>& changed(int ring) const { return mRings[static_cast<std::size_t>(ring)].changed; }
+    /// Starts a frame's changes: the viewer clears them before a frame's updates, the previous frame having
+    /// drawn (uploaded) them.
+    void clearChanges();
     /// Nodes whose samples are upsampled, over all rings.
     std::size_t upsampledNodes() const;
     /// Bytes the rings hold.

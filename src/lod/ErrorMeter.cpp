@@ -205,13 +205,13 @@ Status ErrorMeter::referenceLeaves(const View& view, const NodePtr& from, int ma
     return {};
 }
 
-Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const ResidentNodeLookup& drawn,
-                                         const Camera& camera, double tauPixels, double blockPixels,
+Expected<FrameError> ErrorMeter::measure(const DrawList& frame, const ResidentNodeLookup& resident, double tauPixels,
                                          const MeasuredVisibility& visibility)
 {
-    const bool tessellated = blockPixels > 0.0;
+    const bool tessellated = frame.tessellated();
     std::vector<float> blended;  // tessellation mode: the node's samples as the shaders blend them
     TERRAIN_EXPECTS(tauPixels > 0.0, "tau must be > 0 pixels");
+    const Camera& camera = frame.camera;
     camera.expectValid();
     const View view(mHeader, mExtent, camera);
     const VerticalSegmentProjector& projector = view.projector;
@@ -219,23 +219,19 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
     const double offset = view.offset;
 
     FrameError out;
-    out.nodes = selection.nodes.size();
+    out.nodes = frame.nodes.size();
     double sum = 0.0;
     std::unordered_map<std::uint64_t, RefinedNode> refined;
     std::vector<NodePtr> leaves;
     std::vector<RefinedNode*> ancestors;
     std::vector<LocalMap> inAncestors;
 
-    for (const SelectedNode& selected : selection.nodes) {
+    for (const DrawnNode& drawnNode : frame.nodes) {
         ++mStamp;
-        const NodePtr node = drawn(selected.id);
-        TERRAIN_EXPECTS(node != nullptr, "every selected node must be resident");
-        NodePtr parent;
+        const SelectedNode& selected = drawnNode.selected;
+        const NodePtr& node = drawnNode.node;
         const bool morphs = !selected.id.isRoot() && selected.morph < 1.0f;
-        if (morphs) {
-            parent = drawn(selected.id.parent());
-            TERRAIN_EXPECTS(parent != nullptr, "a morphing node's parent must be resident");
-        }
+        const NodePtr& parent = drawnNode.parent;
         leaves.clear();
         TERRAIN_TRY(referenceLeaves(view, node, mOptions.maxDepthBelow, leaves));
         out.referenceNodes += leaves.size();
@@ -246,7 +242,7 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
             up = up.parent();
             auto [it, inserted] = refined.try_emplace(up.key());
             if (inserted) {
-                it->second.node = drawn(up);
+                it->second.node = resident(up);
             }
             if (it->second.node && it->second.worst <= tauPixels) {
                 ancestors.push_back(&it->second);
@@ -254,11 +250,8 @@ Expected<FrameError> ErrorMeter::measure(const LodSelection& selection, const Re
         }
 
         const float f = selected.morph;
-        BlockLevels levels;
+        const BlockLevels& levels = drawnNode.levels;
         if (tessellated) {
-            TERRAIN_EXPECTS(node->tessellation != nullptr, "tessellation mode needs nodes with tessellation errors");
-            levels = drawnBlockLevels(*node->tessellation, mExtent.box(selected.id, node->zMin, node->zMax), camera,
-                                      blockPixels, selected.hidden, visibility.occluded);
             blended = morphedSamples(*node, n, selected.id.isRoot() ? 1.0f : f);
             out.tessellatedTriangles += levels.triangles();
         }

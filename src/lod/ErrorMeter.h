@@ -15,6 +15,7 @@
 
 #include "core/Camera.h"
 #include "core/Expected.h"
+#include "lod/DrawList.h"
 #include "lod/LodSelector.h"
 #include "lod/NodeData.h"
 #include "lod/TessellationLevels.h"
@@ -87,10 +88,6 @@ struct OracleSelection {
 
 /// What a frame drawn with visibility_lod showed, for measuring it (ErrorMeter::measure).
 struct MeasuredVisibility {
-    /// The drawing's block test (tessellation mode, TerrainRenderer::draw's `occluded`): the meter picks the
-    /// blocks' levels as the renderer did. Hidden nodes (SelectedNode::hidden) take every block's coarsest
-    /// level either way, as drawn.
-    BoxOccluded occluded;
     /// Points (world metres, on the drawn surface) it says did not show are not measured; empty: all are.
     std::function<bool(const glm::dvec3&)> shows;
 };
@@ -101,16 +98,15 @@ public:
     /// node the viewer would make); it must outlive the meter. `header` is the map's.
     ErrorMeter(const MapHeader& header, NodeSource& source, const ErrorMeterOptions& options);
 
-    /// Measures the frame that `selection` (made for `camera`) draws from the nodes `drawn` returns. Every
-    /// selected node must be resident, with its parent (for the morph). `tauPixels` > 0 decides the
-    /// refinements that bought nothing. Errors: a reference node that cannot be loaded (file and node named).
-    /// With `blockPixels` > 0 the frame is drawn in tessellation mode (render_mode = tessellation): each node's
-    /// blocks at the levels drawnBlockLevels picks for that budget (lod/TessellationLevels.h, what the renderer
-    /// uploads), of the node's samples blended by its morph as the shaders blend them; where the tessellator
-    /// may split a cell either way, the worse diagonal counts. Its nodes must carry tessellation errors.
-    /// With `visibility`, what is measured is what the frame showed (see MeasuredVisibility).
-    Expected<FrameError> measure(const LodSelection& selection, const ResidentNodeLookup& drawn, const Camera& camera,
-                                 double tauPixels, double blockPixels = 0.0, const MeasuredVisibility& visibility = {});
+    /// Measures the frame that `frame` draws (made for its camera; lod/DrawList.h): each node as drawn, morphed
+    /// towards its parent by its morph factor, or in tessellation mode (DrawList::tessellated) its blocks at the
+    /// levels the list gives, of the node's samples blended by its morph as the shaders blend them; where the
+    /// tessellator may split a cell either way, the worse diagonal counts. `resident` gives the nodes above the
+    /// drawn ones (the refinements' judged). `tauPixels` > 0 decides the refinements that bought nothing.
+    /// Errors: a reference node that cannot be loaded (file and node named). With `visibility`, what is
+    /// measured is what the frame showed (see MeasuredVisibility).
+    Expected<FrameError> measure(const DrawList& frame, const ResidentNodeLookup& resident, double tauPixels,
+                                 const MeasuredVisibility& visibility = {});
 
     /// The oracle's selection for `camera` at `tauPixels` > 0 (see OracleSelection), from the same reference
     /// as measure(). With `blocks` = 0 a node's error is its largest error in pixels at its points' own

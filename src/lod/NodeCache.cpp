@@ -9,6 +9,19 @@ NodeCache::NodeCache(std::size_t capacity) : mCapacity(capacity)
 {
     TERRAIN_EXPECTS(capacity >= 5, "the cache must hold at least the root and one group of four");
     mGroups.reserve(capacity / 4 + 1);
+    const auto groups = static_cast<int>((capacity - 1) / 4);
+    for (int g = groups; g-- > 0;) {
+        mFreeGroupSlots.push_back(g);
+    }
+}
+
+int NodeCache::slotOf(const NodeId& id) const
+{
+    if (id.isRoot()) {
+        return mRoot ? 0 : -1;
+    }
+    auto it = mGroups.find(id.parent().key());
+    return it == mGroups.end() ? -1 : 4 * it->second.slot + 1 + id.quadrant();
 }
 
 void NodeCache::setRoot(NodePtr root)
@@ -73,14 +86,9 @@ bool NodeCache::evictOne()
             continue;
         }
         mLru.erase(found->second.lru);
-        const ChildNodes nodes = std::move(found->second.nodes);
+        mFreeGroupSlots.push_back(found->second.slot);
         mGroups.erase(found);
         ++mEvictions;
-        if (mEvicted) {
-            for (const NodePtr& node : nodes) {
-                mEvicted(*node);
-            }
-        }
         return true;
     }
     return false;
@@ -104,10 +112,13 @@ NodeCache::Insert NodeCache::insertChildren(const NodeId& parent, ChildNodes chi
             return Insert::NoRoom;
         }
     }
+    TERRAIN_ASSERT(!mFreeGroupSlots.empty());
+    const int slot = mFreeGroupSlots.back();
+    mFreeGroupSlots.pop_back();
     mLru.push_front(parent.key());
     // A group arrives because the traversal wants it: it counts as used this frame, so a later insertion in
     // the same frame cannot evict it again.
-    mGroups.emplace(parent.key(), Group{std::move(children), mFrame, mLru.begin()});
+    mGroups.emplace(parent.key(), Group{std::move(children), mFrame, mLru.begin(), slot});
     return Insert::Inserted;
 }
 

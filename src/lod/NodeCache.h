@@ -5,15 +5,18 @@
 // recently used group that was not used this frame and none of whose nodes has resident children, so it
 // never removes a node drawn this frame and never leaves a resident node unreachable from the root. When no
 // group can go, an insertion is refused instead of overfilling the cache (the paper's 4.5 defect).
-// Render thread only; not thread-safe.
+// Every resident node has a slot in [0, capacity): the root 0, a group's four nodes four consecutive slots that
+// the group keeps while resident and gives back when evicted. The renderer's node pools have a layer per slot,
+// so what the cache holds is what the pools can hold, and a slot whose node changed is all the renderer needs
+// to know. Render thread only; not thread-safe.
 #pragma once
 
 #include "lod/NodeData.h"
 
 #include <cstdint>
-#include <functional>
 #include <list>
 #include <unordered_map>
+#include <vector>
 
 namespace terrain {
 
@@ -49,14 +52,17 @@ public:
     std::uint64_t misses() const { return mMisses; }
     std::uint64_t evictions() const { return mEvictions; }
 
-    /// Called with every node the cache evicts, as it goes (the renderer frees its GPU slot).
-    void onEvict(std::function<void(const NodeData&)> evicted) { mEvicted = std::move(evicted); }
+    /// The slot of resident node `id`, in [0, capacity()); -1 when it is not resident. The root's is 0; the
+    /// nodes of a group hold 4g + 1 .. 4g + 4 (in quadrant order) while the group is resident; a slot given back
+    /// by an evicted group goes to a later one.
+    int slotOf(const NodeId& id) const;
 
 private:
     struct Group {
         ChildNodes nodes;
         std::uint64_t lastUsed = 0;
         std::list<std::uint64_t>::iterator lru;  ///< position in mLru (front = most recent)
+        int slot = 0;                            ///< g: its nodes' slots are 4g + 1 .. 4g + 4
     };
     bool evictOne();
     bool isEvictable(const Group& group) const;
@@ -69,7 +75,7 @@ private:
     std::uint64_t mHits = 0;
     std::uint64_t mMisses = 0;
     std::uint64_t mEvictions = 0;
-    std::function<void(const NodeData&)> mEvicted;
+    std::vector<int> mFreeGroupSlots;  ///< a stack, the lowest on top
 };
 
 }  // namespace terrain

@@ -5,6 +5,7 @@
 // subtree that is hidden as a whole collapses to its root, whose own count then decides. Pure: no GL.
 #pragma once
 
+#include "core/Camera.h"
 #include "lod/DepthOcclusion.h"
 #include "lod/LodSelector.h"
 #include "quadtree/NodeId.h"
@@ -57,6 +58,26 @@ private:
     bool mAny = false;
     std::unordered_map<std::uint64_t, Record> mRecords;
     std::vector<std::pair<std::uint64_t, bool>> mTouched;  ///< per record(): node key, visible (reused)
+};
+
+/// The visible pixels of the nodes drawn in one frame (counted by the renderer, visibility_lod), and its depth.
+struct PixelCounts {
+    std::uint64_t frame = 0;            ///< the renderer's frame number: 1 for the first frame drawn
+    std::vector<NodeId> nodes;          ///< the nodes drawn, in drawing order
+    std::vector<std::uint32_t> pixels;  ///< per node, its fragments that passed the depth test
+    /// The frame's depth buffer after the terrain (DepthOcclusion's input), row 0 at the bottom, and the
+    /// camera it was drawn with; empty when nothing was drawn.
+    std::vector<float> depth;
+    Camera camera;
+};
+
+/// Where the frames' visibility comes from: what drew them (TerrainRenderer), frames late so that reading
+/// does not wait for the GPU. The viewer session takes what is ready before it selects a frame.
+class PixelCountSource {
+public:
+    virtual ~PixelCountSource() = default;
+    /// The counts of the oldest frame not yet taken that is ready, into `out`; false when there is none.
+    virtual bool takePixelCounts(PixelCounts& out) = 0;
 };
 
 /// Whether the children of a node are resident (without touching them in the cache).

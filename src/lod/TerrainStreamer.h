@@ -112,9 +112,8 @@ public:
     NodePtr node(const NodeId& id) const;
     const NodeCache& cache() const { return mCache; }
     NodeServerStats serverStats() const { return mServer.stats(); }
-    /// Called with every node the cache evicts, as it goes (in update() and drain(), on their thread): the renderer
-    /// frees the node's GPU slot (TerrainRenderer::release).
-    void onEvict(std::function<void(const NodeData&)> evicted) { mCache.onEvict(std::move(evicted)); }
+    /// The node pools' slot of resident node `id` (NodeCache::slotOf), -1 if not resident.
+    int slotOf(const NodeId& id) const { return mCache.slotOf(id); }
     /// Called once per group that failed to load, with the error (file and node named).
     void onLoadError(std::function<void(const std::string&)> report) { mReport = std::move(report); }
 

@@ -79,7 +79,7 @@ using BoxOccluded = std::function<bool(const Aabb&)>;
 BlockLevels chooseBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels,
                               const BoxOccluded& occluded = {});
 
-/// The levels a selected node is drawn with (TerrainRenderer::draw, and ErrorMeter::measure measuring it): a
+/// The levels a selected node is drawn with (its DrawnNode::levels in the frame's draw list, lod/DrawList.h): a
 /// `hidden` node's (SelectedNode::hidden) every block at its coarsest, the others' chooseBlockLevels.
 BlockLevels drawnBlockLevels(const TessellationErrors& errors, const Aabb& node, const Camera& camera, double pixels,
                              bool hidden, const BoxOccluded& occluded);

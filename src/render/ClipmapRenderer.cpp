@@ -4,7 +4,9 @@
 #include "core/Aabb.h"
 #include "core/Check.h"
 #include "core/Frustum.h"
+#include "render/FrameSetup.h"
 #include "render/ShaderContract.h"
+#include "render/TextureArrays.h"
 
 #include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
@@ -18,16 +20,11 @@ namespace terrain {
 
 namespace {
 
-void setUpLayers(const gl::Texture& texture, GLenum internalFormat, GLenum format, GLenum type, int n, int layers,
-                 GLint filter)
+/// A ring texture array: a layer per ring, toroidal addressing (a texel's neighbour across the texture's edge is
+/// the next sample of the window).
+TextureArrayFormat ringFormat(GLenum internalFormat, GLenum format, GLenum type, GLint filter)
 {
-    glBindTexture(GL_TEXTURE_2D_ARRAY, texture.name());
-    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, static_cast<GLint>(internalFormat), n, n, layers, 0, format, type, nullptr);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
-    // Toroidal addressing: a texel's neighbour across the texture's edge is the next sample of the window.
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_REPEAT);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    return {internalFormat, format, type, filter, GL_REPEAT};
 }
 
 }  // namespace
@@ -83,29 +80,25 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
     r->mSky = std::move(sky.value());
     const int n = layout.samples();
     r->mSamples = n;
-    r->mHeights = gl::Texture::create();
-    r->mColour = gl::Texture::create();
-    r->mMorph = gl::Texture::create();
-    setUpLayers(r->mHeights, GL_R32F, GL_RED, GL_FLOAT, n, layout.ringCount(), GL_NEAREST);
-    setUpLayers(r->mMorph, GL_RG32F, GL_RG, GL_FLOAT, n, layout.ringCount(), GL_NEAREST);
-    r->mPreviousColour = gl::Texture::create();
-    setUpLayers(r->mColour, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
-    setUpLayers(r->mPreviousColour, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
+    r->mHeights = createTextureArray(ringFormat(GL_R32F, GL_RED, GL_FLOAT, GL_NEAREST), n, layout.ringCount());
+    r->mMorph = createTextureArray(ringFormat(GL_RG32F, GL_RG, GL_FLOAT, GL_NEAREST), n, layout.ringCount());
+    r->mColour = createTextureArray(ringFormat(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR), n, layout.ringCount());
+    r->mPreviousColour =
+        createTextureArray(ringFormat(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR), n, layout.ringCount());
     r->mTextureBytes = static_cast<std::size_t>(n) * n * layout.ringCount() * 20;
     if (!r->mDetail.empty()) {
-        r->mMaterials = gl::Texture::create();
-        r->mPreviousMaterials = gl::Texture::create();
-        setUpLayers(r->mMaterials, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
-        setUpLayers(r->mPreviousMaterials, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, n, layout.ringCount(), GL_LINEAR);
+        r->mMaterials =
+            createTextureArray(ringFormat(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR), n, layout.ringCount());
+        r->mPreviousMaterials =
+            createTextureArray(ringFormat(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR), n, layout.ringCount());
         r->mTextureBytes += static_cast<std::size_t>(n) * n * layout.ringCount() * 8;
     }
     r->mNormalPerCell = normalTexelsPerCell;
     if (normalTexelsPerCell > 0) {
         const int side = normalTexelsPerCell * n;
-        r->mNormals = gl::Texture::create();
-        r->mPreviousNormals = gl::Texture::create();
-        setUpLayers(r->mNormals, GL_RG8_SNORM, GL_RG, GL_BYTE, side, layout.ringCount(), GL_LINEAR);
-        setUpLayers(r->mPreviousNormals, GL_RG8_SNORM, GL_RG, GL_BYTE, side, layout.ringCount(), GL_LINEAR);
+        r->mNormals = createTextureArray(ringFormat(GL_RG8_SNORM, GL_RG, GL_BYTE, GL_LINEAR), side, layout.ringCount());
+        r->mPreviousNormals =
+            createTextureArray(ringFormat(GL_RG8_SNORM, GL_RG, GL_BYTE, GL_LINEAR), side, layout.ringCount());
         r->mTextureBytes += static_cast<std::size_t>(side) * side * layout.ringCount() * 4;
     }
     for (const ShaderProgram& program : r->mPrograms) {
@@ -166,7 +159,7 @@ const ClipmapRenderer::Mesh& ClipmapRenderer::footprint(std::int64_t w, std::int
     return mFootprints.emplace(std::pair{w, h}, std::move(m)).first->second;
 }
 
-void ClipmapRenderer::upload(ClipmapTerrain& terrain, int ring, ClipmapStats& stats)
+void ClipmapRenderer::upload(const ClipmapTerrain& terrain, int ring, ClipmapStats& stats)
 {
     const int n = mSamples;
     const ClipmapRing& data = terrain.ring(ring);
@@ -194,7 +187,7 @@ void ClipmapRenderer::upload(ClipmapTerrain& terrain, int ring, ClipmapStats& st
     TERRAIN_EXPECTS(!mMaterials || !data.materials.empty(), "with detail layers the rings keep material weights");
     TERRAIN_EXPECTS(!mNormals || terrain.normalTexelsPerCell() == mNormalPerCell,
                     "with normal maps the rings keep them at the renderer's texels a cell");
-    for (const LatticeRect& rect : terrain.takeChanged(ring)) {
+    for (const LatticeRect& rect : terrain.changed(ring)) {
         layer(mHeights, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RED, GL_FLOAT, data.heights.data(), 4);
         layer(mMorph, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RG, GL_FLOAT, data.morph.data(), 8);
         layer(mColour, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RGBA, GL_UNSIGNED_BYTE, data.colour.data(), 4);
@@ -240,7 +233,7 @@ void ClipmapRenderer::bindRingTextures() const
     mDetail.bind(units::kDetail);
 }
 
-ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& terrain, int firstRing,
+ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, const ClipmapTerrain& terrain, int firstRing,
                                    const Camera& camera, const SceneStyle& style)
 {
     TERRAIN_EXPECTS(layout.samples() == mSamples && terrain.ringCount() == layout.ringCount(),
@@ -249,41 +242,15 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, ClipmapTerrain& 
     for (int ring = 0; ring < layout.ringCount(); ++ring) {
         upload(terrain, ring, stats);
     }
-    glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
-    glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
-    glClearDepth(1.0);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    if (style.drawSky) {
-        mSky.draw(camera, style);
-    }
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
+    beginSceneFrame(camera, style, mSky);
     glDisable(GL_CULL_FACE);
-    glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
-    const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
-    const glm::vec3 sun = glm::normalize(style.sunDirection);
-    const double s0 = mHeader.sampleSpacing;
-    const double vx0 = mHeader.originX + mHeader.validX0 * s0, vy0 = mHeader.originY + mHeader.validY0 * s0;
-    const double vx1 = mHeader.originX + (mHeader.validX0 + mHeader.validWidth - 1.0) * s0;
-    const double vy1 = mHeader.originY + (mHeader.validY0 + mHeader.validHeight - 1.0) * s0;
-    const double slack = 1e-3 * s0;
+    const glm::dvec4 valid = validRectangle(mHeader);
+    const double vx0 = valid.x, vy0 = valid.y, vx1 = valid.z, vy1 = valid.w;
     for (const ShaderProgram& program : mPrograms) {
-        program.use();
-        glUniformMatrix4fv(program.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
-        glUniform1f(program.uniform("uHeightBase"), static_cast<float>(mHeader.heightOffset - camera.position.z));
-        glUniform3fv(program.uniform("uSunDirection"), 1, glm::value_ptr(sun));
-        glUniform3fv(program.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
-        glUniform3fv(program.uniform("uAmbient"), 1, glm::value_ptr(style.ambient));
-        glUniform3fv(program.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
-        glUniform1f(program.uniform("uHazeDistance"), style.hazeDistance);
-        glUniform1i(program.uniform("uWireframe"), style.wireframe ? 1 : 0);
+        setSceneUniforms(program, camera, style, mHeader);
         glUniform1f(program.uniform("uNow"), terrain.clock());
         // A morph of no time is over at once (the shader divides by it).
         glUniform1f(program.uniform("uMorphSeconds"), static_cast<float>(std::max(terrain.morphSeconds(), 1e-6)));
-        glUniform4f(program.uniform("uValidRect"), static_cast<float>(vx0 - camera.position.x - slack),
-                    static_cast<float>(vy0 - camera.position.y - slack),
-                    static_cast<float>(vx1 - camera.position.x + slack),
-                    static_cast<float>(vy1 - camera.position.y + slack));
     }
     bindRingTextures();
     const Frustum frustum = Frustum::fromCamera(camera);

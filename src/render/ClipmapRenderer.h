@@ -53,7 +53,7 @@ public:
 
     /// Uploads what `terrain` changed, then clears, draws the sky and rings `firstRing` to the coarsest for
     /// `camera` (layout placed for it by moveTo).
-    ClipmapStats draw(const ClipmapLayout& layout, ClipmapTerrain& terrain, int firstRing, const Camera& camera,
+    ClipmapStats draw(const ClipmapLayout& layout, const ClipmapTerrain& terrain, int firstRing, const Camera& camera,
                       const SceneStyle& style);
 
     /// GPU bytes of the ring layers (fixed by n and the ring count).
@@ -72,7 +72,7 @@ private:
     static Mesh makeMesh(const std::vector<GLint>& vertices, const std::vector<std::uint32_t>& indices);
     /// The footprint of w x h cells (made the first time it is asked for).
     const Mesh& footprint(std::int64_t w, std::int64_t h);
-    void upload(ClipmapTerrain& terrain, int ring, ClipmapStats& stats);
+    void upload(const ClipmapTerrain& terrain, int ring, ClipmapStats& stats);
     /// Binds the rings' textures (and the detail layers) to their units (render/ShaderContract.h).
     void bindRingTextures() const;
 

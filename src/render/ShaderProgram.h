@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/Expected.h"
+#include "gpudata/ShaderFile.h"
 #include "render/GlObjects.h"
 
 #include <filesystem>
@@ -11,11 +12,6 @@
 #include <vector>
 
 namespace terrain {
-
-/// A shader file's text with each `#include "name"` line replaced by the named file's text (from the same
-/// directory; one level: an included file includes nothing), `#line` directives keeping the driver's line
-/// numbers those of each file. Errors name the file and line. Needs no GL.
-Expected<std::string> readShaderFile(const std::filesystem::path& file);
 
 class ShaderProgram {
 public:

@@ -1,22 +1,27 @@
 // The chunk renderer (paper 3.2.6-3.2.11, 4.2.3): one template mesh for every node, geomorphed and skirted
-// in the vertex program, front to back in the selector's order. Node data lives in pools allocated once for
-// the cache's capacity (4.2.3): a slot per resident node, a layer of one of each pool's texture arrays, taken
-// when the node is first drawn and given back when the cache evicts it. A frame's nodes go in one instanced
-// draw per program and pair of arrays (the node's and its parent's; one pair while the pools fit one array).
+// in the vertex program, front to back in the selector's order. It draws a frame's draw list (lod/DrawList.h)
+// as it is: the LOD layer decided the nodes, their morphs and their tessellation blocks' levels. Node data
+// lives in pools allocated once for the cache's capacity (4.2.3): a layer of one of each pool's texture
+// arrays per cache slot (NodeCache::slotOf), filled when a slot's node is first drawn. A frame's nodes go in
+// one instanced draw per program and pair of arrays (the node's and its parent's; one pair while the pools
+// fit one array).
 #pragma once
 
 #include "core/Camera.h"
 #include "core/Expected.h"
-#include "lod/LodSelector.h"
+#include "gpudata/TemplateMesh.h"
+#include "lod/DrawList.h"
 #include "lod/NodeData.h"
 #include "lod/NodeMemory.h"
+#include "lod/NodeVisibility.h"
 #include "lod/TessellationLevels.h"
 #include "quadtree/MapFormat.h"
 #include "render/DetailLayers.h"
 #include "render/GlObjects.h"
+#include "render/PixelCounter.h"
 #include "render/ShaderProgram.h"
 #include "render/Sky.h"
-#include "render/TemplateMesh.h"
+#include "render/TriangleFeedback.h"
 #include "synthesis/Material.h"
 
 #include <glm/vec3.hpp>
@@ -25,7 +30,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
-#include <unordered_map>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace terrain {
@@ -36,7 +42,7 @@ struct RenderStats {
     std::size_t dynamicNodes = 0;
     std::uint64_t triangles = 0;
     std::size_t uploads = 0;   ///< nodes copied into their slots this frame
-    std::size_t gpuNodes = 0;  ///< slots holding a node after the frame
+    std::size_t gpuNodes = 0;  ///< slots that have held a node (filled when first drawn, kept until reused)
     /// Draw calls for the terrain (the sky not counted): one per program and pair of pool arrays (the nodes',
     /// their parents') that has nodes in view; 1 when the pools fit one array and no detail layers split it.
     std::size_t drawCalls = 0;
@@ -48,7 +54,8 @@ struct RenderStats {
 
 /// The node pools' size and formats.
 struct PoolOptions {
-    std::size_t slots = 512;      ///< nodes: the cache's capacity (memory_budget or quad_cache_size)
+    /// Nodes: the cache's capacity (memory_budget or quad_cache_size), a layer per cache slot.
+    std::size_t slots = 512;
     bool compressColour = false;  ///< DXT1 colour layers (node_texture_compression), where the GL has S3TC
     /// render_mode = tessellation: blocks of kTessellationBlockQuads quads tessellated at the levels
     /// chooseBlockLevels picks (lod/TessellationLevels.h); needs GL 4.0 (tessellationSupported()) and nodes
@@ -69,18 +76,7 @@ struct PoolOptions {
     std::size_t layersPerArray = 0;
 };
 
-/// The visible pixels of the nodes drawn in one frame (PoolOptions::pixelCounts), and its depth.
-struct PixelCounts {
-    std::uint64_t frame = 0;            ///< draw()'s frame number: 1 for the first frame drawn
-    std::vector<NodeId> nodes;          ///< the nodes drawn, in drawing order
-    std::vector<std::uint32_t> pixels;  ///< per node, its fragments that passed the depth test
-    /// The frame's depth buffer after the terrain (DepthOcclusion's input), row 0 at the bottom, and the
-    /// camera it was drawn with; empty when nothing was drawn.
-    std::vector<float> depth;
-    Camera camera;
-};
-
-class TerrainRenderer {
+class TerrainRenderer : public PixelCountSource {
 public:
     /// Loads the shaders from `shaderDirectory`, builds the template mesh for `header`'s chunk size with the
     /// zigzag order for `vertexCacheSize`, and allocates the node pools: `pools.slots` nodes' heights,
@@ -93,19 +89,13 @@ public:
                                                              const PoolOptions& pools,
                                                              const MaterialSet* materials = nullptr);
 
-    /// Clears, draws the sky and every node of `selection` (made for `camera`) in one instanced draw (two
-    /// with detail layers: nodes beyond every layer's fade go in a second one, drawn by a program without
-    /// the layers), the nodes' data from `resident` (the node cache: every selected node and its parent must be
-    /// resident). A node gets a slot the first time it is drawn and keeps it until release().
-    /// In tessellation mode the blocks spend `blockPixels` of error (the selection was made for the rest of tau).
-    /// With `feedback` (tessellation mode, for tests), the camera-relative corners of every triangle the
-    /// tessellator made are read back by transform feedback, three a triangle, in drawing order (node by node
-    /// as drawn, patch by patch: blocks, then skirts). With `occluded` (tessellation mode, visibility_lod: the
-    /// previous frame's depth), hidden blocks with no visible neighbour are drawn at their coarsest level
-    /// (drawnBlockLevels).
-    RenderStats draw(const LodSelection& selection, const ResidentNodeLookup& resident, const Camera& camera,
-                     const SceneStyle& style, double blockPixels = 0.0, std::vector<glm::vec3>* feedback = nullptr,
-                     const BoxOccluded& occluded = {});
+    /// Clears, draws the sky and every node of `frame` (made for its camera) in one instanced draw (two with
+    /// detail layers: nodes beyond every layer's fade go in a second one, drawn by a program without the layers),
+    /// each node in its cache slot, copied there when the slot held another node. In tessellation mode the
+    /// blocks are drawn at the list's levels. With `feedback` (tessellation mode, for tests), the camera-relative
+    /// corners of every triangle the tessellator made are read back by transform feedback, three a triangle, in
+    /// drawing order (node by node as drawn, patch by patch: blocks, then skirts).
+    RenderStats draw(const DrawList& frame, const SceneStyle& style, std::vector<glm::vec3>* feedback = nullptr);
 
     /// Whether this context runs tessellation shaders (OpenGL 4.0).
     static bool tessellationSupported();
@@ -127,26 +117,35 @@ public:
     /// least `lag` frames before the latest one (kPixelCountLag, or 0 for the frame just drawn, which waits
     /// for the GL to finish it), into `out`; false when there is none. The counts of a frame stay for three
     /// frames: what is not taken by then is dropped (droppedPixelCounts()).
-    bool takePixelCounts(PixelCounts& out, std::uint64_t lag = kPixelCountLag);
+    bool takePixelCounts(PixelCounts& out, std::uint64_t lag);
+    /// takePixelCounts(out, kPixelCountLag): what the viewer session takes before each frame's selection.
+    bool takePixelCounts(PixelCounts& out) override { return takePixelCounts(out, kPixelCountLag); }
     /// The depth buffer of the frame just drawn (the bound framebuffer's, `width` x `height` from its
     /// origin), rows bottom to top, read at once: waits for the GL. For measuring (tengine
     /// measure_error_every), not for drawing: the pixel counts' depth comes late and does not wait.
     static std::vector<float> readDepth(int width, int height);
     /// Frames whose pixel counts were dropped untaken.
-    std::uint64_t droppedPixelCounts() const { return mDroppedCounts; }
-
-    /// The node cache evicted `id` (TerrainStreamer::onEvict): its slot is free for another node. Nothing
-    /// is freed on the GPU. Unknown ids are ignored (a node evicted before it was ever drawn).
-    void release(const NodeId& id);
+    std::uint64_t droppedPixelCounts() const { return mCounter ? mCounter->dropped() : 0; }
 
     const SlotBytes& slotBytes() const { return mSlotBytes; }
     std::size_t slots() const { return mSlotData.size(); }
 
 private:
     TerrainRenderer(const MapHeader& header) : mHeader(header) {}
-    /// The node's slot, copying it there when it is new; a new node takes a free slot in `preferredArray`'s
-    /// layers when there is one (its parent's: a node and its parent in one array draw together).
-    int slotFor(const NodePtr& node, RenderStats& stats, int preferredArray = -1);
+    /// create()'s parts: the programs for `defines`, the template mesh's and the tessellation patches' vertex
+    /// arrays, and the pools.
+    Status createPrograms(const std::filesystem::path& shaderDirectory, std::vector<std::string> defines);
+    void createTemplateMesh(int vertexCacheSize);
+    void createPatches();
+    Status createPools(const PoolOptions& pools);
+    /// Copies `node` into `slot` unless the slot holds it already.
+    void fill(int slot, const NodePtr& node, RenderStats& stats);
+    /// draw()'s parts: the frame's nodes in drawing order (filling their slots), their per-instance constants
+    /// (and block codes) uploaded, the programs' uniforms, and the instanced draws.
+    void orderFrameNodes(const DrawList& frame, RenderStats& stats);
+    void uploadFrameNodes(const DrawList& frame, const SceneStyle& style);
+    void setFrameUniforms(const Camera& camera, const SceneStyle& style);
+    void drawGroups(RenderStats& stats, TriangleFeedback* feedback);
     int arrayOf(int slot) const { return slot / static_cast<int>(mLayersPerArray); }
     int layerOf(int slot) const { return slot % static_cast<int>(mLayersPerArray); }
 
@@ -183,48 +182,28 @@ private:
     bool mDxt1 = false;
     int mColourLayerSize = 0;
     SlotBytes mSlotBytes;
-    std::vector<NodePtr> mSlotData;                  ///< per slot: the node it holds (identity for reloads), or null
-    std::vector<std::vector<int>> mFreeSlots;        ///< per array, a stack
-    std::unordered_map<std::uint64_t, int> mSlotOf;  ///< by node key
+    std::vector<NodePtr> mSlotData;  ///< per slot: the node it holds (identity for reloads), or null
+    std::size_t mSlotsHeld = 0;      ///< slots that have held a node
     // The frame's per-node constants (terrain.vert's per-instance attributes: mNodeTexels vec4s a node).
     int mNodeTexels = 3;
     std::vector<float> mConstants;
     gl::Buffer mConstantsBuffer;
     // Tessellation mode: patches (blocks, then border skirts) and the frame's block codes.
     bool mTessellation = false;
-    QuadtreeExtent mExtent;
     int mBlocks = 0;  ///< per side
     gl::VertexArray mPatchVao;
     gl::Buffer mPatchIds;
     gl::Buffer mLevelsBuffer;
     gl::Texture mLevelsTexture;  ///< GL_TEXTURE_BUFFER over mLevelsBuffer, R16UI
     std::vector<std::uint16_t> mCodes;
-    // The frame's nodes before they are ordered into draws, and the draws.
+    // The frame's nodes in drawing order: the draw list's, near ones first, grouped by program and arrays.
     struct FrameNode {
-        const SelectedNode* selected;
-        const NodeData* node;    ///< held by the cache for the frame
-        const NodeData* parent;  ///< the node itself for the root
-        int slot;
-        int parentSlot;
+        const DrawnNode* drawn;
         int program;
     };
     std::vector<FrameNode> mFrameNodes;
-    gl::Buffer mFeedback;  ///< transform feedback of draw(..., feedback)
-    // Pixel counts: three frames' buffers in turn (frame % 3), each a uint a drawn node.
-    struct CountFrame {
-        gl::Buffer buffer;
-        std::size_t capacity = 0;  ///< nodes the buffer holds
-        gl::Fence fence;           ///< after the frame's draws; none when nothing was drawn
-        std::uint64_t frame = 0;   ///< 0: nothing waiting to be taken
-        std::vector<NodeId> nodes;
-        gl::Buffer depth;             ///< pixel pack buffer the depth is read into
-        std::size_t depthPixels = 0;  ///< its size
-        bool hasDepth = false;        ///< this frame's depth was read
-        Camera camera;
-    };
-    bool mPixelCounts = false;
-    std::array<CountFrame, 3> mCountFrames;
-    std::uint64_t mFrame = 0;  ///< frames drawn
-    std::uint64_t mDroppedCounts = 0;
+    std::optional<TriangleFeedback> mFeedback;  ///< draw(..., feedback)
+    std::optional<PixelCounter> mCounter;       ///< PoolOptions::pixelCounts
+    std::uint64_t mFrame = 0;                   ///< frames drawn
 };
 }  // namespace terrain

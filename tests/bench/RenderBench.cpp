@@ -8,17 +8,17 @@
 //   xvfb-run -a -s "-screen 0 1280x720x24" build/tests/RenderBench
 //
 // and read `ratio` (engine Mtriangles/s over brute force Mtriangles/s; target >= 0.8).
+#include "gpudata/NodeVertexData.h"
+#include "gpudata/TemplateMesh.h"
+#include "gpudata/ZigzagIndexBuffer.h"
 #include "heightfield/HeightFieldIo.h"
 #include "lod/CameraPath.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "quadtree/QuadtreeBuilder.h"
 #include "render/GlWindow.h"
-#include "render/NodeVertexData.h"
 #include "render/ShaderProgram.h"
-#include "render/TemplateMesh.h"
 #include "render/TerrainRenderer.h"
-#include "render/ZigzagIndexBuffer.h"
 
 #include <benchmark/benchmark.h>
 #include <glm/gtc/type_ptr.hpp>
@@ -99,8 +99,6 @@ void BM_ChunkRenderer(benchmark::State& state)
                                              normalMaps > 0 ? 129 : 0, normalMaps == 2})
                         .value();
     auto streamer = TerrainStreamer::create(source, extentOf(s.map->header()), options).value();
-    streamer->onEvict([&renderer](const NodeData& node) { renderer->release(node.id); });
-    const ResidentNodeLookup resident = [&streamer](const NodeId& id) { return streamer->node(id); };
     std::size_t drawCalls = 0;
     SceneStyle style;
     style.drawSky = false;  // triangles only: the brute-force side draws no sky either
@@ -109,9 +107,10 @@ void BM_ChunkRenderer(benchmark::State& state)
         for (const Camera& camera : s.cameras) {
             // Load everything the view wants first: the measurement is drawing only.
             streamer->settle(Settle::Complete, camera, nodePixels);
+            const DrawList frame = makeDrawList(streamer->selection(), *streamer, camera, blockPixels);
             for (int r = 0; r < kRepeats; ++r) {
                 auto start = std::chrono::steady_clock::now();
-                RenderStats stats = renderer->draw(streamer->selection(), resident, camera, style, blockPixels);
+                RenderStats stats = renderer->draw(frame, style);
                 drawCalls = std::max(drawCalls, stats.drawCalls);
                 glFinish();
                 seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

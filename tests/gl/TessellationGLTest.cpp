@@ -60,7 +60,6 @@ TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVertic
     ASSERT_TRUE(streamer.ok());
     auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, header, 16, {2048, false, true});
     ASSERT_TRUE(renderer.ok()) << renderer.error().message;
-    (*streamer)->onEvict([&renderer](const NodeData& node) { (*renderer)->release(node.id); });
 
     // Low over a valley, looking along it: near blocks fine, far ones coarse, sides snapped between them.
     Camera camera;
@@ -82,8 +81,7 @@ TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVertic
     style.clearColour = {1.0f, 0.0f, 1.0f};
     style.hazeDistance = 1e9f;
     std::vector<glm::vec3> feedback;
-    const RenderStats stats = (*renderer)->draw(
-        selection, [&s](const NodeId& id) { return s.node(id); }, camera, style, blockPixels, &feedback);
+    const RenderStats stats = (*renderer)->draw(makeDrawList(selection, s, camera, blockPixels), style, &feedback);
     // No crack inside a node where blocks of different levels meet, nor between nodes: no pixel whose view ray
     // must hit the terrain shows the clear colour.
     glFinish();

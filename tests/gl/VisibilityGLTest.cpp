@@ -50,7 +50,6 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
     pools.pixelCounts = true;
     auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, header, 16, pools);
     ASSERT_TRUE(renderer.ok()) << renderer.error().message;
-    (*streamer)->onEvict([&renderer](const NodeData& node) { (*renderer)->release(node.id); });
 
     // Low in a valley looking along it: ridges hide much of what the selection refines behind them.
     Camera camera;
@@ -69,7 +68,7 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
     ASSERT_GT(selection.nodes.size(), 20u);
     SceneStyle style;
     style.drawSky = false;
-    (*renderer)->draw(selection, resident, camera, style, blockPixels);
+    (*renderer)->draw(makeDrawList(selection, s, camera, tessellation ? blockPixels : 0.0), style);
     PixelCounts counts;
     ASSERT_TRUE((*renderer)->takePixelCounts(counts, 0));
     ASSERT_EQ(counts.nodes.size(), selection.nodes.size());
@@ -91,7 +90,7 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
                                      [&](const SelectedNode& n) { return n.id == counts.nodes[i]; });
         ASSERT_NE(it, selection.nodes.end()) << "counted node " << counts.nodes[i].toString() << " was not selected";
         alone.nodes.assign(1, *it);
-        (*renderer)->draw(alone, resident, camera, style, blockPixels);
+        (*renderer)->draw(makeDrawList(alone, s, camera, tessellation ? blockPixels : 0.0), style);
         const std::vector<float> depth = readDepth(w, h);
         for (std::size_t p = 0; p < depth.size(); ++p) {
             if (!taken[p] && depth[p] < 1.0f && depth[p] == frame[p]) {
@@ -139,7 +138,6 @@ TEST_P(VisibilityGLTest, CountsComeTwoFramesLateInOrderAndUntakenOnesAreDropped)
     pools.pixelCounts = true;
     auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, header, 16, pools);
     ASSERT_TRUE(renderer.ok()) << renderer.error().message;
-    (*streamer)->onEvict([&renderer](const NodeData& node) { (*renderer)->release(node.id); });
     Camera camera;
     camera.viewportWidth = 160;
     camera.viewportHeight = 90;
@@ -150,10 +148,7 @@ TEST_P(VisibilityGLTest, CountsComeTwoFramesLateInOrderAndUntakenOnesAreDropped)
     (*streamer)->drain();
     (*streamer)->update(camera, 2.0);
     const TerrainStreamer& s = **streamer;
-    auto draw = [&] {
-        (*renderer)->draw(
-            s.selection(), [&s](const NodeId& id) { return s.node(id); }, camera, {}, 1.0);
-    };
+    auto draw = [&] { (*renderer)->draw(makeDrawList(s.selection(), s, camera, tessellation ? 1.0 : 0.0), {}); };
     PixelCounts counts;
     draw();  // frame 1
     EXPECT_FALSE((*renderer)->takePixelCounts(counts));

@@ -213,7 +213,7 @@ Expected<FrameError> measure(ErrorMeter& meter, const TerrainStreamer& streamer,
                              const Camera& camera, double tau)
 {
     return meter.measure(
-        selection, [&streamer](const NodeId& id) { return streamer.node(id); }, camera, tau);
+        makeDrawList(selection, streamer, camera), [&streamer](const NodeId& id) { return streamer.node(id); }, tau);
 }
 
 /// The largest error over a set of points.
@@ -712,13 +712,12 @@ TEST_F(ErrorMeterStaticTest, OracleDrawsTheFewestNodesWithinTau)
         const BruteError brute = bruteForceDecoded(selection, camera, tau);
         EXPECT_LE(brute.maxPixels, tau);
         EXPECT_NEAR(oracle->maxPixels, brute.maxPixels, 1e-6 * brute.maxPixels + 1e-6);
-        auto measured = meter.measure(
-            selection,
-            [&nodes](const NodeId& id) {
-                auto it = nodes.find(id.key());
-                return it == nodes.end() ? NodePtr{} : it->second;
-            },
-            camera, tau);
+        const ResidentNodeLookup oracleNodes = [&nodes](const NodeId& id) {
+            auto it = nodes.find(id.key());
+            return it == nodes.end() ? NodePtr{} : it->second;
+        };
+        auto measured =
+            meter.measure(makeDrawList(selection, oracleNodes, extentOf(header()), camera), oracleNodes, tau);
         ASSERT_TRUE(measured.ok()) << measured.error().message;
         EXPECT_EQ(measured->refined, oracle->refined.size());
         EXPECT_EQ(measured->refinedWithinTau, 0u) << "the oracle refines only nodes over tau";

@@ -100,6 +100,39 @@ TEST(NodeCacheTest, NeverEvictsAGroupWithResidentChildren)
     expectReachable(cache, {NodeId::root(), r0, r00, r1});
 }
 
+/// Every resident node has a slot below the capacity that no other resident node has, its group's four in
+/// quadrant order; the root's is 0; a node not resident has none.
+void expectSlots(const NodeCache& cache, const std::vector<NodeId>& everInserted)
+{
+    std::vector<NodeId> holder(cache.capacity());
+    ASSERT_EQ(cache.slotOf(NodeId::root()), 0);
+    holder[0] = NodeId::root();
+    std::size_t resident = 1;
+    for (const NodeId& parent : everInserted) {
+        const bool in = cache.children(parent) != nullptr;
+        for (int q = 0; q < 4; ++q) {
+            const NodeId child = parent.child(q);
+            const int slot = cache.slotOf(child);
+            if (!in) {
+                EXPECT_EQ(slot, -1) << child.toString() << " is not resident";
+                continue;
+            }
+            ASSERT_GE(slot, 1);
+            ASSERT_LT(static_cast<std::size_t>(slot), cache.capacity());
+            EXPECT_EQ(slot, cache.slotOf(parent.child(0)) + q) << "a group's slots are consecutive";
+            if (holder[static_cast<std::size_t>(slot)] == child) {
+                continue;  // the same parent inserted again later
+            }
+            EXPECT_EQ(holder[static_cast<std::size_t>(slot)].level, 0u)
+                << child.toString() << " shares slot " << slot << " with "
+                << holder[static_cast<std::size_t>(slot)].toString();
+            holder[static_cast<std::size_t>(slot)] = child;
+            ++resident;
+        }
+    }
+    EXPECT_EQ(resident, cache.size());
+}
+
 TEST(NodeCacheTest, RandomWorkloadKeepsCapacityAndReachability)
 {
     std::mt19937 random(7);
@@ -118,8 +151,12 @@ TEST(NodeCacheTest, RandomWorkloadKeepsCapacityAndReachability)
             inserted.push_back(id);
         }
         ASSERT_LE(cache.size(), cache.capacity());
+        if (frame % 50 == 0) {
+            expectSlots(cache, inserted);
+        }
     }
     expectReachable(cache, inserted);
+    expectSlots(cache, inserted);
     EXPECT_GT(cache.evictions(), 0u);
 }
 

@@ -1,4 +1,4 @@
-#include "render/NodeVertexData.h"
+#include "gpudata/NodeVertexData.h"
 
 #include "quadtree/TemplateTriangulation.h"
 

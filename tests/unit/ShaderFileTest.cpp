@@ -1,7 +1,7 @@
-// Shader files with `#include "name"` (render/ShaderProgram.h, readShaderFile): the included text replaces the
+// Shader files with `#include "name"` (gpudata/ShaderFile.h, readShaderFile): the included text replaces the
 // line, #line directives keep each file's own line numbers, and bad includes are errors naming the file and line.
 // The shipped shaders that share the detail layers' code expand to one text each. No GL needed.
-#include "render/ShaderProgram.h"
+#include "gpudata/ShaderFile.h"
 
 #include "TestSupport.h"
 

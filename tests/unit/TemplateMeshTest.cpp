@@ -1,4 +1,4 @@
-#include "render/TemplateMesh.h"
+#include "gpudata/TemplateMesh.h"
 
 #include <gtest/gtest.h>
 #include <cstdlib>

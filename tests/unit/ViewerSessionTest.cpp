@@ -6,6 +6,9 @@
 #include "apps/ViewerSession.h"
 #include "lod/CameraPath.h"
 #include "lod/HeightQuery.h"
+#include "lod/TessellationLevels.h"
+
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -133,6 +136,130 @@ TEST_F(ViewerSessionTest, SettledFramesAreTheSameWhateverTheWorkersAndArrivedFra
         framesBehind += keys(realTime->drawnSelection()) != keys(a->drawnSelection()) ? 1 : 0;
     }
     EXPECT_GT(framesBehind, 0u) << "real time draws what has arrived, not all that is wanted";
+}
+
+TEST_F(ViewerSessionTest, TheDrawListIsTheDrawnSelectionWithItsNodesCacheSlotsAndBlockLevels)
+{
+    for (const bool geomorph : {true, false}) {
+        TengineOptions o = options();
+        o.tessellation = true;
+        o.geomorph = geomorph;
+        auto session = open(o);
+        ASSERT_TRUE(session);
+        const QuadtreeExtent extent = extentOf(session->header());
+        for (const Camera& camera : {lowCamera(300, 400, 900, 45), lowCamera(2000, 1200, 700, 200)}) {
+            session->advance(camera, 0.0, 0.0, Settle::Complete);
+            const DrawList& list = session->drawList();
+            const LodSelection& selection = session->drawnSelection();
+            ASSERT_EQ(list.nodes.size(), selection.nodes.size());
+            EXPECT_EQ(list.blockPixels, session->blockPixels());
+            std::set<int> slots;
+            std::uint64_t triangles = 0;
+            for (std::size_t i = 0; i < list.nodes.size(); ++i) {
+                const DrawnNode& drawn = list.nodes[i];
+                const SelectedNode& selected = selection.nodes[i];
+                ASSERT_EQ(drawn.selected.id, selected.id) << "the selection's order";
+                EXPECT_EQ(drawn.selected.morph, geomorph ? selected.morph : 1.0f);
+                EXPECT_EQ(drawn.node, session->node(selected.id));
+                EXPECT_EQ(drawn.slot, session->streamer().cache().slotOf(selected.id));
+                EXPECT_TRUE(slots.insert(drawn.slot).second) << "two drawn nodes share slot " << drawn.slot;
+                EXPECT_LT(static_cast<std::size_t>(drawn.slot), session->cache().nodes);
+                if (!selected.id.isRoot()) {
+                    EXPECT_EQ(drawn.parent, session->node(selected.id.parent()));
+                    EXPECT_EQ(drawn.parentSlot, session->streamer().cache().slotOf(selected.id.parent()));
+                }
+                // Nothing is hidden without visibility_lod: the blocks' own levels for the blocks' budget.
+                const NodeData& node = *drawn.node;
+                const BlockLevels reference = chooseBlockLevels(
+                    *node.tessellation, extent.box(selected.id, node.zMin, node.zMax), camera, session->blockPixels());
+                EXPECT_EQ(drawn.levels.level, reference.level) << selected.id.toString();
+                EXPECT_EQ(drawn.levels.snap, reference.snap) << selected.id.toString();
+                EXPECT_EQ(drawn.levels.culled, reference.culled) << selected.id.toString();
+                triangles += reference.triangles();
+            }
+            EXPECT_EQ(list.blockTriangles, triangles);
+            EXPECT_GT(list.nodes.size(), 4u);
+        }
+    }
+}
+
+/// Pixel counts as a renderer gives them, some frames late: every node of each list drawn is counted, those whose
+/// south-west corner lies east of `darkEastOf` dark, the others 100 pixels.
+class FakeCounts : public PixelCountSource {
+public:
+    explicit FakeCounts(double darkEastOf) : mDarkEastOf(darkEastOf) {}
+    /// The frame `list` draws.
+    void drew(const DrawList& list)
+    {
+        PixelCounts counts;
+        counts.frame = ++mFrame;
+        counts.camera = list.camera;
+        for (const DrawnNode& drawn : list.nodes) {
+            counts.nodes.push_back(drawn.selected.id);
+            const double east = list.camera.position.x + drawn.selected.cameraRelativeOrigin.x;
+            counts.pixels.push_back(east >= mDarkEastOf ? 0u : 100u);
+        }
+        mPending.push_back(std::move(counts));
+    }
+    bool takePixelCounts(PixelCounts& out) override
+    {
+        if (mPending.empty()) {
+            return false;
+        }
+        out = std::move(mPending.front());
+        mPending.erase(mPending.begin());
+        return true;
+    }
+
+private:
+    double mDarkEastOf;
+    std::uint64_t mFrame = 0;
+    std::vector<PixelCounts> mPending;
+};
+
+TEST_F(ViewerSessionTest, PixelCountsFromWhatDrewTheFramesHideNodesAndDrawTheirBlocksCoarsest)
+{
+    TengineOptions o = options();
+    o.tessellation = true;
+    o.visibilityLod = true;
+    o.visibilityHiddenFrames = 2;
+    auto session = ViewerSession::open(o, TERRAIN_MATERIALS_DIR, SessionUse::View, [](const std::string&) {});
+    ASSERT_TRUE(session.ok()) << session.error().message;
+    GlCapabilities gl;
+    gl.pixelCounts = true;
+    ASSERT_TRUE((*session)->startStreaming(gl).ok());
+    ASSERT_TRUE((*session)->countsPixels());
+    const Camera camera = lowCamera(300, 1200, 900, 90);  // looking east over the hills
+    constexpr double kDarkEastOf = 1600.0;
+    FakeCounts counts(kDarkEastOf);
+    std::size_t before = 0;
+    for (int frame = 0; frame < 8; ++frame) {
+        (*session)->advance(camera, frame * 0.1, 0.0, Settle::Complete, &counts);
+        if (frame == 0) {
+            before = (*session)->drawList().nodes.size();
+        }
+        counts.drew((*session)->drawList());
+    }
+    const DrawList& list = (*session)->drawList();
+    std::size_t hidden = 0;
+    for (const DrawnNode& drawn : list.nodes) {
+        if (!drawn.selected.hidden) {
+            continue;
+        }
+        ++hidden;
+        const double east = camera.position.x + drawn.selected.cameraRelativeOrigin.x;
+        EXPECT_GE(east, kDarkEastOf) << drawn.selected.id.toString() << " showed pixels yet is hidden";
+        for (std::uint8_t level : drawn.levels.level) {
+            EXPECT_EQ(1 << level, kTessellationBlockQuads) << "a hidden node's blocks are drawn at their coarsest";
+        }
+    }
+    EXPECT_GT(hidden, 0u) << "nodes dark for " << o.visibilityHiddenFrames << " counted frames are hidden";
+    EXPECT_LT(list.nodes.size(), before) << "hidden nodes are not refined";
+    std::size_t occluded = 0;
+    for (const DrawnNode& drawn : list.nodes) {
+        occluded += static_cast<std::size_t>(drawn.levels.occludedBlocks);
+    }
+    EXPECT_EQ(list.occludedBlocks, occluded);
 }
 
 TEST_F(ViewerSessionTest, TheViewerAndTheErrorToolHoldTheSameCacheAndSplitTauAlike)

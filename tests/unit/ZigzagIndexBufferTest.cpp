@@ -1,6 +1,6 @@
-#include "render/ZigzagIndexBuffer.h"
+#include "gpudata/ZigzagIndexBuffer.h"
 
-#include "render/TemplateMesh.h"
+#include "gpudata/TemplateMesh.h"
 
 #include <meshoptimizer.h>
 

@@ -1,5 +1,5 @@
 // Template mesh (paper 3.2.9, eq. 3.7) with its skirt ring (3.2.6).
-#include "render/TemplateMesh.h"
+#include "gpudata/TemplateMesh.h"
 
 #include "core/Check.h"
 

@@ -3,7 +3,7 @@
 // tests and the brute-force renderer of RenderBench; the viewer does not use it. Pure CPU code: no GL here.
 #pragma once
 
-#include "render/TemplateMesh.h"
+#include "gpudata/TemplateMesh.h"
 
 #include <cstdint>
 #include <span>

@@ -2,10 +2,10 @@
 // band, SW-NE diagonals (quadtree/TemplateTriangulation.h), skirts (3.2.6) around the ring. The list and
 // the strip are generated separately from the same band plan; the tests check they agree triangle by
 // triangle.
-#include "render/ZigzagIndexBuffer.h"
+#include "gpudata/ZigzagIndexBuffer.h"
 
 #include "core/Check.h"
-#include "render/TemplateMesh.h"
+#include "gpudata/TemplateMesh.h"
 
 #include <algorithm>
 #include <limits>

@@ -1,5 +1,5 @@
 // Geomorph targets (eq. 3.4) and morphing normals of one node, for the template mesh.
-#include "render/NodeVertexData.h"
+#include "gpudata/NodeVertexData.h"
 
 #include "core/Check.h"
 #include "quadtree/ChunkGeometry.h"

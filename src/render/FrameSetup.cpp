@@ -1,0 +1,54 @@
+// The frame setup the terrain renderers share (FrameSetup.h).
+#include "render/FrameSetup.h"
+
+#include <glm/glm.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/mat4x4.hpp>
+
+namespace terrain {
+
+void beginSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky)
+{
+    glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
+    glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
+    glClearDepth(1.0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    if (style.drawSky) {
+        sky.draw(camera, style);
+    }
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
+}
+
+glm::dvec4 validRectangle(const MapHeader& header)
+{
+    const double s = header.sampleSpacing;
+    return {header.originX + header.validX0 * s, header.originY + header.validY0 * s,
+            header.originX + (header.validX0 + header.validWidth - 1.0) * s,
+            header.originY + (header.validY0 + header.validHeight - 1.0) * s};
+}
+
+void setSceneUniforms(const ShaderProgram& program, const Camera& camera, const SceneStyle& style,
+                      const MapHeader& header)
+{
+    program.use();
+    const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
+    glUniformMatrix4fv(program.uniform("uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
+    glUniform1f(program.uniform("uHeightBase"), static_cast<float>(header.heightOffset - camera.position.z));
+    const glm::vec3 sun = glm::normalize(style.sunDirection);
+    glUniform3fv(program.uniform("uSunDirection"), 1, glm::value_ptr(sun));
+    glUniform3fv(program.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
+    glUniform3fv(program.uniform("uAmbient"), 1, glm::value_ptr(style.ambient));
+    glUniform3fv(program.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
+    glUniform1f(program.uniform("uHazeDistance"), style.hazeDistance);
+    glUniform1i(program.uniform("uWireframe"), style.wireframe ? 1 : 0);
+    const glm::dvec4 valid = validRectangle(header);
+    const double slack = 1e-3 * header.sampleSpacing;
+    glUniform4f(program.uniform("uValidRect"), static_cast<float>(valid.x - camera.position.x - slack),
+                static_cast<float>(valid.y - camera.position.y - slack),
+                static_cast<float>(valid.z - camera.position.x + slack),
+                static_cast<float>(valid.w - camera.position.y + slack));
+}
+
+}  // namespace terrain

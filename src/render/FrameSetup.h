@@ -1,0 +1,30 @@
+// What every frame of the terrain renderers (quadtree nodes, clipmap rings) sets up alike: the viewport, the
+// clear, the sky, depth testing, and the uniforms their programs take from the camera, the scene's light and
+// the map (shaders/light.glsl, the valid rectangle).
+#pragma once
+
+#include "core/Camera.h"
+#include "quadtree/MapFormat.h"
+#include "render/ShaderProgram.h"
+#include "render/Sky.h"
+
+#include <glm/vec4.hpp>
+
+namespace terrain {
+
+/// Sets the viewport to the camera's, clears colour and depth, draws the sky (SceneStyle::drawSky), then turns
+/// depth testing on (less) and sets the polygon mode (SceneStyle::wireframe). Face culling is the caller's.
+void beginSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky);
+
+/// The map's input samples (prep's padding left out) as world metres: x0, y0, x1, y1 of the first and last
+/// samples.
+glm::dvec4 validRectangle(const MapHeader& header);
+
+/// Sets the uniforms every terrain program takes from the frame on `program` (which it uses): uViewProjection,
+/// uHeightBase (the map's height offset below the camera), the sun, ambient and haze of `style`, uWireframe,
+/// and uValidRect (validRectangle, camera-relative, grown by a thousandth of a sample so that fragments on the
+/// last sample stay).
+void setSceneUniforms(const ShaderProgram& program, const Camera& camera, const SceneStyle& style,
+                      const MapHeader& header);
+
+}  // namespace terrain
