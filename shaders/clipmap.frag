@@ -38,6 +38,7 @@ uniform vec4 uLayerOrigin[LAYER_COUNT];  // the window origin in repeats (xy) an
 #endif
 #include "detail.glsl"
 #endif
+#include "atmosphere.glsl"
 #include "light.glsl"
 
 out vec4 fragColour;

@@ -50,6 +50,7 @@ flat in vec4 vLayerOrigin[LAYER_COUNT];  // the node's corner in repeats (xy) an
 #endif
 #include "detail.glsl"
 #endif
+#include "atmosphere.glsl"
 #include "light.glsl"
 
 out vec4 fragColour;

@@ -86,6 +86,7 @@ SceneStyle styleFrom(const TengineOptions& o)
     style.drawSky = o.drawSky;
     style.wireframe = o.wireframe;
     style.geomorph = o.geomorph;
+    style.exposure = static_cast<float>(o.exposure);
     return style;
 }
 
@@ -240,10 +241,11 @@ Status openRenderer(Scene& scene, const TengineOptions& o, const std::filesystem
 {
     ViewerSession& session = *scene.session;
     const MapHeader& header = session.header();
+    const LightingModel lighting{o.atmosphere};
     if (session.clipmap()) {
         const ClipmapLayout& layout = *session.clipmapLayout();
         auto renderer = ClipmapRenderer::create(shaders, header, layout, session.materials(),
-                                                session.clipmap()->normalTexelsPerCell());
+                                                session.clipmap()->normalTexelsPerCell(), lighting);
         TERRAIN_TRY(renderer);
         scene.clipmapRenderer = std::move(renderer).value();
         const int finest = layout.window(0).level;
@@ -259,7 +261,7 @@ Status openRenderer(Scene& scene, const TengineOptions& o, const std::filesystem
                                 PoolOptions{session.cache().nodes, o.nodeTextureCompression, session.tessellation(),
                                             o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0,
                                             session.compressedNormalMaps(), session.countsPixels()},
-                                session.materials());
+                                session.materials(), lighting);
     TERRAIN_TRY(renderer);
     scene.renderer = std::move(renderer).value();
     const SlotBytes& b = scene.renderer->slotBytes();

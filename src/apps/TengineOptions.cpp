@@ -571,6 +571,15 @@ std::vector<OptionSpec> makeOptionTable()
                            "Aerial perspective: at distance d the terrain keeps exp(-d / haze_distance) of its own "
                            "colour. 0 turns haze off.",
                            &O::hazeDistance, atLeast(0), "metres"));
+    t.push_back(boolOption("atmosphere", kGroupDisplay,
+                           "A physically based sky and air: sunlight and skylight through an atmosphere of Rayleigh "
+                           "and Mie scattering, aerial perspective with distance (in place of haze_distance and "
+                           "clear_color's haze), HDR and a filmic tone map. false: the gradient sky and haze.",
+                           &O::atmosphere));
+    t.push_back(realOption("exposure", kGroupDisplay,
+                           "With atmosphere = true: what the tone map multiplies radiance by (radiance relative to the "
+                           "sun's irradiance above the air); larger is brighter.",
+                           &O::exposure, openInterval(0, 1e6), ""));
     t.push_back({"clear_color", kGroupDisplay, "Background colour where nothing is drawn (and the haze colour).",
                  "three numbers 'r, g, b', each in [0, 1]",
                  [](std::string_view value, const SetContext&, O& o) {

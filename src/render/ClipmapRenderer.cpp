@@ -53,7 +53,8 @@ ClipmapRenderer::Mesh ClipmapRenderer::makeMesh(const std::vector<GLint>& vertic
 Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::filesystem::path& shaderDirectory,
                                                                    const MapHeader& header, const ClipmapLayout& layout,
                                                                    const MaterialSet* materials,
-                                                                   int normalTexelsPerCell)
+                                                                   int normalTexelsPerCell,
+                                                                   const LightingModel& lighting)
 {
     std::unique_ptr<ClipmapRenderer> r(new ClipmapRenderer(header));
     if (materials) {
@@ -62,6 +63,9 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
         r->mDetail = std::move(layers).value();
     }
     std::vector<std::string> defines = r->mDetail.defines();
+    if (lighting.atmosphere) {
+        defines.emplace_back("ATMOSPHERE");
+    }
     if (normalTexelsPerCell > 0) {
         defines.emplace_back("NORMAL_MAP");
     }
@@ -75,7 +79,7 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
         TERRAIN_TRY(far);
         r->mPrograms.push_back(std::move(far.value()));
     }
-    auto sky = Sky::create(shaderDirectory);
+    auto sky = Sky::create(shaderDirectory, lighting);
     TERRAIN_TRY(sky);
     r->mSky = std::move(sky.value());
     const int n = layout.samples();

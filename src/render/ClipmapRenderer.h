@@ -49,7 +49,8 @@ public:
     static Expected<std::unique_ptr<ClipmapRenderer>> create(const std::filesystem::path& shaderDirectory,
                                                              const MapHeader& header, const ClipmapLayout& layout,
                                                              const MaterialSet* materials = nullptr,
-                                                             int normalTexelsPerCell = 0);
+                                                             int normalTexelsPerCell = 0,
+                                                             const LightingModel& lighting = {});
 
     /// Uploads what `terrain` changed, then clears, draws the sky and rings `firstRing` to the coarsest for
     /// `camera` (layout placed for it by moveTo).

@@ -5,6 +5,9 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
 
+#include <algorithm>
+#include <cmath>
+
 namespace terrain {
 
 void beginSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky)
@@ -29,6 +32,23 @@ glm::dvec4 validRectangle(const MapHeader& header)
             header.originY + (header.validY0 + header.validHeight - 1.0) * s};
 }
 
+void setAtmosphereUniforms(const ShaderProgram& program, const Camera& camera, const SceneStyle& style)
+{
+    const AtmosphereModel& air = style.air;
+    const glm::vec3 rayleigh(air.rayleighScattering);
+    glUniform3fv(program.uniform("uRayleighScattering"), 1, glm::value_ptr(rayleigh));
+    glUniform1f(program.uniform("uRayleighHeight"), static_cast<float>(air.rayleighHeight));
+    glUniform1f(program.uniform("uMieScattering"), static_cast<float>(air.mieScattering));
+    glUniform1f(program.uniform("uMieExtinction"), static_cast<float>(air.mieExtinction));
+    glUniform1f(program.uniform("uMieHeight"), static_cast<float>(air.mieHeight));
+    glUniform1f(program.uniform("uMieAnisotropy"), static_cast<float>(air.mieAnisotropy));
+    glUniform1f(program.uniform("uTopScaleHeights"), static_cast<float>(air.topScaleHeights));
+    glUniform1f(program.uniform("uCameraAltitude"), static_cast<float>(camera.position.z));
+    glUniform1f(program.uniform("uExposure"), style.exposure);
+    const double sunElevation = std::asin(std::clamp(double{glm::normalize(style.sunDirection).z}, -1.0, 1.0));
+    glUniform1f(program.uniform("uSunAirMass"), static_cast<float>(airMass(sunElevation)));
+}
+
 void setSceneUniforms(const ShaderProgram& program, const Camera& camera, const SceneStyle& style,
                       const MapHeader& header)
 {
@@ -43,6 +63,7 @@ void setSceneUniforms(const ShaderProgram& program, const Camera& camera, const 
     glUniform3fv(program.uniform("uHazeColour"), 1, glm::value_ptr(style.hazeColour));
     glUniform1f(program.uniform("uHazeDistance"), style.hazeDistance);
     glUniform1i(program.uniform("uWireframe"), style.wireframe ? 1 : 0);
+    setAtmosphereUniforms(program, camera, style);
     const glm::dvec4 valid = validRectangle(header);
     const double slack = 1e-3 * header.sampleSpacing;
     glUniform4f(program.uniform("uValidRect"), static_cast<float>(valid.x - camera.position.x - slack),

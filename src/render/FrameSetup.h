@@ -20,10 +20,14 @@ void beginSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& s
 /// samples.
 glm::dvec4 validRectangle(const MapHeader& header);
 
+/// Sets the atmosphere's uniforms (shaders/atmosphere.glsl) on `program`, which must be in use: the air's constants
+/// and the exposure of `style`, the camera's altitude (its z). Programs without the atmosphere ignore them.
+void setAtmosphereUniforms(const ShaderProgram& program, const Camera& camera, const SceneStyle& style);
+
 /// Sets the uniforms every terrain program takes from the frame on `program` (which it uses): uViewProjection,
 /// uHeightBase (the map's height offset below the camera), the sun, ambient and haze of `style`, uWireframe,
-/// and uValidRect (validRectangle, camera-relative, grown by a thousandth of a sample so that fragments on the
-/// last sample stay).
+/// the atmosphere's (setAtmosphereUniforms) and uValidRect (validRectangle, camera-relative, grown by a thousandth of a
+/// sample so that fragments on the last sample stay).
 void setSceneUniforms(const ShaderProgram& program, const Camera& camera, const SceneStyle& style,
                       const MapHeader& header);
 

@@ -1,5 +1,7 @@
 #include "render/ShaderContract.h"
 
+#include "light/Atmosphere.h"
+
 #include "render/ShaderProgram.h"
 
 namespace terrain::contract {
@@ -19,6 +21,8 @@ std::vector<std::string> shaderContractDefines()
         define("BLOCK_SNAP_SHIFT", kBlockSnapShift),
         define("BLOCK_SNAP_BITS", kBlockSnapBits),
         define("BLOCK_CULLED_BIT", kBlockCulledBit),
+        define("AERIAL_SAMPLES", kAerialSamples),
+        define("SKY_SAMPLES", kSkySamples),
     };
 }
 

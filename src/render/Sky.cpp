@@ -1,13 +1,19 @@
 #include "render/Sky.h"
 
+#include "render/FrameSetup.h"
+
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
 
 namespace terrain {
 
-Expected<Sky> Sky::create(const std::filesystem::path& shaderDirectory)
+Expected<Sky> Sky::create(const std::filesystem::path& shaderDirectory, const LightingModel& lighting)
 {
-    auto program = ShaderProgram::load(shaderDirectory, "sky");
+    std::vector<std::string> defines;
+    if (lighting.atmosphere) {
+        defines.emplace_back("ATMOSPHERE");
+    }
+    auto program = ShaderProgram::load(shaderDirectory, "sky", defines);
     TERRAIN_TRY(program);
     Sky sky;
     sky.mProgram = std::move(program.value());
@@ -26,6 +32,7 @@ void Sky::draw(const Camera& camera, const SceneStyle& style) const
     const glm::vec3 sun = glm::normalize(style.sunDirection);
     glUniform3fv(mProgram.uniform("uSunDirection"), 1, glm::value_ptr(sun));
     glUniform3fv(mProgram.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
+    setAtmosphereUniforms(mProgram, camera, style);
     glDepthMask(GL_FALSE);
     glDisable(GL_DEPTH_TEST);
     glBindVertexArray(mEmptyVao.name());

@@ -5,6 +5,7 @@
 
 #include "core/Camera.h"
 #include "core/Expected.h"
+#include "light/Atmosphere.h"
 #include "render/GlObjects.h"
 #include "render/ShaderProgram.h"
 
@@ -26,13 +27,25 @@ struct SceneStyle {
     bool drawSky = true;
     bool wireframe = false;
     bool geomorph = true;  ///< false: every node at its own detail, morph factor 1 (shows popping)
+    /// LightingModel::atmosphere: the air's constants, and the exposure the tone map applies to radiance (relative
+    /// to the sun's irradiance above the air).
+    AtmosphereModel air;
+    float exposure = 5.0f;
+};
+
+/// How the scene is lit, fixed when the renderers are made (it picks their programs' variant).
+struct LightingModel {
+    /// A physically based sky and air (light/Atmosphere.h, shaders/atmosphere.glsl: sunlight and skylight through
+    /// the air, aerial perspective, HDR and a filmic tone map); false: the gradient sky, ambient light and
+    /// exponential haze.
+    bool atmosphere = false;
 };
 
 class Sky {
 public:
     Sky() = default;
-    /// Loads the sky program from `shaderDirectory`. Needs a current GL context.
-    static Expected<Sky> create(const std::filesystem::path& shaderDirectory);
+    /// Loads the sky program from `shaderDirectory`, the variant of `lighting`. Needs a current GL context.
+    static Expected<Sky> create(const std::filesystem::path& shaderDirectory, const LightingModel& lighting = {});
     /// Draws the sky for `camera` (leaves depth testing off and depth writes on).
     void draw(const Camera& camera, const SceneStyle& style) const;
 

@@ -57,7 +57,8 @@ void enableNodeConstants(const gl::Buffer& buffer, int texels)
 Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::filesystem::path& shaderDirectory,
                                                                    const MapHeader& header, int vertexCacheSize,
                                                                    const PoolOptions& pools,
-                                                                   const MaterialSet* materials)
+                                                                   const MaterialSet* materials,
+                                                                   const LightingModel& lighting)
 {
     TERRAIN_EXPECTS(pools.slots >= 1, "the pools need at least one slot");
     TERRAIN_EXPECTS(pools.normalMapTexels == 0 || pools.normalMapTexels >= 2, "a normal map has >= 2 texels a side");
@@ -97,7 +98,10 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
                         "tessellation blocks must tile the node");
         r->mBlocks = static_cast<int>(header.chunkSize - 1) / kTessellationBlockQuads;
     }
-    TERRAIN_TRY(r->createPrograms(shaderDirectory, std::move(defines)));
+    if (lighting.atmosphere) {
+        defines.emplace_back("ATMOSPHERE");
+    }
+    TERRAIN_TRY(r->createPrograms(shaderDirectory, std::move(defines), lighting));
     r->createTemplateMesh(vertexCacheSize);
     if (r->mTessellation) {
         r->createPatches();
@@ -106,7 +110,8 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     return r;
 }
 
-Status TerrainRenderer::createPrograms(const std::filesystem::path& shaderDirectory, std::vector<std::string> defines)
+Status TerrainRenderer::createPrograms(const std::filesystem::path& shaderDirectory, std::vector<std::string> defines,
+                                       const LightingModel& lighting)
 {
     auto loadProgram = [&](const std::vector<std::string>& with) {
         return mTessellation
@@ -134,7 +139,7 @@ Status TerrainRenderer::createPrograms(const std::filesystem::path& shaderDirect
             mDetail.setUniforms(program, contract::terrain_units::kDetail);
         }
     }
-    auto sky = Sky::create(shaderDirectory);
+    auto sky = Sky::create(shaderDirectory, lighting);
     TERRAIN_TRY(sky);
     mSky = std::move(sky.value());
     return {};

@@ -82,12 +82,13 @@ public:
     /// zigzag order for `vertexCacheSize`, and allocates the node pools: `pools.slots` nodes' heights,
     /// normals, colour textures and material weights in texture arrays. With
     /// `materials`, their detail textures (render/DetailLayers.h) are drawn over the nodes' colours, blended by
-    /// the nodes' material weights (NodeData::materialWeights). Errors name the file, or the GL limit that the
-    /// slots exceed. Needs a current GL context.
+    /// the nodes' material weights (NodeData::materialWeights). `lighting` picks the light and air's variant. Errors
+    /// name the file, or the GL limit that the slots exceed. Needs a current GL context.
     static Expected<std::unique_ptr<TerrainRenderer>> create(const std::filesystem::path& shaderDirectory,
                                                              const MapHeader& header, int vertexCacheSize,
                                                              const PoolOptions& pools,
-                                                             const MaterialSet* materials = nullptr);
+                                                             const MaterialSet* materials = nullptr,
+                                                             const LightingModel& lighting = {});
 
     /// Clears, draws the sky and every node of `frame` (made for its camera) in one instanced draw (two with
     /// detail layers: nodes beyond every layer's fade go in a second one, drawn by a program without the layers),
@@ -134,7 +135,8 @@ private:
     TerrainRenderer(const MapHeader& header) : mHeader(header) {}
     /// create()'s parts: the programs for `defines`, the template mesh's and the tessellation patches' vertex
     /// arrays, and the pools.
-    Status createPrograms(const std::filesystem::path& shaderDirectory, std::vector<std::string> defines);
+    Status createPrograms(const std::filesystem::path& shaderDirectory, std::vector<std::string> defines,
+                          const LightingModel& lighting);
     void createTemplateMesh(int vertexCacheSize);
     void createPatches();
     Status createPools(const PoolOptions& pools);

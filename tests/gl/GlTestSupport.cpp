@@ -22,16 +22,21 @@ Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::fi
     return buildDetailMap(std::move(field).value(), 90.0, path, materials);
 }
 
+Expected<std::unique_ptr<GlWindow>> openHiddenWindow(int width, int height)
+{
+    WindowOptions options;
+    options.width = width;
+    options.height = height;
+    options.visible = false;
+    return GlWindow::create(options);
+}
+
 Expected<std::unique_ptr<DemoScene>> openDemoScene(int width, int height)
 {
     auto scene = std::make_unique<DemoScene>();
     const std::filesystem::path path = scene->dir / "trinidad.map";
     TERRAIN_TRY(buildDemoMap(path));
-    WindowOptions options;
-    options.width = width;
-    options.height = height;
-    options.visible = false;
-    auto window = GlWindow::create(options);
+    auto window = openHiddenWindow(width, height);
     TERRAIN_TRY(window);
     scene->window = std::move(window).value();
     auto map = MapFile::open(path, ReaderKind::Stream);

@@ -42,6 +42,9 @@ Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::fi
 Status buildDetailMap(HeightField field, double spacing, const std::filesystem::path& path,
                       const std::vector<std::filesystem::path>& materials);
 
+/// An invisible window of `width` x `height` whose GL context is current.
+Expected<std::unique_ptr<GlWindow>> openHiddenWindow(int width, int height);
+
 /// The GL tests' usual start: the bundled terrain built into a scratch map (buildDemoMap), an invisible
 /// window of `width` x `height` whose GL context is current, and the map opened for streaming.
 struct DemoScene {

@@ -114,11 +114,7 @@ class ShaderContractGLTest : public ::testing::Test {
 protected:
     void SetUp() override
     {
-        WindowOptions options;
-        options.width = 64;
-        options.height = 64;
-        options.visible = false;
-        auto window = GlWindow::create(options);
+        auto window = test::openHiddenWindow(64, 64);
         ASSERT_TRUE(window.ok()) << window.error().message;
         mWindow = std::move(window).value();
     }
@@ -133,6 +129,8 @@ const std::vector<std::vector<std::string>> kVariants = {
     {"DETAIL", "LAYER_COUNT 3"},
     {"DETAIL", "LAYER_COUNT 3", "DETAIL_TINT_ONLY"},
     {"NORMAL_MAP", "DETAIL", "LAYER_COUNT 8", "CLIP_TO_VALID"},
+    {"ATMOSPHERE"},
+    {"NORMAL_MAP", "DETAIL", "LAYER_COUNT 3", "ATMOSPHERE"},
     {"PIXEL_COUNTS", "NORMAL_MAP", "DETAIL", "LAYER_COUNT 2"},
 };
 

@@ -1,0 +1,136 @@
+// The air between the viewer, the terrain and the sun, in float: single Rayleigh and Mie scattering in an
+// exponential atmosphere over a flat ground, HDR radiance relative to the sun's irradiance above the air, and the
+// filmic tone map. The same model as src/light/Atmosphere.h, its reference (AtmosphereGLTest compares them);
+// read the equations there. The sums reuse each sample's densities for its sunlight, and the sun's air mass
+// comes once a frame. AERIAL_SAMPLES and SKY_SAMPLES come from the C++/GLSL contract, the constants from
+// AtmosphereModel through these uniforms (FrameSetup.cpp sets them).
+
+uniform vec3 uRayleighScattering;  // per metre at sea level
+uniform float uRayleighHeight;     // scale height, metres
+uniform float uMieScattering;
+uniform float uMieExtinction;
+uniform float uMieHeight;
+uniform float uMieAnisotropy;
+uniform float uTopScaleHeights;
+uniform float uCameraAltitude;  // metres (world z)
+uniform float uExposure;
+uniform float uSunAirMass;  // airMass() of the sun's elevation, per frame
+
+const float kPi = 3.14159265358979;
+
+// (1 - e^-x) / x, its series near 0.
+float decayFactor(float x)
+{
+    return abs(x) < 1e-2 ? 1.0 - x * (0.5 - x / 6.0) : (1.0 - exp(-x)) / x;
+}
+
+float densityIntegral(float altitude, float rise, float len, float scaleHeight)
+{
+    return exp(-altitude / scaleHeight) * len * decayFactor(rise / scaleHeight);
+}
+
+vec3 airTransmittance(float altitude, float rise, float len)
+{
+    float rayleigh = densityIntegral(altitude, rise, len, uRayleighHeight);
+    float mie = densityIntegral(altitude, rise, len, uMieHeight);
+    return exp(-(uRayleighScattering * rayleigh + vec3(uMieExtinction * mie)));
+}
+
+float airMass(float elevation)
+{
+    float degrees = max(elevation, 0.0) * (180.0 / kPi);
+    return 1.0 / (sin(degrees * (kPi / 180.0)) + 0.50572 * pow(degrees + 6.07995, -1.6364));
+}
+
+// Of sunlight at a point where the Rayleigh and Mie densities are `rayleighDensity` and `mieDensity`
+// (exp(-altitude / scale height)).
+vec3 sunTransmittanceAt(float rayleighDensity, float mieDensity)
+{
+    return exp(-(uRayleighScattering * (uRayleighHeight * rayleighDensity) +
+                 vec3(uMieExtinction * uMieHeight * mieDensity)) *
+               uSunAirMass);
+}
+
+vec3 sunTransmittance(float altitude)
+{
+    return sunTransmittanceAt(exp(-altitude / uRayleighHeight), exp(-altitude / uMieHeight));
+}
+
+// The sky's irradiance on a horizontal surface whose sunlight is `sunlight` (sunTransmittance), sun in `sun`.
+vec3 skyIrradiance(vec3 sunlight, vec3 sun)
+{
+    return 0.5 * max(sun.z, 0.0) * (vec3(1.0) - sunlight);
+}
+
+float rayleighPhase(float mu)
+{
+    return 3.0 / (16.0 * kPi) * (1.0 + mu * mu);
+}
+
+float miePhase(float mu, float g)
+{
+    float g2 = g * g;
+    return 3.0 / (8.0 * kPi) * (1.0 - g2) * (1.0 + mu * mu) / ((2.0 + g2) * pow(1.0 + g2 - 2.0 * g * mu, 1.5));
+}
+
+// The in-scattered light of a segment from `altitude`, `len` metres rising `slope` a metre, at cos(view, sun)
+// `mu`: midpoints of u in [0, 1], t = len u^2.
+vec3 inscatter(float altitude, float slope, float len, float mu, int samples)
+{
+    float rayleighPhaseValue = rayleighPhase(mu);
+    float miePhaseValue = miePhase(mu, uMieAnisotropy);
+    // The densities where the segment starts: the densities along it are these times exp(-rise / H).
+    float rayleighStart = exp(-altitude / uRayleighHeight);
+    float mieStart = exp(-altitude / uMieHeight);
+    vec3 sum = vec3(0.0);
+    for (int k = 0; k < samples; ++k) {
+        float u = (float(k) + 0.5) / float(samples);
+        float t = len * u * u;
+        float rise = slope * t;
+        float rayleighFall = exp(-rise / uRayleighHeight);
+        float mieFall = exp(-rise / uMieHeight);
+        // The view ray's optical depth to t (densityIntegral with the falls already taken).
+        float rayleighDepth = rayleighStart * t * (abs(rise) < 1e-2 * uRayleighHeight
+                                                        ? 1.0 - rise / uRayleighHeight * (0.5 - rise / (6.0 * uRayleighHeight))
+                                                        : (1.0 - rayleighFall) * uRayleighHeight / rise);
+        float mieDepth = mieStart * t * (abs(rise) < 1e-2 * uMieHeight
+                                              ? 1.0 - rise / uMieHeight * (0.5 - rise / (6.0 * uMieHeight))
+                                              : (1.0 - mieFall) * uMieHeight / rise);
+        vec3 viewTransmittance = exp(-(uRayleighScattering * rayleighDepth + vec3(uMieExtinction * mieDepth)));
+        float rayleighDensity = rayleighStart * rayleighFall, mieDensity = mieStart * mieFall;
+        vec3 scattering = uRayleighScattering * (rayleighDensity * rayleighPhaseValue) +
+                          vec3(uMieScattering * mieDensity * miePhaseValue);
+        sum += viewTransmittance * scattering * sunTransmittanceAt(rayleighDensity, mieDensity) * (2.0 * len * u);
+    }
+    return sum / float(samples);
+}
+
+// The light of a surface point `relative` metres from the camera, `radiance` where it is, as it reaches the
+// camera: times the air's transmittance, plus what the air scatters in.
+vec3 aerialPerspective(vec3 radiance, vec3 relative, vec3 sun)
+{
+    float len = length(relative);
+    if (len <= 0.0) {
+        return radiance;
+    }
+    vec3 view = relative / len;
+    return radiance * airTransmittance(uCameraAltitude, relative.z, len) +
+           inscatter(uCameraAltitude, view.z, len, dot(view, sun), AERIAL_SAMPLES);
+}
+
+// The sky's radiance in unit direction `view` (the sun's disc not included).
+vec3 skyRadiance(vec3 view, vec3 sun)
+{
+    float elevation = asin(clamp(view.z, -1.0, 1.0));
+    float slope = 1.0 / airMass(elevation);
+    float len = uTopScaleHeights * uRayleighHeight / slope;
+    return inscatter(uCameraAltitude, slope, len, dot(view, sun), SKY_SAMPLES);
+}
+
+// The filmic tone map (Narkowicz's ACES fit) of the exposed radiance, then the display's gamma.
+vec3 toneMap(vec3 radiance)
+{
+    vec3 x = max(radiance * uExposure, vec3(0.0));
+    vec3 mapped = clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+    return pow(mapped, vec3(1.0 / 2.2));
+}

@@ -1,0 +1,82 @@
+// The air between the viewer, the terrain and the sun: single scattering by molecules (Rayleigh) and aerosols
+// (Mie) in an atmosphere whose densities fall exponentially with height, over a flat ground (Bruneton & Neyret
+// 2008's scattering coefficients and phase functions as in Bruneton's 2017 reference implementation; Hillaire
+// 2020's sky and aerial perspective as a model of what to compute). The view ray's transmittance is in closed
+// form (the integral of an exponential density along a straight line); its in-scattered light is a midpoint sum
+// over kAerialSamples points spaced quadratically from the viewer, each lit by the sun through the air above it (the
+// Kasten & Young air mass stands in for the Earth's curvature towards a low sun). The sky's irradiance on the ground is
+// half the sunlight the air above scatters out of the sun's beam. Ozone and multiple scattering are left out.
+//
+// shaders/atmosphere.glsl computes the same in float; this is its reference (AtmosphereGLTest) and what the
+// tests measure the frames against. Units: metres, radiance relative to the sun's irradiance at the top of the
+// atmosphere (1 in every channel). Pure: no GL.
+#pragma once
+
+#include <glm/vec3.hpp>
+
+namespace terrain {
+
+/// The atmosphere's constants (Bruneton's 2017 Earth).
+struct AtmosphereModel {
+    glm::dvec3 rayleighScattering{5.802e-6, 13.558e-6, 33.1e-6};  ///< per metre at sea level (680, 550, 440 nm)
+    double rayleighHeight = 8000.0;                               ///< scale height, metres
+    double mieScattering = 3.996e-6;                              ///< per metre at sea level
+    double mieExtinction = 4.440e-6;                              ///< per metre at sea level
+    double mieHeight = 1200.0;                                    ///< scale height, metres
+    double mieAnisotropy = 0.8;                                   ///< Cornette-Shanks g
+    /// Where the sky's rays stop: this many Rayleigh scale heights above the viewer (the density left is e^-8).
+    double topScaleHeights = 8.0;
+};
+
+/// Midpoints the view ray's in-scattered light is summed over (the terrain's aerial perspective): within 3% of
+/// many samples over every segment of AtmosphereTest (4096 samples as the reference), 12% with 2, 5% with 3.
+inline constexpr int kAerialSamples = 4;
+/// Midpoints of a sky ray: within 2% of many samples (10% with 8).
+inline constexpr int kSkySamples = 16;
+
+/// The integral of exp(-h / scaleHeight) along a straight segment from altitude `altitude` rising `rise` metres
+/// over its `length` metres (rise in [-length, length]): exp(-h0 / H) L (1 - e^-x) / x with x = rise / H.
+double densityIntegral(double altitude, double rise, double length, double scaleHeight);
+
+/// Transmittance (per channel, in [0, 1]) of the air along a straight segment from altitude `altitude`, rising
+/// `rise` over `length` metres.
+glm::dvec3 transmittance(const AtmosphereModel& air, double altitude, double rise, double length);
+
+/// Relative optical path towards the sun at elevation `elevationRadians` (Kasten & Young 1989's air mass: 1 at
+/// the zenith, about 38 at the horizon, held there below it).
+double airMass(double elevationRadians);
+
+/// Transmittance of sunlight reaching altitude `altitude` from the sun at elevation `sunElevation` (radians).
+glm::dvec3 sunTransmittance(const AtmosphereModel& air, double altitude, double sunElevation);
+
+/// The sky's irradiance on a horizontal surface at `altitude` (relative to the sun's irradiance above the air):
+/// half the sunlight the air above scatters out of the beam, sin(elevation) (1 - T_sun) / 2 per channel.
+glm::dvec3 skyIrradiance(const AtmosphereModel& air, double altitude, double sunElevation);
+
+/// Rayleigh's and Cornette-Shanks's phase functions at cos(angle between view and sun) `mu`, per steradian.
+double rayleighPhase(double mu);
+double miePhase(double mu, double g);
+
+/// What the air does to light from a point seen along a segment: the point's light arrives times
+/// `transmittance`, plus `inscattered` (radiance, relative to the sun's irradiance above the air).
+struct AerialPerspective {
+    glm::dvec3 transmittance{1.0};
+    glm::dvec3 inscattered{0.0};
+};
+
+/// The segment from a viewer at `altitude` to `relative` metres away (z up), lit by the sun in unit direction
+/// `sun`, summed over `samples` midpoints (kAerialSamples as the shaders; more for a reference).
+AerialPerspective aerialPerspective(const AtmosphereModel& air, double altitude, const glm::dvec3& relative,
+                                    const glm::dvec3& sun, int samples = kAerialSamples);
+
+/// The sky's radiance seen from `altitude` in unit direction `view` (rays at or below the horizon see the
+/// horizon's), the sun's disc not included: the in-scattered light up to topScaleHeights above the viewer,
+/// with the ray climbing at the air mass's slope so that it leaves the air at the horizon too.
+glm::dvec3 skyRadiance(const AtmosphereModel& air, double altitude, const glm::dvec3& view, const glm::dvec3& sun,
+                       int samples = kSkySamples);
+
+/// The filmic tone map (Narkowicz's fit of ACES) of `exposure` times linear radiance, then the display's gamma
+/// 2.2: what the frames show of a radiance, each channel in [0, 1].
+glm::dvec3 toneMap(const glm::dvec3& radiance, double exposure);
+
+}  // namespace terrain
