@@ -144,16 +144,17 @@ Expected<MemoryPlan> planMemory(const MapHeader& header, const MemoryRequest& re
              formatBytes(budget));
     }
     if (need.bytes(budget, plan.threads) > budget) {
-        // The least budget that covers what it itself needs (the need grows by a quarter of the budget, so
-        // following the need converges), rounded up to a MiB: following the advice works.
-        std::uint64_t advice = need.bytes(budget, plan.threads);
+        // The least budget in whole MiB that covers what it itself needs: the need grows by about a quarter of
+        // the budget, so following the need (rounded up to a MiB each time, as the band's rows step with the
+        // budget) converges. Following the advice works.
+        auto roundUp = [](std::uint64_t bytes) { return (bytes + (std::uint64_t{1} << 20) - 1) >> 20 << 20; };
+        std::uint64_t advice = roundUp(need.bytes(budget, plan.threads));
         for (int k = 0; k < 200 && need.bytes(advice, plan.threads) > advice; ++k) {
-            advice = need.bytes(advice, plan.threads);
+            advice = roundUp(need.bytes(advice, plan.threads));
         }
         if (!request.forceOutOfCore) {
-            advice = std::min(advice, inMemoryBytes);  // the whole build in memory may need less
+            advice = std::min(advice, roundUp(inMemoryBytes));  // the whole build in memory may need less
         }
-        advice = (advice + (std::uint64_t{1} << 20) - 1) >> 20 << 20;
         return makeError("the memory budget of ", formatBytes(budget), " is too small for a ", width, "x", height,
                          " input even out of core on one thread: --memory ", advice >> 20, "M is enough");
     }

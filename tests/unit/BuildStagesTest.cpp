@@ -159,7 +159,7 @@ TEST(BuildStagesTest, OutOfCorePlanTakesTheThreadsThatFitAndAdvisesTheLeastBudge
     struct Case {
         int width, height, chunk, threads;
     };
-    const Case cases[] = {{1000, 900, 17, 2}, {8193, 8193, 65, 8}, {300, 20000, 129, 4}};
+    const Case cases[] = {{1000, 900, 17, 2}, {8193, 8193, 65, 8}, {20000, 300, 33, 3}, {300, 20000, 129, 4}};
     for (const Case& c : cases) {
         SCOPED_TRACE(std::to_string(c.width) + "x" + std::to_string(c.height) + " on " + std::to_string(c.threads));
         const MapHeader header = headerOf(c.width, c.height, c.chunk);
