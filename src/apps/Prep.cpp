@@ -155,6 +155,10 @@ int main(int argc, char** argv)
         bar.finish();
         std::fprintf(stderr, "prep: warning: %.*s\n", static_cast<int>(message.size()), message.data());
     };
+    args->build.note = [&](std::string_view message) {
+        bar.finish();
+        std::fprintf(stderr, "prep: note: %.*s\n", static_cast<int>(message.size()), message.data());
+    };
     const std::string description = field.description;
     auto report = buildMap(**source, args->build, output);
     bar.finish();
@@ -198,7 +202,11 @@ int main(int argc, char** argv)
                 h.detailRecipe ? h.detailRecipe->describe().c_str() : "no recipe", report->leafDetailSeconds);
     std::printf("  time      %.2f s, %.1f million input samples per second (%d threads)\n", report->seconds,
                 inputSamples / report->seconds / 1e6, report->threads);
-    std::printf("  memory    peak %s, %s (budget %s)\n", formatBytes(peakResidentBytes()).c_str(),
+    std::printf("  memory    peak %s, %s (budget %s", formatBytes(peakResidentBytes()).c_str(),
                 report->outOfCore ? "out of core" : "in memory", formatBytes(report->memoryBudget).c_str());
+    if (report->outOfCore) {
+        std::printf("; anonymous memory estimated at %s", formatBytes(report->estimatedBytes).c_str());
+    }
+    std::printf(")\n");
     return 0;
 }

@@ -845,11 +845,15 @@ Expected<HeightField> ElevationRaster::readAll()
 
 void configureGdalReading(std::uint64_t memoryBudget, int threads)
 {
-    GDALSetCacheMax64(static_cast<GIntBig>(
-        std::clamp<std::uint64_t>(memoryBudget / 8, std::uint64_t{16} << 20, std::uint64_t{256} << 20)));
+    GDALSetCacheMax64(static_cast<GIntBig>(gdalCacheBytesFor(memoryBudget)));
     if (CPLGetConfigOption("GDAL_NUM_THREADS", nullptr) == nullptr) {
         CPLSetConfigOption("GDAL_NUM_THREADS", std::to_string(std::max(threads, 1)).c_str());
     }
+}
+
+std::uint64_t gdalCacheBytesFor(std::uint64_t memoryBudget)
+{
+    return std::clamp<std::uint64_t>(memoryBudget / 8, std::uint64_t{16} << 20, std::uint64_t{256} << 20);
 }
 
 Expected<HeightField> readGdalHeightField(std::span<const std::filesystem::path> inputs,

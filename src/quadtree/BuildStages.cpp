@@ -3,6 +3,7 @@
 #include "quadtree/BuildStages.h"
 
 #include "core/Memory.h"
+#include "heightfield/GdalRaster.h"
 #include "quadtree/PifsCodec.h"
 #include "quadtree/QuantizedGrid.h"
 
@@ -63,42 +64,84 @@ int splitLevel(const MapHeader& header)
 
 namespace {
 
-/// The out-of-core build's memory for a budget (its bands grow with it) on a number of threads.
+/// The anonymous memory of prep with no input to speak of: the code's heap (GDAL, PROJ, the material and the
+/// detail synthesizer). Measured: prep's anonymous peak on tests/data/etopo5_karakoram_129.png out of core,
+/// 6 MiB (RssAnon sampled every 50 ms).
+constexpr std::uint64_t kProcessBaseBytes = std::uint64_t{6} << 20;
+/// Bytes per sample of a band's window while a pass holds it: the floats kept (4), the reader's own copy (4:
+/// ElevationRaster::readRows reads into a buffer before flagging no-data) and the fill's no-data mask (1).
+constexpr std::uint64_t kBandBytesPerSample = 9;
+/// glibc's largest dynamic mmap threshold (64-bit): a freed block below it stays in the heap. The reader's copy
+/// of a band is allocated and freed once a band. Measured on an 8193^2 float32 UTM GeoTIFF: the copy of the
+/// last, shorter band (30 MiB at --memory 256M, 10 MiB at 400M) stayed resident to the end, the full bands'
+/// (43 and 67 MiB) did not; on a 4097^2 crop of it at 160M, whose full band's copy (26 MiB) stays, a pass
+/// held three band-sized buffers at once (104 MiB).
+constexpr std::uint64_t kAllocatorKeepsBelow = std::uint64_t{32} << 20;
+/// A worker thread's bytes per sample of its subtree's square (borders included): its encoded nodes, node
+/// windows, textures and detail synthesis. Measured over the node phase: a second thread added 10 MiB on a
+/// 7263x9104 GeoTIFF reprojected from geographic at --memory 400M (subtrees of 2176^2 samples with their
+/// borders: 2.2 bytes a sample), and 2.2 to 2.8 MiB on the 8193^2 one (1152^2: 1.7 to 2.2 bytes a sample).
+constexpr double kThreadBytesPerSample = 2.5;
+
+/// The out-of-core build's anonymous memory at its peak, for a budget (its band grows with it) and a number
+/// of threads: the larger of the passes (the band's window at kBandBytesPerSample and a copy the allocator
+/// keeps) and the node building (the copy kept and the worker threads' subtrees), over the process's base, GDAL's block
+/// cache when the source reads through it, the per-map structures (a byte and the roughness sums per leaf, the far
+/// fill's block means, the coarse lattice) and the reader's copies the allocator keeps.
 class OutOfCoreNeed {
 public:
-    OutOfCoreNeed(const MapHeader& header, std::uint64_t fixedBytes, int coarseShift)
+    OutOfCoreNeed(const MapHeader& header, std::uint64_t fixedBytes, int coarseShift, bool gdalCache)
         : mCells(static_cast<int>(header.chunkSize) - 1),
-          mRowBytes(std::uint64_t{header.validWidth} * 6),
-          mFixedBytes(fixedBytes +
+          mWidth(header.validWidth),
+          mHeight(header.validHeight),
+          mGdalCache(gdalCache),
+          mFixedBytes(kProcessBaseBytes + fixedBytes +
                       std::uint64_t{header.validWidth} * header.validHeight / (kFillBlock * kFillBlock) * 16 +
-                      QuantizedGrid::coarseLatticeBytes(static_cast<std::uint32_t>(header.gridSize()), coarseShift) +
-                      (std::uint64_t{4} << 20))
+                      QuantizedGrid::coarseLatticeBytes(static_cast<std::uint32_t>(header.gridSize()), coarseShift))
     {
-        const std::uint64_t square = std::min<std::uint64_t>(header.gridSize(), 4096 + 2 * mCells);
-        mPerThread = square * square * 6;  // its codes, encoded nodes and textures
+        const auto split = static_cast<std::uint32_t>(splitLevel(header));
+        const std::uint64_t side = std::min<std::uint64_t>(
+            header.gridSize(), (std::uint64_t{header.chunkSize - 1} << (header.levels - 1 - split)) +
+                                   2 * static_cast<std::uint64_t>(mCells));
+        mPerThread = static_cast<std::uint64_t>(kThreadBytesPerSample * static_cast<double>(side * side));
     }
 
-    /// The rows a band produces: a quarter of the budget for the band (samples, fill and mask bytes), at
-    /// least a leaf row and 256 rows.
+    /// The rows a band produces: a quarter of the budget for the band at 6 bytes a sample, at least a leaf row
+    /// and 256 rows.
     int coreRowsFor(std::uint64_t budget) const
     {
-        const std::uint64_t bandRows = std::max<std::uint64_t>(budget / 4 / mRowBytes, 1);
+        const std::uint64_t bandRows = std::max<std::uint64_t>(budget / 4 / (mWidth * 6), 1);
         const int leafRowsPerBand = static_cast<int>(
             std::max<std::uint64_t>({bandRows > 2 * kBandMargin ? (bandRows - 2 * kBandMargin) / mCells : 0,
                                      static_cast<std::uint64_t>(256 / mCells), std::uint64_t{1}}));
         return leafRowsPerBand * mCells;
     }
 
-    /// Bytes the build needs within `budget` on `threads` threads.
+    /// Bytes the build holds at its peak within `budget` on `threads` threads.
     std::uint64_t bytes(std::uint64_t budget, int threads) const
     {
-        return (static_cast<std::uint64_t>(coreRowsFor(budget)) + 2 * kBandMargin) * mRowBytes +
-               static_cast<std::uint64_t>(threads) * mPerThread + mFixedBytes;
+        const std::uint64_t coreRows = static_cast<std::uint64_t>(coreRowsFor(budget));
+        const std::uint64_t windowRows = std::min<std::uint64_t>(mHeight, coreRows + 2 * kBandMargin);
+        const std::uint64_t lastCore = mHeight - (mHeight - 1) / coreRows * coreRows;
+        // The reader's copies in bytes: a full band's, and the last band's in the first pass (no margin) and the
+        // second (its margin above it).
+        const std::uint64_t fullCopy = windowRows * mWidth * 4;
+        const std::uint64_t lastCopy = std::min<std::uint64_t>(mHeight, lastCore + kBandMargin) * mWidth * 4;
+        const std::uint64_t firstLastCopy = lastCore * mWidth * 4;
+        std::uint64_t kept = fullCopy < kAllocatorKeepsBelow ? fullCopy : 0;
+        for (std::uint64_t copy : {lastCopy, firstLastCopy}) {
+            kept = std::max(kept, copy < kAllocatorKeepsBelow ? copy : 0);
+        }
+        const std::uint64_t passes = windowRows * mWidth * kBandBytesPerSample + kept;
+        const std::uint64_t nodes = kept + static_cast<std::uint64_t>(threads) * mPerThread;
+        return mFixedBytes + (mGdalCache ? gdalCacheBytesFor(budget) : 0) + std::max(passes, nodes);
     }
 
 private:
     int mCells;
-    std::uint64_t mRowBytes;
+    std::uint64_t mWidth;
+    std::uint64_t mHeight;
+    bool mGdalCache;
     std::uint64_t mFixedBytes;
     std::uint64_t mPerThread = 0;
 };
@@ -132,7 +175,7 @@ Expected<MemoryPlan> planMemory(const MapHeader& header, const MemoryRequest& re
     if (plan.inMemory) {
         return plan;
     }
-    const OutOfCoreNeed need(header, fixedBytes, plan.coarseShift);
+    const OutOfCoreNeed need(header, fixedBytes, plan.coarseShift, request.gdalCache);
     plan.coreRows = need.coreRowsFor(budget);
     // Each thread holds a subtree's square: as many as fit, saying so when fewer than asked.
     while (plan.threads > 1 && need.bytes(budget, plan.threads) > budget) {
@@ -158,6 +201,7 @@ Expected<MemoryPlan> planMemory(const MapHeader& header, const MemoryRequest& re
         return makeError("the memory budget of ", formatBytes(budget), " is too small for a ", width, "x", height,
                          " input even out of core on one thread: --memory ", advice >> 20, "M is enough");
     }
+    plan.estimatedBytes = need.bytes(budget, plan.threads);
     return plan;
 }
 

@@ -37,12 +37,13 @@ int splitLevel(const MapHeader& header);
 
 /// What the memory plan depends on besides the map's header.
 struct MemoryRequest {
-    std::uint64_t budget = 0;     ///< bytes the build may hold (effectiveMemoryBudget), > 0
-    int threads = 1;              ///< worker threads asked for, >= 1
-    bool sourceHeld = false;      ///< the source holds its field: an in-memory build needs no copy of it
-    bool roughness = false;       ///< a roughness grid is measured (80 bytes per leaf)
-    bool pifs = false;            ///< fractal coding, which builds in memory only
-    bool forceOutOfCore = false;  ///< BuildOptions::forceOutOfCore
+    std::uint64_t budget = 0;            ///< bytes the build may hold (effectiveMemoryBudget), > 0
+    int threads = 1;                     ///< worker threads asked for, >= 1
+    bool sourceHeld = false;             ///< the source holds its field: an in-memory build needs no copy of it
+    bool roughness = false;              ///< a roughness grid is measured (80 bytes per leaf)
+    bool pifs = false;                   ///< fractal coding, which builds in memory only
+    bool forceOutOfCore = false;         ///< BuildOptions::forceOutOfCore
+    bool gdalCache = false;       ///< the source reads through GDAL's block cache (gdalCacheBytesFor the budget)
 };
 
 /// How the input and the grid pass through memory (docs/design.md, "Out-of-core prep").
@@ -51,12 +52,16 @@ struct MemoryPlan {
     int coreRows = 0;      ///< out of core: rows a band produces, a multiple of the chunk's cells; 0 in memory
     int threads = 1;       ///< worker threads: those asked for, fewer out of core where the budget holds no more
     int coarseShift = 0;   ///< out of core: the coarse lattice's shift kept in memory (QuantizedGrid::createMapped)
+    std::uint64_t estimatedBytes = 0;  ///< out of core: the anonymous memory expected at the peak, bytes
 };
 
 /// Plans a build of the map `header` describes (chunkSize, levels, validWidth x validHeight: the input's
 /// size): in memory when the input (unless held), its 2-byte codes, the grid and 1 byte (+80 with roughness)
-/// per leaf fit request.budget and out of core is not forced; otherwise bands of a quarter of the budget and
-/// a subtree's square per thread, on as many of the threads asked for as fit. Errors: fractal coding that
+/// per leaf fit request.budget and out of core is not forced; otherwise bands of a quarter of the budget (at
+/// 6 bytes a sample), on as many of the threads asked for as the estimated peak allows: the process's base,
+/// the reader's cache, the per-map structures, what the allocator keeps of a band, and the larger of the band
+/// (9 bytes a sample while read) and 2.5 bytes a sample of each thread's subtree (BuildStages.cpp gives how each
+/// term was measured). Errors: fractal coding that
 /// does not fit in memory, and a budget too small even out of core on one thread (naming the least --memory
 /// that is enough, in MiB). `warn` is told when the plan builds on fewer threads than asked.
 Expected<MemoryPlan> planMemory(const MapHeader& header, const MemoryRequest& request,

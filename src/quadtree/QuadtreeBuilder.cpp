@@ -1027,10 +1027,17 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     // Memory: the whole input and grid when they fit the budget, else bands of rows and the grid in a
     // scratch file next to the output, released region by region (docs/design.md, "Out-of-core prep").
     const std::uint64_t budget = effectiveMemoryBudget(options);
-    auto memory = planMemory(
-        header, {budget, options.threads, source.held() != nullptr, roughness, pifs, options.forceOutOfCore}, warn);
+    auto memory = planMemory(header,
+                             {budget, options.threads, source.held() != nullptr, roughness, pifs,
+                              options.forceOutOfCore, source.readsThroughGdalCache()},
+                             warn);
     TERRAIN_TRY(memory);
     const int threads = memory->threads;
+    if (!memory->inMemory && options.note) {
+        options.note("out of core in bands of " + std::to_string(memory->coreRows) + " rows on " +
+                     std::to_string(threads) + " thread(s), anonymous memory estimated at " +
+                     formatBytes(memory->estimatedBytes) + " (budget " + formatBytes(budget) + ")");
+    }
     InputRows input{source, nullptr, {memory->inMemory, memory->coreRows, {}}};
     HeightField whole;
     if (memory->inMemory) {
@@ -1066,6 +1073,7 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     report.outOfCore = !memory->inMemory;
     report.memoryBudget = budget;
     report.threads = threads;
+    report.estimatedBytes = memory->estimatedBytes;
     whole = {};  // the grid holds everything from here on
 
     if (header.quantizerBin > 1) {

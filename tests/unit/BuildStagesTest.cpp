@@ -3,6 +3,7 @@
 // brute-force reference or the documented contract.
 #include "quadtree/BuildStages.h"
 
+#include "heightfield/GdalRaster.h"
 #include "quadtree/QuantizedGrid.h"
 
 #include <gtest/gtest.h>
@@ -201,6 +202,16 @@ TEST(BuildStagesTest, OutOfCorePlanTakesTheThreadsThatFitAndAdvisesTheLeastBudge
             EXPECT_EQ(plan->coreRows % cells, 0) << "bands of whole leaf rows";
             EXPECT_GE(plan->coreRows, std::max(cells, 256 / cells * cells));
             EXPECT_LE(plan->coarseShift, QuantizedGrid::kTileShift);
+            EXPECT_GT(plan->estimatedBytes, 0u);
+            EXPECT_LE(plan->estimatedBytes, mib << 20) << "the plan keeps within the budget";
+            // Reading through GDAL adds its block cache, as configureGdalReading sizes it for the budget.
+            MemoryRequest gdal = request;
+            gdal.threads = plan->threads;
+            gdal.gdalCache = true;
+            auto throughGdal = planMemory(header, gdal, [](auto&) {});
+            if (throughGdal.ok() && throughGdal->threads == plan->threads) {
+                EXPECT_EQ(throughGdal->estimatedBytes - plan->estimatedBytes, gdalCacheBytesFor(mib << 20));
+            }
         }
         EXPECT_EQ(lastThreads, c.threads) << "2 GiB holds every thread";
     }
