@@ -1,5 +1,6 @@
 #include "apps/ErrorCommand.h"
 
+#include "apps/CommandLine.h"
 #include "apps/ViewerSession.h"
 #include "core/Parse.h"
 #include "lod/CameraPath.h"
@@ -82,80 +83,72 @@ Expected<ErrorCommand> parseErrorCommand(const std::filesystem::path& mapFile, c
     std::vector<std::string> viewerArgs;
     std::optional<double> tau, fov, fps;
     std::optional<std::pair<int, int>> size;
-    for (std::size_t i = 0; i < args.size(); ++i) {
-        const std::string& arg = args[i];
-        if (arg.starts_with("--set=")) {  // tengine's other spelling of --set key=value
-            viewerArgs.push_back(arg);
-            continue;
-        }
-        if (!arg.starts_with("--")) {
-            if (!arg.ends_with(".cfg")) {
-                return makeError("'", arg, "' is neither a CONFIG.cfg nor an option (the map comes first)");
-            }
-            viewerArgs.push_back(arg);
-            continue;
-        }
-        if (arg == "--levels") {
-            command.levels = true;
-            continue;
-        }
-        if (arg == "--pops") {
-            command.pops = true;
-            continue;
-        }
-        if (arg == "--oracle") {
-            command.oracle = true;
-            continue;
-        }
-        if (arg.starts_with("--oracle=")) {
-            auto blocks = parseNumberIn("--oracle", arg.substr(9), 1.0, 64.0);
-            TERRAIN_TRY(blocks);
-            if (*blocks != std::floor(*blocks)) {
-                return makeError("--oracle=B: '", arg.substr(9), "' is not a whole number of blocks");
-            }
-            command.oracle = true;
-            command.oracleBlocks = static_cast<int>(*blocks);
-            continue;
-        }
-        if (i + 1 >= args.size()) {
-            return makeError(arg, " needs a value");
-        }
-        const std::string& value = args[++i];
-        auto number = [&](double lo, double hi) { return parseNumberIn(arg, value, lo, hi); };
-        if (arg == "--set") {
-            viewerArgs.push_back(arg);
-            viewerArgs.push_back(value);
-        } else if (arg == "--camera") {
-            Camera camera;
-            auto parsed = parseCameraArgument(value, camera);
-            TERRAIN_TRY(parsed);
-            command.camera = camera;
-        } else if (arg == "--path") {
-            command.path = value;
-        } else if (arg == "--tau") {
-            auto v = number(0.01, 1000);
+    auto number = [](std::optional<double>& target, double lo, double hi) {
+        return [&target, lo, hi](const std::string& value) -> Status {
+            auto v = numberIn(value, lo, hi);
             TERRAIN_TRY(v);
-            tau = *v;
-        } else if (arg == "--fov") {
-            auto v = number(1, 179);
-            TERRAIN_TRY(v);
-            fov = *v;
-        } else if (arg == "--fps") {
-            auto v = number(0.001, 1000);
-            TERRAIN_TRY(v);
-            fps = *v;
-        } else if (arg == "--size") {
-            unsigned w = 0, h = 0;
-            char tail = 0;
-            if (std::sscanf(value.c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 16384 ||
-                h > 16384) {
-                return makeError("--size: '", value, "' is not WIDTHxHEIGHT (16 to 16384 pixels each)");
-            }
-            size = {static_cast<int>(w), static_cast<int>(h)};
-        } else {
-            return makeError("unknown option '", arg, "'");
+            target = *v;
+            return {};
+        };
+    };
+    auto set = [](bool& target) {
+        return [&target](const std::string&) -> Status {
+            target = true;
+            return {};
+        };
+    };
+    CommandLine line;
+    line.flags = {
+        {"--set", "key=value", "a viewer option, in order with the configs",
+         [&](const std::string& value) -> Status {
+             viewerArgs.push_back("--set");
+             viewerArgs.push_back(value);
+             return {};
+         }},
+        {"--camera", "X,Y,Z,YAW,PITCH", "one camera (metres and degrees)",
+         [&](const std::string& value) -> Status {
+             Camera camera;
+             TERRAIN_TRY(parseCameraArgument(value, camera));
+             command.camera = camera;
+             return {};
+         }},
+        {"--path", "FILE.path", "a camera path",
+         [&](const std::string& value) -> Status {
+             command.path = value;
+             return {};
+         }},
+        {"--tau", "T", "the screen-space error allowed (pixels)", number(tau, 0.01, 1000)},
+        {"--fov", "DEG", "vertical field of view (degrees)", number(fov, 1, 179)},
+        {"--fps", "F", "frames per second of the path", number(fps, 0.001, 1000)},
+        {"--size", "WxH", "the window (pixels)",
+         [&](const std::string& value) -> Status {
+             auto parsed = sizeIn(value, 16, 16384);
+             TERRAIN_TRY(parsed);
+             size = *parsed;
+             return {};
+         }},
+        {"--levels", "", "bounds against measured errors per level", set(command.levels)},
+        {"--pops", "", "the pops between consecutive frames", set(command.pops)},
+        {"--oracle", "", "the fewest whole nodes within tau; =B: B x B blocks",
+         [&](const std::string& value) -> Status {
+             command.oracle = true;
+             if (!value.empty()) {
+                 auto blocks = wholeNumberIn(value, 1, 64, "blocks");
+                 TERRAIN_TRY(blocks);
+                 command.oracleBlocks = static_cast<int>(*blocks);
+             }
+             return {};
+         },
+         true},
+    };
+    line.positional = [&](const std::string& argument) -> Status {
+        if (!argument.ends_with(".cfg")) {
+            return makeError("'", argument, "' is neither a CONFIG.cfg nor an option (the map comes first)");
         }
-    }
+        viewerArgs.push_back(argument);
+        return {};
+    };
+    TERRAIN_TRY(line.parse(args));
     if (command.pops && command.path.empty()) {
         return makeError("--pops compares consecutive frames: it needs --path");
     }

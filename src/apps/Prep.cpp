@@ -1,5 +1,6 @@
 // prep: height field -> .map (paper 4.4.1). Argument parsing and reporting only; the work is buildMap().
 #include "apps/DataDirectories.h"
+#include "apps/PrepArguments.h"
 #include "core/Memory.h"
 #include "core/OutputGuard.h"
 #include "core/ParallelFor.h"
@@ -31,246 +32,11 @@ namespace {
 
 using namespace terrain;
 
-constexpr const char* kUsage = R"(usage: prep <heightfield>... [options]
-
-Builds a terrain map (.map) from elevation: any raster GDAL reads (GeoTIFF of any sample type, SRTM .hgt,
-ESRI .asc, USGS DEM, VRT, ...), PNG (8/16-bit gray), VTP .bt, Terragen .ter or raw 16-bit. Several files,
-or one directory, are tiles of one mosaic: they must share CRS, resolution and grid. Geographic
-(longitude/latitude) rasters are reprojected to the UTM zone of their centre, or to --srs.
-
-  -t FILE              imagery over the terrain: any RGB(A) raster GDAL reads with a CRS is aligned by its
-                       coordinates (the generated colours show where it does not cover); a PNG without
-                       one is stretched over the input (default: colours generated from height and slope)
-  --srs CRS            projected CRS to reproject the elevation to (EPSG:32613, WKT, PROJ string)
-  -w FILE.png          weight map for pruning: white keeps the full resolution, black only the root (3.2.13)
-  -h METRES            sample spacing, when the file gives none (default 1)
-  -v SCALE             vertical scale (metres per file unit), when the file gives none (default 1)
-  -o FILE.map          output (default: the input's name with the extension .map)
-  --offset METRES      added to every height after -v (default 0)
-  --chunk N            samples per node side, 2^k+1 (default 65)
-  --max-error METRES   L-infinity bound on stored heights; 0 = lossless (default 0)
-  --height-codec C     residual: Kobbelt prediction from the parent plus residuals, lossless or within
-                       --max-error (default); pifs: seed 003's fractal code of node interiors (lossy, its
-                       measured error stored; in memory only, no --max-error)
-  --texture-size T     texels per node side, 2^k+1 (default: the chunk size)
-  --threads N          worker threads (default: all cores)
-  --memory SIZE        memory prep may use, e.g. 256M, 2G (suffixes K, M, G); inputs larger than that are
-                       built out of core, streamed in bands with the height grid in a scratch file next to
-                       the output, giving the same map (default: half the memory available)
-  --out-of-core        build out of core even when the input fits --memory
-  --raw-size WxH       size of a raw 16-bit input (required for .raw/.r16/.bin)
-  --raw-signed         raw samples are signed 16-bit (default unsigned)
-  --raw-big-endian     raw samples are big-endian (default little-endian)
-  --nodata V           treat the file value V as no-data (filled from neighbours), compared in the file's
-                       sample type (the value gdalinfo prints works); inf or -inf for infinite samples
-  --clamp LO,HI        heights (metres, after -v and --offset) below LO become LO, above HI become HI
-  --material FILE.mat  material the viewer's detail synthesis adds below the static leaves; repeat for a
-                       set, the first is the ground (default: the viewer's default, the built-in
-                       grass.mat alone)
-  --no-material        no material: the detail below the leaves is subdivision only (the viewer's
-                       detail_add_material = false)
-  --no-roughness       the detail errors assume the viewer does not continue the terrain's roughness
-                       below the leaves (detail_roughness = false); the roughness is measured and
-                       stored either way
-  --detail-scheme S    subdivision of the synthesized detail: kobbelt, bilinear or catmull-clark
-                       (default kobbelt)
-  --detail-factor W    Kobbelt's omega in [0, 2]: 0 linear, 1 Kobbelt (default 1)
-  --help               this text
-
-The map stores the estimated error of the detail synthesized below its static leaves (paper 3.4.1), so
-the viewer refines past them, and what it was estimated for (materials, scheme, factor, roughness): the viewer warns
-when its own detail_* options differ. The defaults are the viewer's defaults.
-)";
-
-struct Arguments {
-    std::vector<std::filesystem::path> inputs;
-    std::optional<std::filesystem::path> output;
-    BuildOptions build;
-    HeightFieldReadOptions read;
-    DetailSettings detail;
-    bool detailFactorGiven = false;
-    std::vector<std::string> warnings;             ///< about options that have no effect
-    std::vector<std::filesystem::path> materials;  ///< empty: the viewer's default (built-in grass.mat)
-    bool noMaterial = false;                       ///< --no-material
-    bool noRoughness = false;                      ///< --no-roughness
-};
-
-Expected<Arguments> parseArguments(int argc, char** argv)
-{
-    Arguments args;
-    args.build.threads = defaultThreadCount();
-    std::vector<std::string> positional;
-    for (int i = 1; i < argc; ++i) {
-        std::string arg = argv[i];
-        auto value = [&]() -> Expected<std::string> {
-            if (i + 1 >= argc) {
-                return makeError(arg, " needs a value");
-            }
-            return std::string(argv[++i]);
-        };
-        auto number = [&]() -> Expected<double> {
-            auto text = value();
-            TERRAIN_TRY(text);
-            if (arg == "--nodata" && (*text == "inf" || *text == "+inf" || *text == "-inf")) {
-                // Infinite samples marking missing data.
-                return text->front() == '-' ? -std::numeric_limits<double>::infinity()
-                                            : std::numeric_limits<double>::infinity();
-            }
-            auto parsed = parseDouble(*text);
-            if (!parsed.ok()) {
-                return makeError(arg, ": ", parsed.error().message);
-            }
-            return parsed;
-        };
-        auto integer = [&]() -> Expected<int> {
-            auto text = value();
-            TERRAIN_TRY(text);
-            auto parsed = parseInteger(*text);
-            if (!parsed.ok() || *parsed < -(1 << 30) || *parsed > (1 << 30)) {
-                return makeError(arg, ": '", *text, "' is not an integer");
-            }
-            return static_cast<int>(*parsed);
-        };
-        if (arg == "-t" || arg == "-w" || arg == "-o") {
-            auto path = value();
-            TERRAIN_TRY(path);
-            (arg == "-t" ? args.build.texture : arg == "-w" ? args.build.weights : args.output) = *path;
-        } else if (arg == "--srs") {
-            auto text = value();
-            TERRAIN_TRY(text);
-            args.read.targetSrs = *text;
-        } else if (arg == "--height-codec") {
-            auto text = value();
-            TERRAIN_TRY(text);
-            if (*text == "residual") {
-                args.build.heightCoding = kHeightCodingKobbeltResidual;
-            } else if (*text == "pifs") {
-                args.build.heightCoding = kHeightCodingPifs;
-            } else {
-                return makeError("--height-codec: unknown codec '", *text, "' (expected residual or pifs)");
-            }
-        } else if (arg == "--material" || arg == "--detail-scheme") {
-            auto text = value();
-            TERRAIN_TRY(text);
-            if (arg == "--material") {
-                args.materials.push_back(*text);
-            } else if (!makeSubdivider(*text, 3, args.detail.omega).ok()) {
-                return makeError("--detail-scheme: unknown scheme '", *text,
-                                 "' (expected kobbelt, bilinear or catmull-clark)");
-            } else {
-                args.detail.scheme = *text;
-            }
-        } else if (arg == "--detail-factor") {
-            auto v = number();
-            TERRAIN_TRY(v);
-            if (!(*v >= 0.0 && *v <= 2.0)) {
-                return makeError("--detail-factor: omega must be in [0, 2], got ", *v);
-            }
-            args.detail.omega = *v;
-            args.detailFactorGiven = true;
-        } else if (arg == "-h" || arg == "-v" || arg == "--offset" || arg == "--max-error" || arg == "--nodata") {
-            auto v = number();
-            TERRAIN_TRY(v);
-            if (arg == "-h") {
-                if (!(*v >= kMinSpacingMetres && *v <= kMaxSpacingMetres)) {
-                    return makeError("-h: the spacing must be in [", kMinSpacingMetres, ", ", kMaxSpacingMetres,
-                                     "] metres, got ", *v);
-                }
-                args.build.spacing = *v;
-            } else if (arg == "-v") {
-                if (!(*v >= 1e-9 && *v <= 1e9)) {
-                    return makeError("-v: the vertical scale must be in [1e-09, 1e+09] metres a unit, got ", *v);
-                }
-                args.build.verticalScale = *v;
-            } else if (arg == "--offset") {
-                if (!(std::abs(*v) <= kMaxHeightMetres)) {
-                    return makeError("--offset: must be within +-", kMaxHeightMetres, " metres, got ", *v);
-                }
-                args.build.offset = *v;
-            } else if (arg == "--max-error") {
-                if (!(*v >= 0 && *v <= kMaxHeightMetres)) {
-                    return makeError("--max-error: must be in [0, ", kMaxHeightMetres, "] metres, got ", *v);
-                }
-                args.build.maxError = *v;
-            } else {
-                args.read.noData = *v;
-            }
-        } else if (arg == "--chunk" || arg == "--texture-size" || arg == "--threads") {
-            auto v = integer();
-            TERRAIN_TRY(v);
-            (arg == "--chunk"          ? args.build.chunkSize
-             : arg == "--texture-size" ? args.build.textureSize
-                                       : args.build.threads) = *v;
-        } else if (arg == "--clamp") {
-            auto text = value();
-            TERRAIN_TRY(text);
-            const std::size_t comma = text->find(',');
-            const bool pair = comma != std::string::npos;
-            auto lo = parseDouble(pair ? text->substr(0, comma) : *text);
-            auto hi = parseDouble(pair ? text->substr(comma + 1) : std::string());
-            if (!pair || !lo.ok() || !hi.ok() || !(*lo <= *hi) || !(std::abs(*lo) <= kMaxHeightMetres) ||
-                !(std::abs(*hi) <= kMaxHeightMetres)) {
-                return makeError("--clamp: '", *text, "' is not LO,HI: two heights in metres, LO <= HI, within +-",
-                                 kMaxHeightMetres);
-            }
-            args.build.clampMetres = std::array<double, 2>{*lo, *hi};
-        } else if (arg == "--memory") {
-            auto text = value();
-            TERRAIN_TRY(text);
-            auto bytes = parseByteSize(*text);
-            if (!bytes.ok()) {
-                return makeError("--memory: ", bytes.error().message);
-            }
-            args.build.memoryBudget = *bytes;
-        } else if (arg == "--raw-size") {
-            auto text = value();
-            TERRAIN_TRY(text);
-            auto x = text->find('x');
-            auto w = parseInteger(text->substr(0, x == std::string::npos ? 0 : x));
-            auto h = parseInteger(x == std::string::npos ? "" : text->substr(x + 1));
-            if (!w.ok() || !h.ok() || *w < 1 || *h < 1 || *w > (1 << 30) || *h > (1 << 30)) {
-                return makeError("--raw-size: '", *text, "' is not WIDTHxHEIGHT");
-            }
-            args.read.rawWidth = static_cast<int>(*w);
-            args.read.rawHeight = static_cast<int>(*h);
-        } else if (arg == "--out-of-core") {
-            args.build.forceOutOfCore = true;
-        } else if (arg == "--no-material") {
-            args.noMaterial = true;
-        } else if (arg == "--no-roughness") {
-            args.noRoughness = true;
-        } else if (arg == "--raw-signed") {
-            args.read.rawSigned = true;
-        } else if (arg == "--raw-big-endian") {
-            args.read.rawBigEndian = true;
-        } else if (!arg.empty() && arg[0] == '-' && arg != "-") {
-            return makeError("unknown option '", arg, "' (see prep --help)");
-        } else {
-            positional.push_back(arg);
-        }
-    }
-    if (positional.empty()) {
-        return makeError("no height field given (see prep --help)");
-    }
-    args.inputs.assign(positional.begin(), positional.end());
-    if (args.noMaterial && !args.materials.empty()) {
-        return makeError("--no-material and --material exclude each other");
-    }
-    if (args.materials.empty() && !args.noMaterial) {
-        // The viewer's defaults (detail_material_type = 0, material_path empty): grass.mat alone.
-        args.materials.push_back(programDataDirectory("materials", TERRAIN_MATERIALS_DIR) / "grass.mat");
-    }
-    if (args.detailFactorGiven && args.detail.scheme != "kobbelt") {
-        args.warnings.push_back("--detail-factor has no effect with --detail-scheme " + args.detail.scheme +
-                                " (Kobbelt's scheme only)");
-    }
-    return args;
-}
-
 /// The synthesizer the viewer will use below the static leaves, with the materials loaded as the viewer
 /// loads them (errors name the file and line; warnings go to `warnings`), and its recipe for the map. Null
 /// when the chunk size is not 2^k + 1 (buildMap reports it).
-Expected<std::unique_ptr<const DetailSynthesizer>> makeSynthesizer(Arguments& args, std::vector<std::string>& warnings)
+Expected<std::unique_ptr<const DetailSynthesizer>> makeSynthesizer(PrepArguments& args,
+                                                                   std::vector<std::string>& warnings)
 {
     DetailSettings settings = args.detail;
     if (!args.materials.empty()) {
@@ -327,11 +93,12 @@ int main(int argc, char** argv)
     std::signal(SIGXFSZ, SIG_IGN);
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--help") == 0) {
-            std::fputs(kUsage, stdout);
+            std::fputs(prepUsage().c_str(), stdout);
             return 0;
         }
     }
-    auto args = parseArguments(argc, argv);
+    auto args = parsePrepArguments(std::vector<std::string>(argv + 1, argv + argc), defaultThreadCount(),
+                                   programDataDirectory("materials", TERRAIN_MATERIALS_DIR) / "grass.mat");
     if (!args.ok()) {
         std::fprintf(stderr, "prep: %s\n", args.error().message.c_str());
         return 2;
@@ -388,6 +155,10 @@ int main(int argc, char** argv)
         bar.finish();
         std::fprintf(stderr, "prep: warning: %.*s\n", static_cast<int>(message.size()), message.data());
     };
+    args->build.note = [&](std::string_view message) {
+        bar.finish();
+        std::fprintf(stderr, "prep: note: %.*s\n", static_cast<int>(message.size()), message.data());
+    };
     const std::string description = field.description;
     auto report = buildMap(**source, args->build, output);
     bar.finish();
@@ -431,7 +202,11 @@ int main(int argc, char** argv)
                 h.detailRecipe ? h.detailRecipe->describe().c_str() : "no recipe", report->leafDetailSeconds);
     std::printf("  time      %.2f s, %.1f million input samples per second (%d threads)\n", report->seconds,
                 inputSamples / report->seconds / 1e6, report->threads);
-    std::printf("  memory    peak %s, %s (budget %s)\n", formatBytes(peakResidentBytes()).c_str(),
+    std::printf("  memory    peak %s, %s (budget %s", formatBytes(peakResidentBytes()).c_str(),
                 report->outOfCore ? "out of core" : "in memory", formatBytes(report->memoryBudget).c_str());
+    if (report->outOfCore) {
+        std::printf("; anonymous memory estimated at %s", formatBytes(report->estimatedBytes).c_str());
+    }
+    std::printf(")\n");
     return 0;
 }

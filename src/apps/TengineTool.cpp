@@ -1,4 +1,5 @@
 // tengine-tool: inspect (info), check (verify) and query (height) terrain maps.
+#include "apps/CommandLine.h"
 #include "apps/DataDirectories.h"
 #include "apps/DetailSetup.h"
 #include "apps/ErrorCommand.h"
@@ -14,6 +15,7 @@
 #include "lod/TerrainStreamer.h"
 #include "quadtree/MapFile.h"
 #include "quadtree/MapVerifier.h"
+#include "quadtree/QuadtreeBuilder.h"
 
 #include <algorithm>
 #include <array>
@@ -28,6 +30,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 namespace {
@@ -74,8 +77,33 @@ constexpr const char* kUsage = R"(usage: tengine-tool COMMAND FILE.map [argument
                           their measured errors, per frame (the floor for chunked LOD; =B: B x B blocks'
                           metres projected as the selection projects bounds)
 
-Options: --reader stream|memory_mapped (default stream)
+Options:
 )";
+
+/// The flags every command takes: --reader.
+CommandLine globalCommandLine(ReaderKind& reader)
+{
+    CommandLine line;
+    line.flags.push_back({"--reader", "KIND", "stream or memory_mapped: how the map is read (default stream)",
+                          [&reader](const std::string& value) -> Status {
+                              auto kind = parseReaderKind(value);
+                              TERRAIN_TRY(kind);
+                              reader = *kind;
+                              return {};
+                          }});
+    line.flags.push_back({"--help", "", "this text (also -h)", [](const std::string&) -> Status { return {}; }});
+    return line;
+}
+
+/// The --help text: the commands, then the flags of globalCommandLine.
+std::string usage()
+{
+    ReaderKind reader = ReaderKind::Stream;
+    return kUsage + globalCommandLine(reader).help();
+}
+
+/// World coordinates export takes (metres): beyond what any map spans (2^24 samples of at most 1e6 m).
+constexpr double kMaxWorldMetres = 1e15;
 
 int fail(const std::string& message)
 {
@@ -258,60 +286,63 @@ Expected<ViewOptions> parseViewOptions(const std::vector<std::string>& args, std
     ViewOptions view;
     bool haveCamera = false;
     auto degrees = [](double d) { return d * std::numbers::pi / 180.0; };
-    for (std::size_t i = first; i < args.size(); ++i) {
-        const std::string& arg = args[i];
-        if (arg == "--fast") {
-            view.fast = true;
-            continue;
-        }
-        if (i + 1 >= args.size()) {
-            return makeError(arg, " needs a value");
-        }
-        const std::string& value = args[++i];
-        auto number = [&](double lo, double hi) { return parseNumberIn(arg, value, lo, hi); };
-        if (arg == "--camera") {
-            auto parsed = parseCameraArgument(value, view.camera);
-            TERRAIN_TRY(parsed);
-            haveCamera = true;
-        } else if (arg == "--tau") {
-            auto v = number(0.01, 1000);
+    auto number = [](double& target, double lo, double hi, std::string_view unit) {
+        return [&target, lo, hi, unit](const std::string& value) -> Status {
+            auto v = numberIn(value, lo, hi, unit);
             TERRAIN_TRY(v);
-            view.tau = *v;
-        } else if (arg == "--fov") {
-            auto v = number(1, 179);
+            target = *v;
+            return {};
+        };
+    };
+    auto count = [](auto& target, long long lo) {
+        return [&target, lo](const std::string& value) -> Status {
+            auto v = wholeNumberIn(value, lo, 1 << 24);
             TERRAIN_TRY(v);
-            view.camera.verticalFov = degrees(*v);
-        } else if (arg == "--fps") {
-            auto v = number(1, 1000);
-            TERRAIN_TRY(v);
-            view.fps = *v;
-        } else if (arg == "--cache" || arg == "--queue" || arg == "--workers") {
-            auto v = number(arg == "--workers" ? 0 : 1, 1 << 24);
-            TERRAIN_TRY(v);
-            if (*v != std::floor(*v)) {
-                return makeError(arg, ": '", value, "' is not an integer");
-            }
-            if (arg == "--cache") {
-                view.streamer.cacheSize = static_cast<std::size_t>(*v);
-            } else if (arg == "--queue") {
-                view.streamer.queueLimit = static_cast<std::size_t>(*v);
-            } else {
-                view.streamer.workers = static_cast<int>(*v);
-            }
-        } else if (arg == "--size") {
-            unsigned w = 0, h = 0;
-            char tail = 0;
-            if (std::sscanf(value.c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384) {
-                return makeError("--size: '", value, "' is not WIDTHxHEIGHT");
-            }
-            view.camera.viewportWidth = static_cast<int>(w);
-            view.camera.viewportHeight = static_cast<int>(h);
-        } else if (arg == "--path" && wantPath) {
-            view.path = value;
-        } else {
-            return makeError("unknown option '", arg, "'");
-        }
+            target = static_cast<std::remove_reference_t<decltype(target)>>(*v);
+            return {};
+        };
+    };
+    CommandLine line;
+    line.flags = {
+        {"--camera", "X,Y,Z,YAW,PITCH", "the camera (metres and degrees; yaw 0 = north)",
+         [&](const std::string& value) -> Status {
+             TERRAIN_TRY(parseCameraArgument(value, view.camera));
+             haveCamera = true;
+             return {};
+         }},
+        {"--tau", "T", "the screen-space error allowed (pixels)", number(view.tau, 0.01, 1000, "pixels")},
+        {"--fov", "DEG", "vertical field of view (degrees)",
+         [&](const std::string& value) -> Status {
+             auto v = numberIn(value, 1, 179, "degrees");
+             TERRAIN_TRY(v);
+             view.camera.verticalFov = degrees(*v);
+             return {};
+         }},
+        {"--fps", "F", "frames per second of the replay", number(view.fps, 1, 1000, "frames per second")},
+        {"--cache", "N", "nodes the cache holds", count(view.streamer.cacheSize, 1)},
+        {"--queue", "N", "node groups waiting to load", count(view.streamer.queueLimit, 1)},
+        {"--workers", "N", "loader threads (0: on the selecting thread)", count(view.streamer.workers, 0)},
+        {"--size", "WxH", "the viewport (pixels)",
+         [&](const std::string& value) -> Status {
+             auto size = sizeIn(value, 1, 16384);
+             TERRAIN_TRY(size);
+             view.camera.viewportWidth = size->first;
+             view.camera.viewportHeight = size->second;
+             return {};
+         }},
+        {"--fast", "", "replay as fast as possible",
+         [&](const std::string&) -> Status {
+             view.fast = true;
+             return {};
+         }},
+    };
+    if (wantPath) {
+        line.flags.push_back({"--path", "FILE.path", "the camera path", [&](const std::string& value) -> Status {
+                                  view.path = value;
+                                  return {};
+                              }});
     }
+    TERRAIN_TRY(line.parse(std::span(args).subspan(first)));
     if (!wantPath && !haveCamera) {
         return makeError("select needs --camera X,Y,Z,YAW,PITCH");
     }
@@ -433,25 +464,36 @@ struct ExportRequest {
     double spacing = 0.0;
 };
 
+/// The surface's flags: --depth D (a quadtree level), --material M.mat (repeatable), --no-material.
+void addSurfaceFlags(CommandLine& line, SurfaceRequest& request)
+{
+    line.flags.push_back(
+        {"--depth", "D", "the quadtree level of the drawn surface", [&request](const std::string& value) -> Status {
+             auto depth = wholeNumberIn(value, 0, NodeId::kMaxLevel);
+             TERRAIN_TRY(depth);
+             request.depth = static_cast<int>(*depth);
+             return {};
+         }});
+    line.flags.push_back({"--material", "M.mat", "a material of the synthesized detail, blended in order",
+                          [&request](const std::string& value) -> Status {
+                              request.detail.detailMaterials.emplace_back(value);
+                              return {};
+                          }});
+    line.flags.push_back(
+        {"--no-material", "", "no material: subdivision only", [&request](const std::string&) -> Status {
+             request.detail.detailAddMaterial = false;
+             return {};
+         }});
+}
+
 /// The surface options from `args[first..]`: --depth D, --material M.mat, --no-material.
 Expected<SurfaceRequest> parseSurface(const std::vector<std::string>& args, std::size_t first)
 {
     SurfaceRequest request;
-    for (std::size_t i = first; i < args.size(); ++i) {
-        const std::string& arg = args[i];
-        if (arg == "--depth" && i + 1 < args.size()) {
-            auto d = parseInteger(args[++i]);
-            if (!d.ok() || *d < 0 || *d > NodeId::kMaxLevel) {
-                return makeError("height: --depth must be an integer in [0, ", NodeId::kMaxLevel, "]");
-            }
-            request.depth = static_cast<int>(*d);
-        } else if (arg == "--material" && i + 1 < args.size()) {
-            request.detail.detailMaterials.emplace_back(args[++i]);
-        } else if (arg == "--no-material") {
-            request.detail.detailAddMaterial = false;
-        } else {
-            return makeError("height: unknown or incomplete option '", arg, "'");
-        }
+    CommandLine line;
+    addSurfaceFlags(line, request);
+    if (Status parsed = line.parse(std::span(args).subspan(first)); !parsed.ok()) {
+        return makeError("height: ", parsed.error().message);
     }
     if (!request.depth && args.size() > first) {
         return makeError("height: --material and --no-material need --depth");
@@ -513,52 +555,49 @@ Expected<ExportRequest> parseExport(const MapFile& map, const std::vector<std::s
     }
     ExportRequest request;
     request.output = args[2];
-    std::vector<std::string> surfaceArgs;
-    bool haveRegion = false, haveSpacing = false, haveDepth = false;
-    for (std::size_t i = 3; i < args.size(); ++i) {
-        if (args[i] == "--region" && i + 1 < args.size()) {
-            std::size_t at = 0;
-            const std::string& text = args[++i];
-            for (int k = 0; k < 4; ++k) {
-                const std::size_t comma = k < 3 ? text.find(',', at) : text.size();
-                auto v = parseDouble(comma == std::string::npos ? std::string() : text.substr(at, comma - at));
-                if (!v.ok() || comma == std::string::npos) {
-                    return makeError("export: --region '", text, "' is not X0,Y0,X1,Y1 (metres)");
-                }
-                request.region[static_cast<std::size_t>(k)] = *v;
-                at = comma + 1;
-            }
-            const auto& r = request.region;
-            if (!(r[2] > r[0] && r[3] > r[1])) {
-                return makeError("export: --region '", text, "' needs X1 > X0 and Y1 > Y0");
-            }
-            haveRegion = true;
-        } else if (args[i] == "--spacing" && i + 1 < args.size()) {
-            auto v = parseDouble(args[++i]);
-            if (!v.ok() || !(*v > 0)) {
-                return makeError("export: --spacing must be a positive number of metres");
-            }
-            request.spacing = *v;
-            haveSpacing = true;
-        } else {
-            haveDepth = haveDepth || args[i] == "--depth";
-            surfaceArgs.push_back(args[i]);
-        }
+    bool haveRegion = false, haveSpacing = false;
+    CommandLine line;
+    line.flags.push_back(
+        {"--region", "X0,Y0,X1,Y1", "the region (world metres)", [&](const std::string& text) -> Status {
+             std::size_t at = 0;
+             for (int k = 0; k < 4; ++k) {
+                 const std::size_t comma = k < 3 ? text.find(',', at) : text.size();
+                 auto v = numberIn(comma == std::string::npos ? std::string() : text.substr(at, comma - at),
+                                   -kMaxWorldMetres, kMaxWorldMetres);
+                 if (!v.ok() || comma == std::string::npos) {
+                     return makeError("'", text, "' is not X0,Y0,X1,Y1 (metres, within +-", kMaxWorldMetres, ")");
+                 }
+                 request.region[static_cast<std::size_t>(k)] = *v;
+                 at = comma + 1;
+             }
+             const auto& r = request.region;
+             if (!(r[2] > r[0] && r[3] > r[1])) {
+                 return makeError("'", text, "' needs X1 > X0 and Y1 > Y0");
+             }
+             haveRegion = true;
+             return {};
+         }});
+    line.flags.push_back({"--spacing", "S", "the grid's spacing (metres)", [&](const std::string& text) -> Status {
+                              auto v = numberIn(text, kMinSpacingMetres, kMaxSpacingMetres, "metres");
+                              TERRAIN_TRY(v);
+                              request.spacing = *v;
+                              haveSpacing = true;
+                              return {};
+                          }});
+    addSurfaceFlags(line, request.surface);
+    if (Status parsed = line.parse(std::span(args).subspan(3)); !parsed.ok()) {
+        return makeError("export: ", parsed.error().message);
     }
     if (!haveRegion || !haveSpacing) {
         return makeError("export needs --region X0,Y0,X1,Y1 and --spacing S");
     }
-    if (!haveDepth) {
+    if (!request.surface.depth) {
         int level = 0;
         while (level < NodeId::kMaxLevel && map.header().spacingAt(level) > request.spacing * (1 + 1e-9)) {
             ++level;
         }
-        surfaceArgs.push_back("--depth");
-        surfaceArgs.push_back(std::to_string(level));
+        request.surface.depth = level;
     }
-    auto surface = parseSurface(surfaceArgs, 0);
-    TERRAIN_TRY(surface);
-    request.surface = std::move(surface).value();
     return request;
 }
 
@@ -756,35 +795,32 @@ int height(const MapFile& map, const HeightRequest& request, const std::filesyst
 int main(int argc, char** argv)
 {
     const std::filesystem::path materialsDirectory = programDataDirectory("materials", TERRAIN_MATERIALS_DIR);
-    std::vector<std::string> args;
-    ReaderKind reader = ReaderKind::Stream;
     for (int i = 1; i < argc; ++i) {
-        std::string arg = argv[i];
-        if (arg == "--help" || arg == "-h") {
-            std::fputs(kUsage, stdout);
+        if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
+            std::fputs(usage().c_str(), stdout);
             return 0;
         }
-        if (arg == "--reader") {
-            if (i + 1 >= argc) {
-                return fail("--reader needs a value");
-            }
-            auto kind = parseReaderKind(argv[++i]);
-            if (!kind.ok()) {
-                return fail(kind.error().message);
-            }
-            reader = *kind;
-        } else {
-            args.push_back(arg);
-        }
+    }
+    std::vector<std::string> args;
+    ReaderKind reader = ReaderKind::Stream;
+    // The flags every command takes, anywhere; the rest goes to the command in order.
+    CommandLine global = globalCommandLine(reader);
+    global.passUnknown = true;
+    global.positional = [&args](const std::string& argument) -> Status {
+        args.push_back(argument);
+        return {};
+    };
+    if (Status parsed = global.parse(std::vector<std::string>(argv + 1, argv + argc)); !parsed.ok()) {
+        return fail(parsed.error().message);
     }
     if (args.size() < 2) {
-        std::fputs(kUsage, stderr);
+        std::fputs(usage().c_str(), stderr);
         return 2;
     }
     const std::string& command = args[0];
     if (command != "info" && command != "verify" && command != "height" && command != "texture" &&
         command != "export" && command != "select" && command != "stream" && command != "error") {
-        std::fprintf(stderr, "tengine-tool: unknown command '%s'\n%s", command.c_str(), kUsage);
+        std::fprintf(stderr, "tengine-tool: unknown command '%s'\n%s", command.c_str(), usage().c_str());
         return 2;
     }
     // What texture and export write must not be one of the run's inputs: checked before anything is opened.

@@ -393,6 +393,175 @@ bool isGdalRasterExtension(const std::filesystem::path& path)
     return kExtensions.count(lower(path.extension().string())) != 0;
 }
 
+namespace {
+
+/// The files `inputs` name: the rasters of a directory given alone (rastersIn, noting what it skipped in
+/// `notes`), or the files given. Error: a directory given with other inputs.
+Expected<std::vector<std::filesystem::path>> inputFiles(std::span<const std::filesystem::path> inputs,
+                                                        std::vector<std::string>& notes)
+{
+    std::error_code ec;
+    if (inputs.size() == 1 && std::filesystem::is_directory(inputs.front(), ec)) {
+        return rastersIn(inputs.front(), notes);
+    }
+    std::vector<std::filesystem::path> files;
+    for (const auto& input : inputs) {
+        if (std::filesystem::is_directory(input, ec)) {
+            return makeError(input.string(), ": a directory can only be given alone (as a mosaic of its tiles)");
+        }
+        files.push_back(input);
+    }
+    return files;
+}
+
+/// How errors and notes name the input: its one file, or the first input and how many more.
+std::string inputsName(const std::vector<std::filesystem::path>& files, std::span<const std::filesystem::path> inputs)
+{
+    std::string name = files.size() == 1 ? files.front().string() : inputs.front().string();
+    if (inputs.size() > 1) {
+        name += " (and " + std::to_string(inputs.size() - 1) + " more)";
+    }
+    return name;
+}
+
+/// The input files opened, with what each says of itself (facts[i] of datasets[i], whose CRS it points to).
+struct OpenedTiles {
+    std::vector<Dataset> datasets;
+    std::vector<TileFacts> facts;
+};
+
+/// Opens `files` in order, checking that each has one band and lies on the first one's grid.
+Expected<OpenedTiles> openTiles(const std::vector<std::filesystem::path>& files, GdalMessages& messages)
+{
+    OpenedTiles tiles;
+    for (const auto& file : files) {
+        auto dataset = openRaster(file, messages);
+        TERRAIN_TRY(dataset);
+        tiles.facts.push_back(factsOf(**dataset, file));
+        TERRAIN_TRY(checkOneBand(tiles.facts.back()));
+        if (tiles.facts.size() > 1) {
+            TERRAIN_TRY(checkSameGrid(tiles.facts.front(), tiles.facts.back()));
+        }
+        tiles.datasets.push_back(std::move(dataset).value());
+    }
+    return tiles;
+}
+
+/// A VRT mosaic of `files` at the highest resolution: later tiles win where tiles overlap, and an added alpha
+/// band marks what no tile covers (read through the mask). `name` names the input in errors.
+Expected<Dataset> mosaicOf(const std::vector<std::filesystem::path>& files, const std::string& name,
+                           GdalMessages& messages)
+{
+    CPLStringList args;
+    for (const char* arg : {"-resolution", "highest", "-strict", "-addalpha"}) {
+        args.AddString(arg);
+    }
+    GDALBuildVRTOptions* vrtOptions = GDALBuildVRTOptionsNew(args.List(), nullptr);
+    std::vector<std::string> names;
+    std::vector<const char*> pointers;
+    for (const auto& file : files) {
+        names.push_back(file.string());
+    }
+    for (const auto& n : names) {
+        pointers.push_back(n.c_str());
+    }
+    int usageError = 0;
+    GDALDatasetH vrt =
+        GDALBuildVRT("", static_cast<int>(pointers.size()), nullptr, pointers.data(), vrtOptions, &usageError);
+    GDALBuildVRTOptionsFree(vrtOptions);
+    if (vrt == nullptr) {
+        return makeError(name, ": cannot mosaic its tiles: ", messages.last());
+    }
+    return Dataset(GDALDataset::FromHandle(vrt));
+}
+
+/// Metres = scale x native + offset, from the band's scale and offset times its vertical unit; no scale when
+/// the band gives neither a scale, an offset nor a unit (-v then applies).
+struct VerticalMapping {
+    std::optional<double> scale;
+    double offset = 0.0;
+};
+
+/// The first tile's vertical mapping, noting in `notes` when it gives no unit. Error: a unit prep does not know.
+Expected<VerticalMapping> verticalMappingOf(const TileFacts& first, std::vector<std::string>& notes)
+{
+    const double unit = verticalUnitMetres(first.unit);
+    if (unit == 0.0) {
+        return makeError(first.path.string(), ": vertical unit '", first.unit,
+                         "' is not one prep knows (m, ft, US survey ft, cm, mm); set it with gdal_edit.py -units");
+    }
+    VerticalMapping mapping;
+    if (first.hasScaleOrOffset || unit > 0) {
+        mapping.scale = first.scale * (unit > 0 ? unit : 1.0);
+        mapping.offset = first.offset * (unit > 0 ? unit : 1.0);
+    }
+    if (unit < 0) {
+        notes.push_back("the raster gives no vertical unit: heights taken as metres (-v to scale them)");
+    }
+    return mapping;
+}
+
+/// Where a raster lies and whether it is resampled (warped) onto `target`.
+struct Placement {
+    bool georeferenced = false;                ///< it has a geotransform
+    std::array<double, 6> gt{};                ///< its geotransform
+    const OGRSpatialReference* srs = nullptr;  ///< its CRS, owned by the dataset; null for none
+    OGRSpatialReference target;                ///< the CRS it is warped to, when `warp`
+    bool warp = false;
+};
+
+/// Decides the reprojection of `base`: to --srs (options.targetSrs, a projected CRS) when it differs from the
+/// raster's; geographic rasters to the UTM zone of their centre; rotated or non-square pixels resampled in
+/// their own CRS (noted in `notes`). Errors: an unknown or unprojected --srs, --srs for a raster without a
+/// CRS, a CRS neither projected nor geographic, and rotated or non-square pixels without a CRS.
+Expected<Placement> placementOf(GDALDataset& base, const ElevationReadOptions& options, const std::string& name,
+                                std::vector<std::string>& notes, GdalMessages& messages)
+{
+    Placement placement;
+    std::array<double, 6>& gt = placement.gt;
+    placement.georeferenced = base.GetGeoTransform(gt.data()) == CE_None;
+    placement.srs = base.GetSpatialRef();
+    const OGRSpatialReference* srs = placement.srs;
+    const bool georeferenced = placement.georeferenced;
+    OGRSpatialReference& target = placement.target;
+    if (!options.targetSrs.empty()) {
+        if (target.SetFromUserInput(options.targetSrs.c_str()) != OGRERR_NONE) {
+            return makeError("--srs '", options.targetSrs, "': GDAL does not know this CRS: ", messages.last());
+        }
+        target.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+        if (!target.IsProjected()) {
+            return makeError("--srs '", options.targetSrs, "' (", nameOf(target),
+                             ") is not a projected CRS: the terrain needs metric coordinates");
+        }
+        if (!georeferenced || srs == nullptr) {
+            return makeError(name, ": has no CRS, so --srs cannot reproject it");
+        }
+        placement.warp = !srs->IsSame(&target);
+    } else if (georeferenced && srs != nullptr && srs->IsGeographic()) {
+        const double lon = gt[0] + gt[1] * base.GetRasterXSize() / 2.0 + gt[2] * base.GetRasterYSize() / 2.0;
+        const double lat = gt[3] + gt[4] * base.GetRasterXSize() / 2.0 + gt[5] * base.GetRasterYSize() / 2.0;
+        target = utmOf(lon, lat);
+        placement.warp = true;
+    } else if (georeferenced && srs != nullptr && !srs->IsProjected()) {
+        return makeError(name, ": its CRS ", nameOf(*srs),
+                         " is neither projected nor geographic: give --srs to say where it lies, or reproject it");
+    }
+    const bool square = std::abs(std::abs(gt[1]) - std::abs(gt[5])) <= 1e-9 * std::abs(gt[1]);
+    if (georeferenced && !placement.warp && (gt[2] != 0.0 || gt[4] != 0.0 || !square)) {
+        if (srs == nullptr) {
+            return makeError(name, ": its pixels are ", (square ? "rotated" : "not square"),
+                             " and it has no CRS to resample it in");
+        }
+        target = *srs;
+        placement.warp = true;
+        notes.push_back(std::string("its pixels are ") + (square ? "rotated" : "not square") +
+                        ": resampled onto a square north-up grid");
+    }
+    return placement;
+}
+
+}  // namespace
+
 struct ElevationRaster::State {
     std::vector<Dataset> sources;  ///< the input files (closed last)
     Dataset mosaic;                ///< VRT over several sources
@@ -417,6 +586,67 @@ struct ElevationRaster::State {
     bool integerSamples = false;
     std::string description;
     std::vector<std::string> notes;
+
+    /// Reads `base` warped onto placement.target (bilinear, NaN where nothing maps, the mosaic's alpha
+    /// honoured), noting it; placement.gt becomes the warped grid's, and `description` gets its size.
+    Status readReprojected(GDALDataset& base, Placement& placement, const TileFacts& first,
+                           std::ostringstream& descriptionText, GdalMessages& messages)
+    {
+        auto spec = suggestGrid(base, wktOf(placement.target), name, messages, 0.0);
+        TERRAIN_TRY(spec);
+        std::optional<double> srcNoData;
+        if (first.hasNoData) {
+            srcNoData = first.noData;
+        }
+        auto reprojected = createWarped(base, placement.target, *spec, {1}, mosaic ? alphaBandOf(base) : 0, 0,
+                                        GDT_Float32, GRA_Bilinear, srcNoData, true, name, messages);
+        TERRAIN_TRY(reprojected);
+        warped = std::move(reprojected).value();
+        notes.push_back("reprojected from " + (placement.srs ? nameOf(*placement.srs) : std::string("its CRS")) +
+                        " to " + nameOf(placement.target) + " (bilinear), " + std::to_string(spec->width) + "x" +
+                        std::to_string(spec->height) + " samples of " + formatNumber(spec->gt[1]) + " units");
+        read = warped.get();
+        placement.gt = spec->gt;
+        hasNoData = true;
+        noData = std::numeric_limits<double>::quiet_NaN();
+        useMask = false;
+        descriptionText << " -> " << spec->width << "x" << spec->height;
+        return {};
+    }
+
+    /// Reads `base` as it is, through band 1's mask where it has one beyond no-data.
+    void readDirectly(GDALDataset& base)
+    {
+        read = &base;
+        const int flags = base.GetRasterBand(1)->GetMaskFlags();
+        useMask = (flags & GMF_ALL_VALID) == 0 && (flags & GMF_NODATA) == 0;
+    }
+
+    /// Spacing, origin (the south-west sample's centre) and CRS, in metres, from geotransform `gt` and CRS
+    /// `srs` (null: coordinates taken as metres, noted); `descriptionText` gets the CRS's name. Error: a CRS whose
+    /// linear unit is not a positive finite number of metres.
+    Status setGeoreference(const std::array<double, 6>& gt, const OGRSpatialReference* srs,
+                           std::ostringstream& descriptionText)
+    {
+        crsUnitMetres = srs != nullptr ? srs->GetLinearUnits() : 1.0;
+        if (!(crsUnitMetres > 0) || !std::isfinite(crsUnitMetres)) {
+            return makeError(name, ": its CRS has a linear unit of ", crsUnitMetres, " m");
+        }
+        const double u = crsUnitMetres;
+        spacing = std::abs(gt[1]) * u;
+        southUp = gt[5] > 0;
+        // Sample centres: x = gt0 + (col + 0.5) gt1; the south row is the last one when north-up.
+        originX = (gt[0] + 0.5 * gt[1]) * u;
+        originY = (southUp ? gt[3] + 0.5 * gt[5] : gt[3] + (height - 0.5) * gt[5]) * u;
+        if (srs != nullptr) {
+            crsWkt = wktOf(*srs);
+            crsName = nameOf(*srs);
+            descriptionText << ", " << (srs->GetName() ? srs->GetName() : "unnamed CRS");
+        } else {
+            notes.push_back("the raster has a geotransform but no CRS: its coordinates are taken as metres");
+        }
+        return {};
+    }
 };
 
 ElevationRaster::ElevationRaster(std::unique_ptr<State> state) : mState(std::move(state)) {}
@@ -487,177 +717,48 @@ Expected<ElevationRaster> ElevationRaster::open(std::span<const std::filesystem:
     if (inputs.empty()) {
         return makeError("no elevation raster given");
     }
-    std::vector<std::filesystem::path> files;
-    std::error_code ec;
-    if (inputs.size() == 1 && std::filesystem::is_directory(inputs.front(), ec)) {
-        auto listed = rastersIn(inputs.front(), state->notes);
-        TERRAIN_TRY(listed);
-        files = std::move(listed).value();
-    } else {
-        for (const auto& input : inputs) {
-            if (std::filesystem::is_directory(input, ec)) {
-                return makeError(input.string(), ": a directory can only be given alone (as a mosaic of its tiles)");
-            }
-            files.push_back(input);
-        }
-    }
-    state->name = files.size() == 1 ? files.front().string() : inputs.front().string();
-    if (inputs.size() > 1) {
-        state->name += " (and " + std::to_string(inputs.size() - 1) + " more)";
-    }
-
-    std::vector<TileFacts> facts;
-    for (const auto& file : files) {
-        auto dataset = openRaster(file, messages);
-        TERRAIN_TRY(dataset);
-        facts.push_back(factsOf(**dataset, file));
-        TERRAIN_TRY(checkOneBand(facts.back()));
-        if (facts.size() > 1) {
-            TERRAIN_TRY(checkSameGrid(facts.front(), facts.back()));
-        }
-        state->sources.push_back(std::move(dataset).value());
-    }
-    const TileFacts& first = facts.front();
+    auto files = inputFiles(inputs, state->notes);
+    TERRAIN_TRY(files);
+    state->name = inputsName(*files, inputs);
+    auto tiles = openTiles(*files, messages);
+    TERRAIN_TRY(tiles);
+    state->sources = std::move(tiles->datasets);
+    const TileFacts& first = tiles->facts.front();
     GDALDataset* base = state->sources.front().get();
-    if (files.size() > 1) {
-        // Later tiles win where tiles overlap; -addalpha marks what no tile covers (read through the mask).
-        CPLStringList args;
-        for (const char* arg : {"-resolution", "highest", "-strict", "-addalpha"}) {
-            args.AddString(arg);
-        }
-        GDALBuildVRTOptions* vrtOptions = GDALBuildVRTOptionsNew(args.List(), nullptr);
-        std::vector<std::string> names;
-        std::vector<const char*> pointers;
-        for (const auto& file : files) {
-            names.push_back(file.string());
-        }
-        for (const auto& n : names) {
-            pointers.push_back(n.c_str());
-        }
-        int usageError = 0;
-        GDALDatasetH vrt =
-            GDALBuildVRT("", static_cast<int>(pointers.size()), nullptr, pointers.data(), vrtOptions, &usageError);
-        GDALBuildVRTOptionsFree(vrtOptions);
-        if (vrt == nullptr) {
-            return makeError(state->name, ": cannot mosaic its tiles: ", messages.last());
-        }
-        state->mosaic.reset(GDALDataset::FromHandle(vrt));
+    if (files->size() > 1) {
+        auto mosaic = mosaicOf(*files, state->name, messages);
+        TERRAIN_TRY(mosaic);
+        state->mosaic = std::move(mosaic).value();
         base = state->mosaic.get();
-        state->notes.push_back("mosaic of " + std::to_string(files.size()) + " tiles, " +
+        state->notes.push_back("mosaic of " + std::to_string(files->size()) + " tiles, " +
                                std::to_string(base->GetRasterXSize()) + "x" + std::to_string(base->GetRasterYSize()) +
                                " samples");
     }
     state->hasNoData = first.hasNoData;
     state->noData = first.noData;
+    auto vertical = verticalMappingOf(first, state->notes);
+    TERRAIN_TRY(vertical);
+    state->verticalScale = vertical->scale;
+    state->verticalOffset = vertical->offset;
 
-    // Vertical mapping: band scale and offset times the unit.
-    const double unit = verticalUnitMetres(first.unit);
-    if (unit == 0.0) {
-        return makeError(first.path.string(), ": vertical unit '", first.unit,
-                         "' is not one prep knows (m, ft, US survey ft, cm, mm); set it with gdal_edit.py -units");
-    }
-    if (first.hasScaleOrOffset || unit > 0) {
-        state->verticalScale = first.scale * (unit > 0 ? unit : 1.0);
-        state->verticalOffset = first.offset * (unit > 0 ? unit : 1.0);
-    }
-    if (unit < 0) {
-        state->notes.push_back("the raster gives no vertical unit: heights taken as metres (-v to scale them)");
-    }
-
-    // Georeferencing and whether to warp.
-    std::array<double, 6> gt{};
-    const bool georeferenced = base->GetGeoTransform(gt.data()) == CE_None;
-    const OGRSpatialReference* srs = base->GetSpatialRef();
-    OGRSpatialReference target;
-    bool warp = false;
-    if (!options.targetSrs.empty()) {
-        if (target.SetFromUserInput(options.targetSrs.c_str()) != OGRERR_NONE) {
-            return makeError("--srs '", options.targetSrs, "': GDAL does not know this CRS: ", messages.last());
-        }
-        target.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-        if (!target.IsProjected()) {
-            return makeError("--srs '", options.targetSrs, "' (", nameOf(target),
-                             ") is not a projected CRS: the terrain needs metric coordinates");
-        }
-        if (!georeferenced || srs == nullptr) {
-            return makeError(state->name, ": has no CRS, so --srs cannot reproject it");
-        }
-        warp = !srs->IsSame(&target);
-    } else if (georeferenced && srs != nullptr && srs->IsGeographic()) {
-        const double lon = gt[0] + gt[1] * base->GetRasterXSize() / 2.0 + gt[2] * base->GetRasterYSize() / 2.0;
-        const double lat = gt[3] + gt[4] * base->GetRasterXSize() / 2.0 + gt[5] * base->GetRasterYSize() / 2.0;
-        target = utmOf(lon, lat);
-        warp = true;
-    } else if (georeferenced && srs != nullptr && !srs->IsProjected()) {
-        return makeError(state->name, ": its CRS ", nameOf(*srs),
-                         " is neither projected nor geographic: give --srs to say where it lies, or reproject it");
-    }
-    const bool square = std::abs(std::abs(gt[1]) - std::abs(gt[5])) <= 1e-9 * std::abs(gt[1]);
-    if (georeferenced && !warp && (gt[2] != 0.0 || gt[4] != 0.0 || !square)) {
-        if (srs == nullptr) {
-            return makeError(state->name, ": its pixels are ", (square ? "rotated" : "not square"),
-                             " and it has no CRS to resample it in");
-        }
-        target = *srs;
-        warp = true;
-        state->notes.push_back(std::string("its pixels are ") + (square ? "rotated" : "not square") +
-                               ": resampled onto a square north-up grid");
-    }
-
-    GDALRasterBand* band = base->GetRasterBand(1);
+    auto placement = placementOf(*base, options, state->name, state->notes, messages);
+    TERRAIN_TRY(placement);
     const char* driver =
         state->sources.front()->GetDriver() != nullptr ? state->sources.front()->GetDriver()->GetDescription() : "GDAL";
     std::ostringstream description;
     description << driver << " " << GDALGetDataTypeName(first.type) << " " << base->GetRasterXSize() << "x"
                 << base->GetRasterYSize();
-    if (warp) {
-        auto spec = suggestGrid(*base, wktOf(target), state->name, messages, 0.0);
-        TERRAIN_TRY(spec);
-        std::optional<double> srcNoData;
-        if (first.hasNoData) {
-            srcNoData = first.noData;
-        }
-        auto warped = createWarped(*base, target, *spec, {1}, state->mosaic ? alphaBandOf(*base) : 0, 0, GDT_Float32,
-                                   GRA_Bilinear, srcNoData, true, state->name, messages);
-        TERRAIN_TRY(warped);
-        state->warped = std::move(warped).value();
-        state->notes.push_back("reprojected from " + (srs ? nameOf(*srs) : std::string("its CRS")) + " to " +
-                               nameOf(target) + " (bilinear), " + std::to_string(spec->width) + "x" +
-                               std::to_string(spec->height) + " samples of " + formatNumber(spec->gt[1]) + " units");
-        state->read = state->warped.get();
-        gt = spec->gt;
-        state->hasNoData = true;
-        state->noData = std::numeric_limits<double>::quiet_NaN();
-        state->useMask = false;
-        srs = &target;
-        description << " -> " << spec->width << "x" << spec->height;
+    if (placement->warp) {
+        TERRAIN_TRY(state->readReprojected(*base, *placement, first, description, messages));
     } else {
-        state->read = base;
-        const int flags = band->GetMaskFlags();
-        state->useMask = (flags & GMF_ALL_VALID) == 0 && (flags & GMF_NODATA) == 0;
+        state->readDirectly(*base);
     }
-    state->integerSamples = !warp && GDALDataTypeIsInteger(first.type) != 0;
+    state->integerSamples = !placement->warp && GDALDataTypeIsInteger(first.type) != 0;
     state->width = state->read->GetRasterXSize();
     state->height = state->read->GetRasterYSize();
-
-    if (georeferenced) {
-        state->crsUnitMetres = srs != nullptr ? srs->GetLinearUnits() : 1.0;
-        if (!(state->crsUnitMetres > 0) || !std::isfinite(state->crsUnitMetres)) {
-            return makeError(state->name, ": its CRS has a linear unit of ", state->crsUnitMetres, " m");
-        }
-        const double u = state->crsUnitMetres;
-        state->spacing = std::abs(gt[1]) * u;
-        state->southUp = gt[5] > 0;
-        // Sample centres: x = gt0 + (col + 0.5) gt1; the south row is the last one when north-up.
-        state->originX = (gt[0] + 0.5 * gt[1]) * u;
-        state->originY = (state->southUp ? gt[3] + 0.5 * gt[5] : gt[3] + (state->height - 0.5) * gt[5]) * u;
-        if (srs != nullptr) {
-            state->crsWkt = wktOf(*srs);
-            state->crsName = nameOf(*srs);
-            description << ", " << (srs->GetName() ? srs->GetName() : "unnamed CRS");
-        } else {
-            state->notes.push_back("the raster has a geotransform but no CRS: its coordinates are taken as metres");
-        }
+    if (placement->georeferenced) {
+        const OGRSpatialReference* srs = placement->warp ? &placement->target : placement->srs;
+        TERRAIN_TRY(state->setGeoreference(placement->gt, srs, description));
     } else {
         state->notes.push_back("the raster has no georeferencing: -h gives its spacing");
     }
@@ -744,11 +845,15 @@ Expected<HeightField> ElevationRaster::readAll()
 
 void configureGdalReading(std::uint64_t memoryBudget, int threads)
 {
-    GDALSetCacheMax64(static_cast<GIntBig>(
-        std::clamp<std::uint64_t>(memoryBudget / 8, std::uint64_t{16} << 20, std::uint64_t{256} << 20)));
+    GDALSetCacheMax64(static_cast<GIntBig>(gdalCacheBytesFor(memoryBudget)));
     if (CPLGetConfigOption("GDAL_NUM_THREADS", nullptr) == nullptr) {
         CPLSetConfigOption("GDAL_NUM_THREADS", std::to_string(std::max(threads, 1)).c_str());
     }
+}
+
+std::uint64_t gdalCacheBytesFor(std::uint64_t memoryBudget)
+{
+    return std::clamp<std::uint64_t>(memoryBudget / 8, std::uint64_t{16} << 20, std::uint64_t{256} << 20);
 }
 
 Expected<HeightField> readGdalHeightField(std::span<const std::filesystem::path> inputs,

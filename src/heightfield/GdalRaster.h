@@ -89,6 +89,8 @@ private:
 /// environment, decoding on `threads` threads (GTiff decodes the tiles of one request in parallel: the
 /// input passes of OutOfCoreBench went from 3.9 to 3.2 s and 6.2 to 5.3 s on 2 cores).
 void configureGdalReading(std::uint64_t memoryBudget, int threads);
+/// The block cache configureGdalReading gives a build within `memoryBudget`, bytes.
+std::uint64_t gdalCacheBytesFor(std::uint64_t memoryBudget);
 
 /// Reads elevation through GDAL: ElevationRaster::open + readAll.
 Expected<HeightField> readGdalHeightField(std::span<const std::filesystem::path> inputs,

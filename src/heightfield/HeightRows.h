@@ -20,6 +20,8 @@ public:
     virtual Status readRows(int j0, int rows, std::span<float> out) = 0;
     /// The whole field, when the source holds it in memory already (then it can be taken without a copy).
     virtual HeightField* held() { return nullptr; }
+    /// Whether rows are read through GDAL's block cache (configureGdalReading sizes it by the budget).
+    virtual bool readsThroughGdalCache() const { return false; }
 };
 
 /// A field already in memory (PNG, raw, .bt, .ter, or a test's).
@@ -41,6 +43,7 @@ public:
     explicit RasterRows(ElevationRaster raster);
     const HeightField& info() const override { return mInfo; }
     Status readRows(int j0, int rows, std::span<float> out) override { return mRaster.readRows(j0, rows, out); }
+    bool readsThroughGdalCache() const override { return true; }
 
 private:
     ElevationRaster mRaster;

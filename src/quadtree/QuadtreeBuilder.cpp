@@ -8,6 +8,7 @@
 #include "core/ParallelFor.h"
 #include "heightfield/GdalRaster.h"
 #include "heightfield/NoDataFill.h"
+#include "quadtree/BuildStages.h"
 #include "quadtree/HeightCodec.h"
 #include "quadtree/NodeTexture.h"
 #include "quadtree/PifsCodec.h"
@@ -23,9 +24,12 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <string>
+#include <thread>
 
 namespace terrain {
 
@@ -403,9 +407,7 @@ private:
 
 namespace {
 
-/// Rows a band of the out-of-core passes reads beyond the rows it produces: the no-data fill's reach, then
-/// the roughness lags measured on the filled samples.
-constexpr int kBandMargin = kFillRings + kRoughnessMargin;
+using Warn = std::function<void(const std::string&)>;
 
 /// How the input passes through memory: whole (one band, the field held) or in bands of whole leaf rows.
 struct InputPlan {
@@ -425,138 +427,86 @@ void clampSamples(std::span<float> samples, const InputPlan& plan)
     }
 }
 
-/// Calls fn(window, windowRow0, windowRows, core0, core1) for bands whose cores [core0, core1) cover the
-/// field's rows in order, each window holding its core and `margin` rows beyond it on each side (as far as
-/// the field goes): the held field at once, or bands read from the source.
-Status forEachBand(HeightRows& source, HeightField* field, const InputPlan& plan, int margin,
-                   const std::function<Status(std::span<float>, int, int, int, int)>& fn)
-{
-    const int width = source.info().width, height = source.info().height;
-    if (field) {
-        return fn(field->samples, 0, height, 0, height);
-    }
-    std::vector<float> buffer;
-    for (int core0 = 0; core0 < height; core0 += plan.coreRows) {
-        const int core1 = std::min(height, core0 + plan.coreRows);
-        const int w0 = std::max(0, core0 - margin), w1 = std::min(height, core1 + margin);
-        buffer.resize(static_cast<std::size_t>(w1 - w0) * width);
-        TERRAIN_TRY(source.readRows(w0, w1 - w0, buffer));
-        clampSamples(buffer, plan);
-        TERRAIN_TRY(fn(buffer, w0, w1 - w0, core0, core1));
-    }
-    return {};
-}
+/// The input as the passes over its rows see it: the field held whole, or bands of rows read from the source.
+struct InputRows {
+    HeightRows& source;
+    HeightField* field = nullptr;  ///< the whole input in memory; null out of core
+    InputPlan plan;
 
-/// The split level the parallel subtrees start at: deep enough for every core to be busy (64 subtrees) and
-/// for a subtree's square to stay within 4096 samples (what the out-of-core build holds per thread). The
-/// tree alone decides it, so the file does not depend on the thread count or on the memory budget.
-int splitLevel(const MapHeader& header)
-{
-    const int levels = static_cast<int>(header.levels);
-    int split = std::min(3, levels - 1);
-    while (split < levels - 1 && (std::uint64_t{header.chunkSize - 1} << (levels - 1 - split)) > 4096) {
-        ++split;
-    }
-    return split;
-}
-
-}  // namespace
-
-std::uint64_t effectiveMemoryBudget(const BuildOptions& options)
-{
-    return options.memoryBudget ? options.memoryBudget : availableMemoryBytes() / 2;
-}
-
-Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, const std::filesystem::path& output)
-{
-    FieldRows rows(std::move(field));
-    return buildMap(rows, options, output);
-}
-
-Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, const std::filesystem::path& output)
-{
-    const auto start = std::chrono::steady_clock::now();
-    // Before the build: an output that cannot be created would only fail when the map is written.
-    TERRAIN_TRY(checkOutputPath(output));
-    auto warn = [&](const std::string& message) {
-        if (options.warn) {
-            options.warn(message);
+    /// Calls fn(window, windowRow0, windowRows, core0, core1) for bands whose cores [core0, core1) cover the
+    /// field's rows in order, each window holding its core and `margin` rows beyond it on each side (as far
+    /// as the field goes): the held field at once, or bands read from the source (clamped).
+    Status forEachBand(int margin, const std::function<Status(std::span<float>, int, int, int, int)>& fn) const
+    {
+        const int width = source.info().width, height = source.info().height;
+        if (field) {
+            return fn(field->samples, 0, height, 0, height);
         }
-    };
-    auto progress = [&](double fraction, std::string_view stage) {
-        if (options.progress) {
-            options.progress(fraction, stage);
+        std::vector<float> buffer;
+        for (int core0 = 0; core0 < height; core0 += plan.coreRows) {
+            const int core1 = std::min(height, core0 + plan.coreRows);
+            const int w0 = std::max(0, core0 - margin), w1 = std::min(height, core1 + margin);
+            buffer.resize(static_cast<std::size_t>(w1 - w0) * width);
+            TERRAIN_TRY(source.readRows(w0, w1 - w0, buffer));
+            clampSamples(buffer, plan);
+            TERRAIN_TRY(fn(buffer, w0, w1 - w0, core0, core1));
         }
-    };
-    if (!isValidChunkSize(options.chunkSize)) {
-        return makeError("chunk size ", options.chunkSize, " must be 2^k+1 between 3 and ", kMaxChunkSize,
-                         " (e.g. 33, 65, 129)");
+        return {};
     }
-    const int textureSize = options.textureSize == 0 ? options.chunkSize : options.textureSize;
-    if (!isPowerOfTwoPlusOne(textureSize) || textureSize > kMaxTextureSize) {
-        return makeError("texture size ", textureSize, " must be 2^k+1 between 3 and ", kMaxTextureSize,
-                         " (e.g. 65, 129, 257)");
-    }
-    if (options.threads < 1) {
-        return makeError("thread count ", options.threads, " must be at least 1");
-    }
-    // The worker threads: options.threads, fewer out of core where the memory budget holds no more.
-    int threads = options.threads;
-    const bool pifs = options.heightCoding == kHeightCodingPifs;
-    if (!pifs && options.heightCoding != kHeightCodingKobbeltResidual) {
-        return makeError("unknown height coding ", options.heightCoding);
-    }
-    if (pifs && options.maxError > 0) {
-        return makeError(
-            "--max-error has no effect with --height-codec pifs: the fractal code's error is what it "
-            "measures, stored in the map (use the residual codec for a bound)");
-    }
-    if (pifs && options.chunkSize < 9) {
-        return makeError(
-            "--height-codec pifs needs a chunk size of at least 9 (4 x 4 range blocks and 8 x 8 "
-            "domains), not ",
-            options.chunkSize);
-    }
-    const HeightField& info = source.info();
-    if (info.width < 2 || info.height < 2) {
-        return makeError("height field is ", info.width, "x", info.height, "; at least 2x2 samples are needed");
-    }
+};
 
-    // Spacing and vertical scale: the file's own win (paper 4.4.1), the options fill in what it lacks.
+/// Metres between samples and metres per native unit.
+struct SampleUnits {
     double spacing = 1.0;
+    double scale = 1.0;
+};
+
+/// Spacing and vertical scale: the file's own win (paper 4.4.1), the options fill in what it lacks (else a
+/// spacing of 1 m, with a warning, and a scale of 1); an option the file overrides is warned about. Errors: a
+/// spacing outside [kMinSpacingMetres, kMaxSpacingMetres] and a non-finite --offset. The scale is checked
+/// once the samples are read (measureInput), as it always was.
+Expected<SampleUnits> resolveUnits(const HeightField& info, const BuildOptions& options, const Warn& warn)
+{
+    SampleUnits units;
     if (info.spacing) {
-        spacing = *info.spacing;
-        if (options.spacing && *options.spacing != spacing) {
+        units.spacing = *info.spacing;
+        if (options.spacing && *options.spacing != units.spacing) {
             warn("-h " + std::to_string(*options.spacing) + " has no effect: the file gives a spacing of " +
-                 std::to_string(spacing) + " m");
+                 std::to_string(units.spacing) + " m");
         }
     } else if (options.spacing) {
-        spacing = *options.spacing;
+        units.spacing = *options.spacing;
     } else {
         warn("the file gives no sample spacing and -h was not given: using 1 m");
     }
-    if (!(spacing >= kMinSpacingMetres && spacing <= kMaxSpacingMetres)) {
-        return makeError("sample spacing ", spacing, " m", info.spacing ? " (the file's)" : "", " must be in [",
+    if (!(units.spacing >= kMinSpacingMetres && units.spacing <= kMaxSpacingMetres)) {
+        return makeError("sample spacing ", units.spacing, " m", info.spacing ? " (the file's)" : "", " must be in [",
                          kMinSpacingMetres, ", ", kMaxSpacingMetres, "] m");
     }
-    double scale = 1.0;
     if (info.verticalScale) {
-        scale = *info.verticalScale;
-        if (options.verticalScale && *options.verticalScale != scale) {
+        units.scale = *info.verticalScale;
+        if (options.verticalScale && *options.verticalScale != units.scale) {
             warn("-v " + std::to_string(*options.verticalScale) +
-                 " has no effect: the file gives a vertical scale of " + std::to_string(scale));
+                 " has no effect: the file gives a vertical scale of " + std::to_string(units.scale));
         }
     } else if (options.verticalScale) {
-        scale = *options.verticalScale;
+        units.scale = *options.verticalScale;
     }
     if (!std::isfinite(options.offset)) {
         return makeError("offset ", options.offset, " must be a finite number");
     }
+    return units;
+}
 
+/// The map's header as the input's size and the options decide it before a sample is read: chunk and texture
+/// sizes, the levels whose grid covers the input (at most 24), spacing, origin, valid region, source,
+/// georeference and detail recipe.
+Expected<MapHeader> headerFor(const HeightField& info, const BuildOptions& options, double spacing)
+{
     const int width = info.width, height = info.height;
     MapHeader header;
     header.chunkSize = static_cast<std::uint32_t>(options.chunkSize);
-    header.textureSize = static_cast<std::uint32_t>(textureSize);
+    header.textureSize = static_cast<std::uint32_t>(effectiveTextureSize(options));
     header.levels = 1;
     while (header.gridSize() < static_cast<std::uint64_t>(std::max(width, height))) {
         ++header.levels;
@@ -572,136 +522,102 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     header.source = info.description;
     setGeoreference(header, info.crsWkt, info.crsUnitMetres);
     setDetailRecipe(header, options.detailRecipe);
-    const auto gridSize = static_cast<std::uint32_t>(header.gridSize());
-    const int cells = options.chunkSize - 1;
-    const std::uint64_t leavesPerSide = std::uint64_t{1} << (header.levels - 1);
+    return header;
+}
+
+/// Whether the map gets a roughness grid: when asked for and the map has at most 15 levels (a warning when
+/// asked for and it has more).
+bool measuresRoughness(const MapHeader& header, const BuildOptions& options, const Warn& warn)
+{
     const bool roughness = options.measureRoughness && header.levels <= 15;
     if (options.measureRoughness && !roughness) {
         warn("a map of " + std::to_string(header.levels) +
              " levels is too large for a roughness grid: the detail below its leaves will not continue the "
              "terrain's roughness");
     }
+    return roughness;
+}
 
-    // Memory: the whole input and grid when they fit the budget, else bands of rows and the grid in a
-    // scratch file next to the output, released region by region (docs/design.md, "Out-of-core prep").
-    const std::uint64_t budget = effectiveMemoryBudget(options);
-    const std::uint64_t samples = std::uint64_t{static_cast<std::uint32_t>(width)} * static_cast<std::uint32_t>(height);
-    const std::uint64_t fixedBytes = leavesPerSide * leavesPerSide * (1 + (roughness ? 80 : 0));
-    const std::uint64_t inMemoryBytes =
-        (source.held() ? 0 : samples * 4) + samples * 2 + QuantizedGrid::storageBytes(gridSize) + fixedBytes;
-    InputPlan plan;
-    plan.inMemory = inMemoryBytes <= budget && !options.forceOutOfCore;
-    if (pifs && !plan.inMemory) {
-        return makeError("--height-codec pifs builds in memory, and a ", width, "x", height, " input needs about ",
-                         formatBytes(inMemoryBytes + QuantizedGrid::storageBytes(gridSize) * 4 / 3),
-                         (options.forceOutOfCore ? std::string(" (--out-of-core was given)")
-                                                 : ", more than the memory budget of " + formatBytes(budget)),
-                         ": use the residual codec out of core");
+/// The input whole, for an in-memory build: the source's own field when it holds one (given up), else read.
+Status holdInput(HeightRows& source, HeightField& whole)
+{
+    if (HeightField* held = source.held()) {
+        whole = std::move(*held);
+        return {};
     }
-    // Out of core, the samples the nodes above the split read (multiples of the split level's stride) stay
-    // in memory beside the scratch file (QuantizedGrid::createMapped).
-    const int coarseShift =
-        std::min(QuantizedGrid::kTileShift, static_cast<int>(header.levels) - 1 - splitLevel(header));
-    if (!plan.inMemory) {
-        // Bands: a quarter of the budget for the band (samples, fill and mask bytes), at least a leaf row and
-        // 256 rows; per thread a subtree's square of codes and its encoded nodes.
-        const std::uint64_t rowBytes = std::uint64_t{static_cast<std::uint32_t>(width)} * 6;
-        // The rows of a band for a budget, and what the build then needs: the band grows with the budget.
-        auto coreRowsFor = [&](std::uint64_t b) {
-            const std::uint64_t bandRows = std::max<std::uint64_t>(b / 4 / rowBytes, 1);
-            const int leafRowsPerBand = static_cast<int>(
-                std::max<std::uint64_t>({bandRows > 2 * kBandMargin ? (bandRows - 2 * kBandMargin) / cells : 0,
-                                         static_cast<std::uint64_t>(256 / cells), std::uint64_t{1}}));
-            return leafRowsPerBand * cells;
-        };
-        const std::uint64_t square = std::min<std::uint64_t>(gridSize, 4096 + 2 * cells);
-        const std::uint64_t perThread = square * square * 6;  // its codes, encoded nodes and textures
-        auto neededFor = [&](std::uint64_t b) {
-            return (static_cast<std::uint64_t>(coreRowsFor(b)) + 2 * kBandMargin) * rowBytes +
-                   static_cast<std::uint64_t>(threads) * perThread + fixedBytes +
-                   samples / (kFillBlock * kFillBlock) * 16 + QuantizedGrid::coarseLatticeBytes(gridSize, coarseShift) +
-                   (std::uint64_t{4} << 20);
-        };
-        plan.coreRows = coreRowsFor(budget);
-        // Each thread holds a subtree's square: as many as fit, saying so when fewer than asked.
-        while (threads > 1 && neededFor(budget) > budget) {
-            --threads;
-        }
-        if (threads < options.threads) {
-            warn("building on " + std::to_string(threads) + " thread(s) of the " + std::to_string(options.threads) +
-                 " asked: each holds a subtree of the grid, and more do not fit the memory budget of " +
-                 formatBytes(budget));
-        }
-        if (neededFor(budget) > budget) {
-            // The least budget that covers what it itself needs (the need grows by a quarter of the budget, so
-            // following the need converges), rounded up to a MiB: following the advice works.
-            std::uint64_t advice = neededFor(budget);
-            for (int k = 0; k < 200 && neededFor(advice) > advice; ++k) {
-                advice = neededFor(advice);
-            }
-            if (!options.forceOutOfCore) {
-                advice = std::min(advice, inMemoryBytes);  // the whole build in memory may need less
-            }
-            advice = (advice + (std::uint64_t{1} << 20) - 1) >> 20 << 20;
-            return makeError("the memory budget of ", formatBytes(budget), " is too small for a ", width, "x", height,
-                             " input even out of core on one thread: --memory ", advice >> 20, "M is enough");
-        }
-    }
-    HeightField whole;
-    HeightField* field = nullptr;
-    if (plan.inMemory) {
-        if (HeightField* held = source.held()) {
-            whole = std::move(*held);
-        } else {
-            TERRAIN_TRY(checkAllocation(samples * 4,
-                                        "a " + std::to_string(width) + "x" + std::to_string(height) + " height field"));
-            whole = info;
-            whole.samples.resize(samples);
-            TERRAIN_TRY(source.readRows(0, height, whole.samples));
-        }
-        field = &whole;
-    }
-    if (options.clampMetres) {
-        const double base = info.verticalOffset + options.offset;
-        const auto [lo, hi] = *options.clampMetres;
-        if (!(lo <= hi && std::abs(lo) <= kMaxHeightMetres && std::abs(hi) <= kMaxHeightMetres)) {
-            return makeError("--clamp ", lo, ",", hi, ": LO <= HI, both within +-", kMaxHeightMetres, " m");
-        }
-        auto native = [&](double metres) {
-            constexpr double kMax = std::numeric_limits<float>::max();
-            return static_cast<float>(std::clamp((metres - base) / scale, -kMax, kMax));
-        };
-        plan.clampNative = std::array<float, 2>{native(lo), native(hi)};
-        if (field) {
-            clampSamples(field->samples, plan);
-        }
-    }
+    const HeightField& info = source.info();
+    const std::uint64_t samples =
+        std::uint64_t{static_cast<std::uint32_t>(info.width)} * static_cast<std::uint32_t>(info.height);
+    TERRAIN_TRY(checkAllocation(
+        samples * 4, "a " + std::to_string(info.width) + "x" + std::to_string(info.height) + " height field"));
+    const int height = info.height;
+    whole = info;
+    whole.samples.resize(samples);
+    return source.readRows(0, height, whole.samples);
+}
 
-    // Pass 1: the valid samples' statistics and the far fill's block means.
-    progress(0.0, "reading");
+/// BuildOptions::clampMetres in native units (metres = base + scale x native, the ends clamped to float's
+/// range); empty without it. Error: LO > HI or either beyond kMaxHeightMetres.
+Expected<std::optional<std::array<float, 2>>> clampInNativeUnits(const BuildOptions& options, double base, double scale)
+{
+    if (!options.clampMetres) {
+        return std::optional<std::array<float, 2>>{};
+    }
+    const auto [lo, hi] = *options.clampMetres;
+    if (!(lo <= hi && std::abs(lo) <= kMaxHeightMetres && std::abs(hi) <= kMaxHeightMetres)) {
+        return makeError("--clamp ", lo, ",", hi, ": LO <= HI, both within +-", kMaxHeightMetres, " m");
+    }
+    auto native = [&](double metres) {
+        constexpr double kMax = std::numeric_limits<float>::max();
+        return static_cast<float>(std::clamp((metres - base) / scale, -kMax, kMax));
+    };
+    return std::optional(std::array<float, 2>{native(lo), native(hi)});
+}
+
+/// What pass 1 learns of the input.
+struct InputStatistics {
+    SampleStatistics statistics;  ///< of the valid samples
+    FarFillGrid far;              ///< the far fill's block means; empty when every sample is valid
+};
+
+/// Pass 1: the valid samples' statistics and the far fill's block means. Errors: no valid sample, a vertical
+/// scale that is not positive and finite, heights out of range (checkSampleRange, metres = baseOffset +
+/// scale x native).
+Expected<InputStatistics> measureInput(const InputRows& input, double scale, double baseOffset)
+{
+    const int width = input.source.info().width, height = input.source.info().height;
     SampleStatistics statistics(width, height);
     FarFillBuilder farBuilder(width, height);
-    TERRAIN_TRY(
-        forEachBand(source, field, plan, 0, [&](std::span<float> rows, int, int, int core0, int core1) -> Status {
-            statistics.addRows(core0, core1 - core0, rows);
-            farBuilder.addRows(core0, core1 - core0, rows);
-            return {};
-        }));
+    TERRAIN_TRY(input.forEachBand(0, [&](std::span<float> rows, int, int, int core0, int core1) -> Status {
+        statistics.addRows(core0, core1 - core0, rows);
+        farBuilder.addRows(core0, core1 - core0, rows);
+        return {};
+    }));
     if (statistics.valid() == 0) {
         return makeError("height field has no valid sample (every sample is no-data)");
     }
     if (!(scale > 0) || !std::isfinite(scale)) {
         return makeError("vertical scale ", scale, " must be a positive finite number");
     }
-    TERRAIN_TRY(checkSampleRange(statistics, scale, info.verticalOffset + options.offset));
-    const FarFillGrid far = statistics.valid() < samples ? farBuilder.finish() : FarFillGrid{};
+    TERRAIN_TRY(checkSampleRange(statistics, scale, baseOffset));
+    const std::uint64_t samples = std::uint64_t{static_cast<std::uint32_t>(width)} * static_cast<std::uint32_t>(height);
+    FarFillGrid far = statistics.valid() < samples ? farBuilder.finish() : FarFillGrid{};
+    return InputStatistics{std::move(statistics), std::move(far)};
+}
 
+/// The quantization (chooseQuantization), passing over the rows again (pass 1b) where float samples may lie
+/// on a lattice, written into `header`; warns when --max-error leaves the heights lossless.
+Expected<Quantization> chooseMapQuantization(const InputRows& input, const SampleStatistics& statistics, double scale,
+                                             double baseOffset, const BuildOptions& options, MapHeader& header,
+                                             const Warn& warn)
+{
+    const int width = input.source.info().width;
     auto quantization = chooseQuantization(
-        statistics, info.integerSamples, scale, info.verticalOffset + options.offset, options.maxError,
+        statistics, input.source.info().integerSamples, scale, baseOffset, options.maxError,
         [&](double g) -> Expected<std::optional<double>> {
             // Pass 1b, for float input that may lie on a lattice: every valid sample's distance from it.
             std::optional<double> worst = 0.0;
-            TERRAIN_TRY(forEachBand(source, field, plan, 0, [&](std::span<float> rows, int, int, int core0, int core1) {
+            TERRAIN_TRY(input.forEachBand(0, [&](std::span<float> rows, int, int, int core0, int core1) {
                 if (worst) {
                     auto band = latticeDeviation(rows.first(static_cast<std::size_t>(core1 - core0) * width),
                                                  statistics.lo(), statistics.hi(), g);
@@ -726,122 +642,146 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
                       options.maxError, quantization->step);
         warn(message);
     }
+    return quantization;
+}
 
-    // Pass 2: fill, roughness, codes (the padding replicating the last column and row), filled squares.
-    progress(0.0, "quantizing");
-    auto grid =
-        plan.inMemory
-            ? QuantizedGrid::create(gridSize)
-            : QuantizedGrid::createMapped(
-                  gridSize, output.has_parent_path() ? output.parent_path() : std::filesystem::path("."), coarseShift);
+/// Codes of rows [core0, core1) of a band whose rows start at row w0, on `threads` threads; the padding
+/// columns repeat each row's last code.
+void quantizeRows(QuantizedGrid& grid, std::span<const float> rows, int width, int w0, int core0, int core1,
+                  const Quantization& quantization, int threads)
+{
+    parallelFor(static_cast<std::size_t>(core1 - core0), threads, [&](std::size_t k) {
+        const int y = core0 + static_cast<int>(k);
+        const float* row = rows.data() + static_cast<std::size_t>(y - w0) * width;
+        for (int x = 0; x < width; ++x) {
+            grid.at(static_cast<std::uint64_t>(x), static_cast<std::uint64_t>(y)) =
+                quantizeNative(row[x], quantization);
+        }
+        const std::uint16_t last = grid.at(static_cast<std::uint64_t>(width - 1), static_cast<std::uint64_t>(y));
+        for (std::uint32_t x = static_cast<std::uint32_t>(width); x < grid.size(); ++x) {
+            grid.at(x, static_cast<std::uint64_t>(y)) = last;
+        }
+    });
+}
+
+/// The padding rows below the input's `height` rows, each a copy of its last row, released as written.
+void padLastRow(QuantizedGrid& grid, int height)
+{
+    const std::uint32_t gridSize = grid.size();
+    for (std::uint32_t y = static_cast<std::uint32_t>(height); y < gridSize; ++y) {
+        for (std::uint32_t x = 0; x < gridSize; ++x) {
+            grid.at(x, y) = grid.at(x, static_cast<std::uint64_t>(height - 1));
+        }
+        if (y % 256 == 255) {
+            grid.release(0, (y - 255) & ~std::uint32_t{63}, gridSize, y + 1);
+        }
+    }
+}
+
+/// What pass 2 leaves.
+struct QuantizedInput {
+    QuantizedGrid grid;                         ///< the codes, the padding repeating the last column and row
+    std::vector<std::uint8_t> filledSquares;    ///< per finest-level square: it held a no-data sample
+    std::uint64_t filled = 0;                   ///< no-data samples filled
+    std::uint16_t lowest = 65535, highest = 0;  ///< over the input's codes
+    std::optional<RoughnessGrid> roughness;     ///< the leaves' roughness, where measured
+};
+
+/// Pass 2: fills the no-data samples, measures the leaves' roughness (when `roughness`), quantizes into the
+/// grid (in memory, or a scratch file in `scratchDirectory` out of core) and marks the squares that held
+/// no-data samples.
+Expected<QuantizedInput> quantizeInput(const InputRows& input, const MapHeader& header,
+                                       const InputStatistics& statistics, const Quantization& quantization,
+                                       double scale, bool roughness, int threads,
+                                       const std::filesystem::path& scratchDirectory, int coarseShift)
+{
+    const int width = input.source.info().width, height = input.source.info().height;
+    const std::uint64_t samples = std::uint64_t{static_cast<std::uint32_t>(width)} * static_cast<std::uint32_t>(height);
+    const auto gridSize = static_cast<std::uint32_t>(header.gridSize());
+    const int cells = static_cast<int>(header.chunkSize) - 1;
+    const std::uint64_t leavesPerSide = std::uint64_t{1} << (header.levels - 1);
+    auto grid = input.plan.inMemory ? QuantizedGrid::create(gridSize)
+                                    : QuantizedGrid::createMapped(gridSize, scratchDirectory, coarseShift);
     TERRAIN_TRY(grid);
+    QuantizedInput out{std::move(grid.value()),
+                       std::vector<std::uint8_t>(leavesPerSide * leavesPerSide, 0),
+                       0,
+                       65535,
+                       0,
+                       std::nullopt};
     std::optional<LeafRoughnessMeter> meter;
     if (roughness) {
         meter.emplace(width, height, scale, header);
     }
-    std::vector<std::uint8_t> filledSquares(leavesPerSide * leavesPerSide, 0);
-    std::uint64_t filled = 0;
-    std::uint16_t lowest = 65535, highest = 0;
     std::vector<std::uint8_t> mask;
-    TERRAIN_TRY(forEachBand(
-        source, field, plan, kBandMargin, [&](std::span<float> rows, int w0, int wrows, int core0, int core1) {
-            if (statistics.valid() < samples) {
-                fillNoDataRows(rows, width, wrows, w0, far, &mask);
-            }
-            for (int y = core0; y < core1 && !mask.empty(); ++y) {
-                const std::uint8_t* row = mask.data() + static_cast<std::size_t>(y - w0) * width;
-                for (int x = 0; x < width; ++x) {
-                    if (!row[x]) {
-                        continue;
-                    }
-                    ++filled;
-                    // The finest squares whose closed square holds (x, y): up to four at a corner.
-                    for (int sy = y / cells - (y % cells == 0 ? 1 : 0); sy <= y / cells; ++sy) {
-                        for (int sx = x / cells - (x % cells == 0 ? 1 : 0); sx <= x / cells; ++sx) {
-                            if (sx >= 0 && sy >= 0 && std::uint64_t(sx) < leavesPerSide &&
-                                std::uint64_t(sy) < leavesPerSide) {
-                                filledSquares[std::uint64_t(sy) * leavesPerSide + std::uint64_t(sx)] = 1;
-                            }
-                        }
-                    }
-                }
-            }
-            if (meter) {
-                const int ly0 = core0 / cells;
-                const int ly1 = core1 == height ? meter->leafRows() : core1 / cells;
-                meter->addLeafRows(ly0, ly1, rows, w0, wrows, threads);
-            }
-            parallelFor(static_cast<std::size_t>(core1 - core0), threads, [&](std::size_t k) {
-                const int y = core0 + static_cast<int>(k);
-                const float* row = rows.data() + static_cast<std::size_t>(y - w0) * width;
-                for (int x = 0; x < width; ++x) {
-                    grid->at(static_cast<std::uint64_t>(x), static_cast<std::uint64_t>(y)) =
-                        quantizeNative(row[x], *quantization);
-                }
-                const std::uint16_t last =
-                    grid->at(static_cast<std::uint64_t>(width - 1), static_cast<std::uint64_t>(y));
-                for (std::uint32_t x = static_cast<std::uint32_t>(width); x < gridSize; ++x) {
-                    grid->at(x, static_cast<std::uint64_t>(y)) = last;
-                }
-            });
-            for (int y = core0; y < core1; ++y) {
-                for (int x = 0; x < width; ++x) {
-                    const std::uint16_t code = grid->at(static_cast<std::uint64_t>(x), static_cast<std::uint64_t>(y));
-                    lowest = std::min(lowest, code);
-                    highest = std::max(highest, code);
-                }
-            }
-            grid->release(0, static_cast<std::uint64_t>(core0) & ~std::uint64_t{63}, gridSize,
-                          static_cast<std::uint64_t>(core1));
-            return Status{};
-        }));
-    for (std::uint32_t y = static_cast<std::uint32_t>(height); y < gridSize; ++y) {
-        for (std::uint32_t x = 0; x < gridSize; ++x) {
-            grid->at(x, y) = grid->at(x, static_cast<std::uint64_t>(height - 1));
+    TERRAIN_TRY(input.forEachBand(kBandMargin, [&](std::span<float> rows, int w0, int wrows, int core0, int core1) {
+        if (statistics.statistics.valid() < samples) {
+            fillNoDataRows(rows, width, wrows, w0, statistics.far, &mask);
         }
-        if (y % 256 == 255) {
-            grid->release(0, (y - 255) & ~std::uint32_t{63}, gridSize, y + 1);
+        out.filled += markFilledSquares(mask, width, w0, core0, core1, cells, leavesPerSide, out.filledSquares);
+        if (meter) {
+            const int ly0 = core0 / cells;
+            const int ly1 = core1 == height ? meter->leafRows() : core1 / cells;
+            meter->addLeafRows(ly0, ly1, rows, w0, wrows, threads);
         }
-    }
-    grid->releaseAll();
-    header.noDataFilled = filled;
+        quantizeRows(out.grid, rows, width, w0, core0, core1, quantization, threads);
+        for (int y = core0; y < core1; ++y) {
+            for (int x = 0; x < width; ++x) {
+                const std::uint16_t code = out.grid.at(static_cast<std::uint64_t>(x), static_cast<std::uint64_t>(y));
+                out.lowest = std::min(out.lowest, code);
+                out.highest = std::max(out.highest, code);
+            }
+        }
+        out.grid.release(0, static_cast<std::uint64_t>(core0) & ~std::uint64_t{63}, gridSize,
+                         static_cast<std::uint64_t>(core1));
+        return Status{};
+    }));
+    padLastRow(out.grid, height);
+    out.grid.releaseAll();
     if (meter) {
-        setRoughness(header, meter->finish());
+        out.roughness = meter->finish();
     }
-    BuildReport report;
-    report.inputWidth = width;
-    report.inputHeight = height;
-    report.outOfCore = !plan.inMemory;
-    report.memoryBudget = budget;
-    report.threads = threads;
-    whole = {};  // the grid holds everything from here on
-    mask = {};
+    return out;
+}
 
-    if (header.quantizerBin > 1) {
-        progress(0.02, "reconstructing");
-        grid->reconstructLossy(header, header.quantizerBin, threads);
-    }
+/// The finest level's texel lattice over the valid region, in the map's CRS.
+RasterGrid textureLattice(const MapHeader& header)
+{
+    const double texelsPerSample = (header.textureSize - 1.0) / (header.chunkSize - 1.0);
+    RasterGrid lattice;
+    lattice.width = static_cast<int>(std::ceil((header.validWidth - 1.0) * texelsPerSample - 1e-9)) + 1;
+    lattice.height = static_cast<int>(std::ceil((header.validHeight - 1.0) * texelsPerSample - 1e-9)) + 1;
+    lattice.step = header.sampleSpacing / texelsPerSample;
+    lattice.x0 = header.originX + header.validX0 * header.sampleSpacing;
+    lattice.y0 = header.originY + header.validY0 * header.sampleSpacing;
+    lattice.crsWkt = header.crsWkt;
+    lattice.crsUnitMetres = header.crsUnitMetres;
+    return lattice;
+}
 
-    // -t: georeferenced imagery aligned by coordinates over the generated colours, or a PNG stretched over
-    // the input.
-    std::unique_ptr<TextureSource> textureSource;
-    std::unique_ptr<TextureSource> generated =
-        std::make_unique<HeightColouring>(*grid, header, header.heightOf(lowest), header.heightOf(highest));
-    Image textureImage;
+/// What the nodes' textures are sampled from, and what that refers to.
+struct MapTexture {
+    std::unique_ptr<TextureSource> generated;  ///< colours from the heights (imagery's fallback); null when `source`
+    std::unique_ptr<Image> image;              ///< a stretched PNG's pixels, which `source` refers to
+    std::unique_ptr<TextureSource> source;
+    std::optional<double> imageryCoverage;  ///< georeferenced imagery: the share of the lattice it covers
+};
+
+/// The texture (-t): georeferenced imagery aligned by coordinates over the colours generated from the heights
+/// (between codes lowest and highest), a PNG stretched over the input, or those colours alone. Out of core,
+/// imagery whose texel lattice takes more than half of `budget` is an error. `header` and `grid` must outlive
+/// the result.
+Expected<MapTexture> chooseTexture(const BuildOptions& options, const MapHeader& header, const QuantizedGrid& grid,
+                                   std::uint16_t lowest, std::uint16_t highest, bool inMemory, std::uint64_t budget)
+{
+    MapTexture texture;
+    texture.generated =
+        std::make_unique<HeightColouring>(grid, header, header.heightOf(lowest), header.heightOf(highest));
     if (options.texture && isGeoreferencedRaster(*options.texture)) {
-        // The finest level's texel lattice over the valid region.
-        const double texelsPerSample = (header.textureSize - 1.0) / (header.chunkSize - 1.0);
-        RasterGrid lattice;
-        lattice.width = static_cast<int>(std::ceil((header.validWidth - 1.0) * texelsPerSample - 1e-9)) + 1;
-        lattice.height = static_cast<int>(std::ceil((header.validHeight - 1.0) * texelsPerSample - 1e-9)) + 1;
-        lattice.step = header.sampleSpacing / texelsPerSample;
-        lattice.x0 = header.originX + header.validX0 * header.sampleSpacing;
-        lattice.y0 = header.originY + header.validY0 * header.sampleSpacing;
-        lattice.crsWkt = header.crsWkt;
-        lattice.crsUnitMetres = header.crsUnitMetres;
+        const RasterGrid lattice = textureLattice(header);
         const std::uint64_t latticeBytes =
             std::uint64_t{static_cast<std::uint32_t>(lattice.width)} * static_cast<std::uint32_t>(lattice.height) * 4;
-        if (!plan.inMemory && latticeBytes > budget / 2) {
+        if (!inMemory && latticeBytes > budget / 2) {
             return makeError(options.texture->string(), ": imagery resampled onto the map's ", lattice.width, "x",
                              lattice.height, " texel lattice takes ", formatBytes(latticeBytes),
                              ", more than half the memory budget of ", formatBytes(budget),
@@ -850,40 +790,40 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
         }
         auto imagery = readGeoImagery(*options.texture, lattice);
         TERRAIN_TRY(imagery);
+        const double texelsPerSample = (header.textureSize - 1.0) / (header.chunkSize - 1.0);
         auto covered = std::make_unique<CoveredImageTexture>(std::move(imagery.value()), texelsPerSample,
-                                                             header.validX0, header.validY0, *generated);
-        report.imageryCoverage = covered->coverage();
-        textureSource = std::move(covered);
+                                                             header.validX0, header.validY0, *texture.generated);
+        texture.imageryCoverage = covered->coverage();
+        texture.source = std::move(covered);
     } else if (options.texture) {
         auto image = readPngImage(*options.texture, 3);
         TERRAIN_TRY(image);
-        textureImage = std::move(image.value());
-        textureSource = std::make_unique<ImageTexture>(textureImage, header);
+        texture.image = std::make_unique<Image>(std::move(image.value()));
+        texture.source = std::make_unique<ImageTexture>(*texture.image, header);
     } else {
-        textureSource = std::move(generated);
+        texture.source = std::move(texture.generated);
     }
-    std::unique_ptr<WeightMap> weights;
-    if (options.weights) {
-        auto image = readPngImage(*options.weights, 1);
-        TERRAIN_TRY(image);
-        weights = std::make_unique<WeightMap>(std::move(image.value()), header);
-    }
-    const TreeShape shape(header, weights.get());
-    const std::uint64_t totalNodes = shape.count();
-    std::optional<PifsPyramid> pyramid;
-    if (pifs) {
-        // Seed 003's fractal code, top-down over the whole tree before the nodes' errors (which need every
-        // node's stored heights and coding error).
-        progress(0.03, "fractal coding");
-        header.heightCoding = kHeightCodingPifs;
-        pyramid.emplace(PifsPyramid::build(
-            header, *grid, [&](int level) { return shape.nodesAt(level); }, threads, options.zlibLevel));
-        header.maxErrorBound = pyramid->maxErrorCodes() * header.heightStep + quantization->errorBound;
-    }
+    return texture;
+}
 
+/// The weight map (-w) over the map, or null without one.
+Expected<std::unique_ptr<WeightMap>> readWeights(const BuildOptions& options, const MapHeader& header)
+{
+    if (!options.weights) {
+        return std::unique_ptr<WeightMap>();
+    }
+    auto image = readPngImage(*options.weights, 1);
+    TERRAIN_TRY(image);
+    return std::make_unique<WeightMap>(std::move(image.value()), header);
+}
+
+/// Creates the map file (under a temporary name until committed) and writes its header, patched at the end,
+/// and the header's records: detail recipe, roughness, georeference.
+Expected<AtomicFile> beginMapFile(const std::filesystem::path& output, const MapHeader& header)
+{
     auto file = AtomicFile::create(output);
     TERRAIN_TRY(file);
-    file->write(encodeHeader(header).data(), kHeaderBytes);  // patched at the end
+    file->write(encodeHeader(header).data(), kHeaderBytes);
     if (header.detailRecipe) {
         file->write(encodeDetailRecipe(*header.detailRecipe, header.version));
     }
@@ -893,72 +833,113 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     if (header.georeferenceBytes > 0) {
         file->write(encodeGeoreference(header.crsWkt, header.crsUnitMetres));
     }
+    return file;
+}
 
-    std::atomic<std::uint64_t> done{0};
-    std::atomic<std::int64_t> detailNanoseconds{0};
-    BuildOptions nodeOptions = options;
-    if (options.detailDisplacementRangeFor) {
-        nodeOptions.detailDisplacementRange = options.detailDisplacementRangeFor(header);
+/// Appends encoded blocks to the map file: their entries, offsets made absolute, to the directory, and their
+/// byte counts to the report.
+class BlockWriter {
+public:
+    BlockWriter(AtomicFile& file, BuildReport& report, std::uint64_t nodes) : mFile(file), mReport(report)
+    {
+        mDirectory.reserve(nodes);
     }
-    // Subtrees below the split are independent: workers build them in parallel, each into its own block,
-    // and blocks are appended in subtree order.
-    SplitPartials partials;
-    partials.split = splitLevel(header);
-    partials.subtrees = shape.nodesAt(partials.split);
-    partials.codes.resize(partials.subtrees.size());
-    const int split = partials.split;
-    const std::vector<NodeId>& subtrees = partials.subtrees;
-    Builder builder(header, *grid, shape, *textureSource, filledSquares, partials, nodeOptions,
-                    pyramid ? &*pyramid : nullptr, done, detailNanoseconds);
-    std::vector<DirectoryEntry> directory;
-    directory.reserve(totalNodes);
-    auto append = [&](EncodedBlock& block) {
-        const std::uint64_t base = file->size();
+
+    /// Appends `block` after what was written so far, and empties it.
+    void append(EncodedBlock& block)
+    {
+        const std::uint64_t base = mFile.size();
         for (auto& entry : block.entries) {
             entry.offset += base;
-            directory.push_back(entry);
+            mDirectory.push_back(entry);
         }
-        file->write(block.bytes);
-        report.heightBytes += block.heightBytes;
-        report.textureBytes += block.textureBytes;
-        report.storedSamples += block.storedSamples;
+        mFile.write(block.bytes);
+        mReport.heightBytes += block.heightBytes;
+        mReport.textureBytes += block.textureBytes;
+        mReport.storedSamples += block.storedSamples;
         block = {};
-    };
+    }
 
-    std::vector<NodeSummary> subtreeSummaries(subtrees.size());
+    std::vector<DirectoryEntry>& directory() { return mDirectory; }
+
+private:
+    AtomicFile& mFile;
+    BuildReport& mReport;
+    std::vector<DirectoryEntry> mDirectory;
+};
+
+/// Reports the nodes built out of `total` as "building nodes" progress every 100 ms, from a thread of its own,
+/// until stop() (no thread without a callback).
+class NodeProgress {
+public:
+    NodeProgress(const std::function<void(double, std::string_view)>& progress, const std::atomic<std::uint64_t>& done,
+                 std::uint64_t total)
+    {
+        if (progress) {
+            mThread = std::thread([this, &progress, &done, total] {
+                while (!mStop) {
+                    progress(0.05 + 0.95 * static_cast<double>(done) / static_cast<double>(total), "building nodes");
+                    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+                }
+            });
+        }
+    }
+    NodeProgress(const NodeProgress&) = delete;
+    NodeProgress& operator=(const NodeProgress&) = delete;
+    ~NodeProgress() { stop(); }
+
+    void stop()
+    {
+        mStop = true;
+        if (mThread.joinable()) {
+            mThread.join();
+        }
+    }
+
+private:
+    std::atomic<bool> mStop{false};
+    std::thread mThread;
+};
+
+/// Builds the subtrees at the split level (partials.subtrees) on `threads` workers, each into its own block,
+/// appended in subtree order; fills partials.codes, releases each subtree's square of the grid once done and
+/// returns the subtree roots' summaries (the roots themselves are emitted by their parents).
+std::vector<NodeSummary> buildSubtrees(const Builder& builder, SplitPartials& partials, QuantizedGrid& grid,
+                                       const MapHeader& header, int threads, BlockWriter& writer)
+{
+    const std::vector<NodeId>& subtrees = partials.subtrees;
+    std::vector<NodeSummary> summaries(subtrees.size());
     std::vector<std::unique_ptr<EncodedBlock>> pending(subtrees.size());
     std::mutex writeMutex;
     std::size_t nextToWrite = 0;
     auto none = [](const NodeId&) -> const NodeSummary* { return nullptr; };
-    std::atomic<bool> stopProgress{false};
-    std::thread progressThread;
-    if (options.progress) {
-        progressThread = std::thread([&] {
-            while (!stopProgress) {
-                progress(0.05 + 0.95 * static_cast<double>(done) / static_cast<double>(totalNodes), "building nodes");
-                std::this_thread::sleep_for(std::chrono::milliseconds(100));
-            }
-        });
-    }
     parallelFor(subtrees.size(), threads, [&](std::size_t i) {
         auto block = std::make_unique<EncodedBlock>();
-        subtreeSummaries[i] = builder.process(subtrees[i], *block, none);
+        summaries[i] = builder.process(subtrees[i], *block, none);
         partials.codes[i] = builder.partialsOf(subtrees[i]);
         // Done with the subtree's square (and the tiles around it that its borders touched).
-        const std::uint64_t side = std::uint64_t{header.chunkSize - 1} << (header.levels - 1 - split);
+        const std::uint64_t side = std::uint64_t{header.chunkSize - 1} << (header.levels - 1 - partials.split);
         const std::uint64_t margin = 2 * 64;
         const std::uint64_t x0 = subtrees[i].x * side, y0 = subtrees[i].y * side;
-        grid->release(x0 > margin ? x0 - margin : 0, y0 > margin ? y0 - margin : 0, x0 + side + margin,
-                      y0 + side + margin);
+        grid.release(x0 > margin ? x0 - margin : 0, y0 > margin ? y0 - margin : 0, x0 + side + margin,
+                     y0 + side + margin);
         std::lock_guard lock(writeMutex);
         pending[i] = std::move(block);
         while (nextToWrite < pending.size() && pending[nextToWrite]) {
-            append(*pending[nextToWrite]);
+            writer.append(*pending[nextToWrite]);
             pending[nextToWrite].reset();
             ++nextToWrite;
         }
     });
-    // The levels above the split, reusing the subtree roots' summaries.
+    return summaries;
+}
+
+/// The levels above the split, reusing the subtree roots' summaries, and the root: appended last.
+void buildUpperLevels(const Builder& builder, const SplitPartials& partials,
+                      const std::vector<NodeSummary>& subtreeSummaries, BlockWriter& writer)
+{
+    const int split = partials.split;
+    const std::vector<NodeId>& subtrees = partials.subtrees;
     EncodedBlock top;
     auto known = [&](const NodeId& id) -> const NodeSummary* {
         if (id.level != split || split == 0) {
@@ -969,28 +950,31 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
     };
     NodeSummary root = split == 0 ? subtreeSummaries.front() : builder.process(NodeId::root(), top, known);
     builder.emitRoot(root, top);
-    append(top);
-    stopProgress = true;
-    if (progressThread.joinable()) {
-        progressThread.join();
-    }
-    progress(1.0, "writing directory");
+    writer.append(top);
+}
 
+/// Writes the directory, sorted by node key, and the final header, then commits the file.
+Status finishMapFile(AtomicFile& file, MapHeader& header, std::vector<DirectoryEntry>& directory, BuildReport& report)
+{
     std::sort(directory.begin(), directory.end(),
               [](const DirectoryEntry& a, const DirectoryEntry& b) { return a.id.key() < b.id.key(); });
     auto directoryBytes = encodeDirectory(directory);
     header.nodeCount = static_cast<std::uint32_t>(directory.size());
-    header.directoryOffset = file->size();
+    header.directoryOffset = file.size();
     header.directoryBytes = directoryBytes.size();
     header.directoryCrc = crc32Of(directoryBytes);
-    file->write(directoryBytes);
-    file->writeAt(0, encodeHeader(header).data(), kHeaderBytes);
-    report.fileBytes = file->size();
-    TERRAIN_TRY(file->commit());
+    file.write(directoryBytes);
+    file.writeAt(0, encodeHeader(header).data(), kHeaderBytes);
+    report.fileBytes = file.size();
+    return file.commit();
+}
 
-    report.header = header;
+/// The report's node and leaf figures, from the directory in its order (so they do not depend on the thread
+/// count).
+void summarizeNodes(const std::vector<DirectoryEntry>& directory, BuildReport& report)
+{
     report.nodes = directory.size();
-    double detailSum = 0.0;  // in directory order, so the figures do not depend on the thread count
+    double detailSum = 0.0;
     for (const DirectoryEntry& entry : directory) {
         if (!entry.hasChildren) {
             ++report.leaves;
@@ -999,6 +983,147 @@ Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, 
         }
     }
     report.meanLeafDetailError = detailSum / static_cast<double>(report.leaves);
+}
+
+}  // namespace
+
+std::uint64_t effectiveMemoryBudget(const BuildOptions& options)
+{
+    return options.memoryBudget ? options.memoryBudget : availableMemoryBytes() / 2;
+}
+
+Expected<BuildReport> buildMap(HeightField field, const BuildOptions& options, const std::filesystem::path& output)
+{
+    FieldRows rows(std::move(field));
+    return buildMap(rows, options, output);
+}
+
+Expected<BuildReport> buildMap(HeightRows& source, const BuildOptions& options, const std::filesystem::path& output)
+{
+    const auto start = std::chrono::steady_clock::now();
+    // Before the build: an output that cannot be created would only fail when the map is written.
+    TERRAIN_TRY(checkOutputPath(output));
+    const Warn warn = [&](const std::string& message) {
+        if (options.warn) {
+            options.warn(message);
+        }
+    };
+    auto progress = [&](double fraction, std::string_view stage) {
+        if (options.progress) {
+            options.progress(fraction, stage);
+        }
+    };
+    const HeightField& info = source.info();
+    TERRAIN_TRY(checkBuildOptions(options, info));
+    auto units = resolveUnits(info, options, warn);
+    TERRAIN_TRY(units);
+    const double scale = units->scale;
+    auto headerOfInput = headerFor(info, options, units->spacing);
+    TERRAIN_TRY(headerOfInput);
+    MapHeader header = std::move(headerOfInput.value());
+    const bool roughness = measuresRoughness(header, options, warn);
+    const bool pifs = options.heightCoding == kHeightCodingPifs;
+
+    // Memory: the whole input and grid when they fit the budget, else bands of rows and the grid in a
+    // scratch file next to the output, released region by region (docs/design.md, "Out-of-core prep").
+    const std::uint64_t budget = effectiveMemoryBudget(options);
+    auto memory = planMemory(header,
+                             {budget, options.threads, source.held() != nullptr, roughness, pifs,
+                              options.forceOutOfCore, source.readsThroughGdalCache()},
+                             warn);
+    TERRAIN_TRY(memory);
+    const int threads = memory->threads;
+    if (!memory->inMemory && options.note) {
+        options.note("out of core in bands of " + std::to_string(memory->coreRows) + " rows on " +
+                     std::to_string(threads) + " thread(s), anonymous memory estimated at " +
+                     formatBytes(memory->estimatedBytes) + " (budget " + formatBytes(budget) + ")");
+    }
+    InputRows input{source, nullptr, {memory->inMemory, memory->coreRows, {}}};
+    HeightField whole;
+    if (memory->inMemory) {
+        TERRAIN_TRY(holdInput(source, whole));
+        input.field = &whole;
+    }
+    const double baseOffset = info.verticalOffset + options.offset;
+    auto clamp = clampInNativeUnits(options, baseOffset, scale);
+    TERRAIN_TRY(clamp);
+    input.plan.clampNative = *clamp;
+    if (input.field) {
+        clampSamples(input.field->samples, input.plan);
+    }
+
+    progress(0.0, "reading");
+    auto statistics = measureInput(input, scale, baseOffset);
+    TERRAIN_TRY(statistics);
+    auto quantization = chooseMapQuantization(input, statistics->statistics, scale, baseOffset, options, header, warn);
+    TERRAIN_TRY(quantization);
+    progress(0.0, "quantizing");
+    auto quantized = quantizeInput(input, header, *statistics, *quantization, scale, roughness, threads,
+                                   output.has_parent_path() ? output.parent_path() : std::filesystem::path("."),
+                                   memory->coarseShift);
+    TERRAIN_TRY(quantized);
+    QuantizedGrid& grid = quantized->grid;
+    header.noDataFilled = quantized->filled;
+    if (quantized->roughness) {
+        setRoughness(header, *quantized->roughness);
+    }
+    BuildReport report;
+    report.inputWidth = info.width;
+    report.inputHeight = info.height;
+    report.outOfCore = !memory->inMemory;
+    report.memoryBudget = budget;
+    report.threads = threads;
+    report.estimatedBytes = memory->estimatedBytes;
+    whole = {};  // the grid holds everything from here on
+
+    if (header.quantizerBin > 1) {
+        progress(0.02, "reconstructing");
+        grid.reconstructLossy(header, header.quantizerBin, threads);
+    }
+    auto texture =
+        chooseTexture(options, header, grid, quantized->lowest, quantized->highest, memory->inMemory, budget);
+    TERRAIN_TRY(texture);
+    report.imageryCoverage = texture->imageryCoverage;
+    auto weights = readWeights(options, header);
+    TERRAIN_TRY(weights);
+    const TreeShape shape(header, weights->get());
+    std::optional<PifsPyramid> pyramid;
+    if (pifs) {
+        // Seed 003's fractal code, top-down over the whole tree before the nodes' errors (which need every
+        // node's stored heights and coding error).
+        progress(0.03, "fractal coding");
+        header.heightCoding = kHeightCodingPifs;
+        pyramid.emplace(PifsPyramid::build(
+            header, grid, [&](int level) { return shape.nodesAt(level); }, threads, options.zlibLevel));
+        header.maxErrorBound = pyramid->maxErrorCodes() * header.heightStep + quantization->errorBound;
+    }
+
+    auto file = beginMapFile(output, header);
+    TERRAIN_TRY(file);
+    BuildOptions nodeOptions = options;
+    if (options.detailDisplacementRangeFor) {
+        nodeOptions.detailDisplacementRange = options.detailDisplacementRangeFor(header);
+    }
+    // Subtrees below the split are independent: workers build them in parallel, each into its own block,
+    // and blocks are appended in subtree order; then the levels above them.
+    SplitPartials partials;
+    partials.split = splitLevel(header);
+    partials.subtrees = shape.nodesAt(partials.split);
+    partials.codes.resize(partials.subtrees.size());
+    std::atomic<std::uint64_t> done{0};
+    std::atomic<std::int64_t> detailNanoseconds{0};
+    const Builder builder(header, grid, shape, *texture->source, quantized->filledSquares, partials, nodeOptions,
+                          pyramid ? &*pyramid : nullptr, done, detailNanoseconds);
+    BlockWriter writer(*file, report, shape.count());
+    NodeProgress nodeProgress(options.progress, done, shape.count());
+    const std::vector<NodeSummary> subtreeSummaries = buildSubtrees(builder, partials, grid, header, threads, writer);
+    buildUpperLevels(builder, partials, subtreeSummaries, writer);
+    nodeProgress.stop();
+    progress(1.0, "writing directory");
+
+    TERRAIN_TRY(finishMapFile(*file, header, writer.directory(), report));
+    report.header = header;
+    summarizeNodes(writer.directory(), report);
     report.leafDetailSeconds = static_cast<double>(detailNanoseconds.load()) * 1e-9;
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return report;

@@ -74,6 +74,8 @@ struct BuildOptions {
     std::function<void(double, std::string_view)> progress;
     /// Called for each warning (an option that had no effect, a default that was assumed).
     std::function<void(std::string_view)> warn;
+    /// Called with notes on how the build proceeds (out of core: its bands, threads and estimated memory).
+    std::function<void(std::string_view)> note;
 };
 
 /// What a build produced, for prep's summary and for benchmarks.
@@ -90,6 +92,7 @@ struct BuildReport {
     bool outOfCore = false;          ///< streamed in bands with the grid in a scratch file (BuildOptions::memoryBudget)
     std::uint64_t memoryBudget = 0;  ///< the budget it was built within, bytes
     int threads = 1;                 ///< the worker threads it was built on (fewer than asked where memory is short)
+    std::uint64_t estimatedBytes = 0;  ///< out of core: the anonymous memory the plan expected at the peak
     std::uint64_t leaves = 0;
     float maxLeafDetailError = 0.0f;   ///< metres, over the leaves (0 without leafDetailError)
     double meanLeafDetailError = 0.0;  ///< metres

@@ -249,6 +249,67 @@ TEST_F(PrepRealDataTest, ToolInfoDescribesTheMap)
     EXPECT_TRUE(mentions(result.output, "roughness  D(r) = A (r / 90 m)^H over 64 leaves")) << result.output;
 }
 
+TEST_F(PrepRealDataTest, ToolRefusesBadArgumentsNamingTheFlag)
+{
+    ASSERT_TRUE(open("jacksboro"));
+    const std::string map = (*sDir / "jacksboro.map").string();
+    const std::string tif = (*sDir / "export.tif").string();
+    const std::string camera = "5000,5000,3000,0,-30";
+    struct Case {
+        std::vector<std::string> args;
+        std::string mentions;
+    };
+    const Case cases[] = {
+        {{"info", map, "--reader"}, "--reader needs a value"},
+        {{"info", map, "--reader", "mmap"}, "--reader: reader 'mmap' is not one of"},
+        {{"select", map, "--camera", camera, "--tau", "0"}, "--tau: '0' is not a number in [0.01, 1000] pixels"},
+        {{"select", map, "--camera", camera, "--tau", "nan"}, "--tau: 'nan'"},
+        {{"select", map, "--camera", camera, "--fov", "1e308"}, "--fov: '1e308'"},
+        {{"select", map, "--camera", camera, "--size", "0x0"}, "--size: '0x0' is not WIDTHxHEIGHT"},
+        {{"select", map, "--camera", camera, "--size", "99999999999x9"}, "--size: '99999999999x9'"},
+        {{"select", map, "--camera", camera, "--fast=1"}, "--fast takes no value"},
+        {{"select", map, "--camera", camera, "--path", "a.path"}, "unknown option '--path'"},
+        {{"select", map, "--camera", camera, "stray"}, "unexpected argument 'stray'"},
+        {{"select", map}, "select needs --camera"},
+        {{"stream", map, "--path", "a.path", "--cache", "1.5"},
+         "--cache: '1.5' is not a whole number in [1, 16777216]"},
+        {{"stream", map, "--path", "a.path", "--workers", "-1"},
+         "--workers: '-1' is not a whole number in [0, 16777216]"},
+        {{"stream", map, "--path", "a.path", "--queue", ""}, "--queue: '' is not a whole number"},
+        {{"stream", map, "--path", "a.path", "--fps", "inf"}, "--fps: 'inf'"},
+        {{"stream", map, "--cache", "8"}, "stream needs --path"},
+        {{"height", map, "1", "2", "--depth", "99"}, "height: --depth: '99' is not a whole number in [0, 30]"},
+        {{"height", map, "1", "2", "--depth", "-1"}, "height: --depth: '-1'"},
+        {{"height", map, "1", "2", "--no-material"}, "--material and --no-material need --depth"},
+        {{"height", map, "1", "2", "--bogus"}, "height: unknown option '--bogus'"},
+        {{"export", map, tif, "--region", "0,0,10,10", "--spacing", "0"}, "export: --spacing: '0' is not a number"},
+        {{"export", map, tif, "--region", "0,0,10,10", "--spacing", "-inf"}, "export: --spacing: '-inf'"},
+        {{"export", map, tif, "--region", "10,0,0,10", "--spacing", "1"}, "needs X1 > X0 and Y1 > Y0"},
+        {{"export", map, tif, "--region", "0,0,1e16,10", "--spacing", "1"},
+         "--region: '0,0,1e16,10' is not X0,Y0,X1,Y1"},
+        {{"export", map, tif, "--region", "0,0,nan,10", "--spacing", "1"}, "--region: '0,0,nan,10'"},
+        {{"export", map, tif, "--region", "0,0,10", "--spacing", "1"}, "--region: '0,0,10'"},
+        {{"export", map, tif, "--spacing", "1"}, "export needs --region"},
+        {{"export", map, tif, "--region", "0,0,10,10", "--spacing", "1", "--depth", "x"}, "export: --depth: 'x'"},
+        {{"error", map, "--camera", camera, "--oracle=0"}, "--oracle: '0' is not a whole number in [1, 64] blocks"},
+        {{"error", map, "--camera", camera, "--oracle="}, "--oracle= needs a value"},
+        {{"error", map, "--camera", camera, "--fps", "1e308"}, "--fps: '1e308'"},
+    };
+    for (const Case& c : cases) {
+        std::string line;
+        for (const auto& a : c.args) {
+            line += " " + a;
+        }
+        auto result = test::runProgram(kTool, c.args);
+        EXPECT_NE(result.exitCode, 0) << "tengine-tool" << line;
+        EXPECT_LT(result.exitCode, 128) << "tengine-tool" << line << " crashed: " << result.output;
+        EXPECT_TRUE(mentions(result.output, c.mentions))
+            << "tengine-tool" << line << ": output does not mention '" << c.mentions << "':\n"
+            << result.output;
+    }
+    EXPECT_FALSE(std::filesystem::exists(tif));
+}
+
 TEST_F(PrepRealDataTest, ToolTextureWritesTheNodeTextureNorthUp)
 {
     auto map = open("jacksboro");
