@@ -37,12 +37,12 @@ int splitLevel(const MapHeader& header);
 
 /// What the memory plan depends on besides the map's header.
 struct MemoryRequest {
-    std::uint64_t budget = 0;            ///< bytes the build may hold (effectiveMemoryBudget), > 0
-    int threads = 1;                     ///< worker threads asked for, >= 1
-    bool sourceHeld = false;             ///< the source holds its field: an in-memory build needs no copy of it
-    bool roughness = false;              ///< a roughness grid is measured (80 bytes per leaf)
-    bool pifs = false;                   ///< fractal coding, which builds in memory only
-    bool forceOutOfCore = false;         ///< BuildOptions::forceOutOfCore
+    std::uint64_t budget = 0;     ///< bytes the build may hold (effectiveMemoryBudget), > 0
+    int threads = 1;              ///< worker threads asked for, >= 1
+    bool sourceHeld = false;      ///< the source holds its field: an in-memory build needs no copy of it
+    bool roughness = false;       ///< a roughness grid is measured (80 bytes per leaf)
+    bool pifs = false;            ///< fractal coding, which builds in memory only
+    bool forceOutOfCore = false;  ///< BuildOptions::forceOutOfCore
     bool gdalCache = false;       ///< the source reads through GDAL's block cache (gdalCacheBytesFor the budget)
 };
 
