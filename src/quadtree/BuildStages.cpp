@@ -107,14 +107,18 @@ public:
     }
 
     /// The rows a band produces: a quarter of the budget for the band at 6 bytes a sample, at least a leaf row
-    /// and 256 rows.
+    /// and 256 rows, at most the leaf rows that cover the input (one band then reads it all; a budget of any
+    /// size stays within int).
     int coreRowsFor(std::uint64_t budget) const
     {
         const std::uint64_t bandRows = std::max<std::uint64_t>(budget / 4 / (mWidth * 6), 1);
-        const int leafRowsPerBand = static_cast<int>(
-            std::max<std::uint64_t>({bandRows > 2 * kBandMargin ? (bandRows - 2 * kBandMargin) / mCells : 0,
-                                     static_cast<std::uint64_t>(256 / mCells), std::uint64_t{1}}));
-        return leafRowsPerBand * mCells;
+        const std::uint64_t cells = static_cast<std::uint64_t>(mCells);
+        const std::uint64_t inputLeafRows = std::max<std::uint64_t>((mHeight + cells - 1) / cells, 1);
+        const std::uint64_t leafRowsPerBand =
+            std::min(inputLeafRows,
+                     std::max<std::uint64_t>({bandRows > 2 * kBandMargin ? (bandRows - 2 * kBandMargin) / cells : 0,
+                                              256 / cells, std::uint64_t{1}}));
+        return static_cast<int>(leafRowsPerBand * cells);
     }
 
     /// Bytes the build holds at its peak within `budget` on `threads` threads.
