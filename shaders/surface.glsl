@@ -4,7 +4,7 @@
 // normals, the material weights); its constants are a NodeInstance (render/ShaderContract.h). The parent's
 // surface is the node's own even samples (they are the parent's samples) along the template triangulation; its
 // normals at its samples are made with the node (lod/NodeTextures.h), and between parent samples the mean of the
-// two is taken (render/NodeVertexData.h computes the same on the CPU). The includer declares the outputs written
+// two is taken (gpudata/NodeVertexData.h computes the same on the CPU). The includer declares the outputs written
 // here: vRelative, vNormal (without NORMAL_MAP), vNodeUv, vLocal, vMaterials, vMorph, vParentOffset, vSlots.
 
 uniform mat4 uViewProjection;  // camera-relative world -> clip (rotation and projection only)
