@@ -1,9 +1,11 @@
 // The air between the viewer, the terrain and the sun, in float: single Rayleigh and Mie scattering in an
 // exponential atmosphere over a flat ground, HDR radiance relative to the sun's irradiance above the air, and the
 // filmic tone map. The same model as src/light/Atmosphere.h, its reference (AtmosphereGLTest compares them);
-// read the equations there. The sums reuse each sample's densities for its sunlight, and the sun's air mass
-// comes once a frame. AERIAL_SAMPLES and SKY_SAMPLES come from the C++/GLSL contract, the constants from
-// AtmosphereModel through these uniforms (FrameSetup.cpp sets them).
+// read the equations there. The sums (inscatter) reuse each sample's densities for its sunlight, and the sun's
+// air mass comes once a frame. They fill the frame's tables (shaders/atmosphere_table.frag, compiled with
+// ATMOSPHERE_TABLE; light/AtmosphereTables.h gives their layout), which the terrain and the sky read in one
+// fetch a pixel (aerialPerspective, skyRadiance). The tables' sizes and sample counts come from the C++/GLSL
+// contract, the constants from AtmosphereModel through these uniforms (FrameSetup.cpp sets them).
 
 uniform vec3 uRayleighScattering;  // per metre at sea level
 uniform float uRayleighHeight;     // scale height, metres
@@ -105,27 +107,73 @@ vec3 inscatter(float altitude, float slope, float len, float mu, int samples)
     return sum / float(samples);
 }
 
+// The view direction at table coordinates `c` (light/AtmosphereTables.h, directionAt): azimuth c.x^2 pi from the
+// sun's, elevation from c.y spaced finely at the horizon.
+vec3 tableDirection(vec2 c, vec3 sun)
+{
+    float sunAzimuth = sun.x == 0.0 && sun.y == 0.0 ? 0.0 : atan(sun.y, sun.x);
+    float azimuth = sunAzimuth - c.x * c.x * kPi;
+    float e = 2.0 * c.y - 1.0;
+    float elevation = e * abs(e) * (0.5 * kPi);
+    return vec3(cos(elevation) * vec2(cos(azimuth), sin(azimuth)), sin(elevation));
+}
+
+// The table coordinates of unit view direction `view` (directionCoordinate).
+vec2 tableCoordinate(vec3 view, vec3 sun)
+{
+    float cross = view.x * sun.y - view.y * sun.x;
+    float along = dot(view.xy, sun.xy);
+    float azimuth = cross == 0.0 && along == 0.0 ? 0.0 : atan(abs(cross), along);
+    float elevation = asin(clamp(view.z, -1.0, 1.0));
+    float e = sqrt(abs(elevation) / (0.5 * kPi));
+    return vec2(sqrt(azimuth / kPi), 0.5 + 0.5 * (elevation < 0.0 ? -e : e));
+}
+
+// A coordinate in [0, 1] as the texture coordinate of a table `cells` long whose first and last cells are its ends.
+vec2 onCells(vec2 c, vec2 cells) { return (c * (cells - 1.0) + 0.5) / cells; }
+
+// What a table cell holds: the in-scattered light of the segment `distance` metres along `view`, and the sky's.
+vec3 aerialSum(vec3 view, float distance, vec3 sun)
+{
+    return inscatter(uCameraAltitude, view.z, distance, dot(view, sun), AERIAL_TABLE_SAMPLES);
+}
+
+vec3 skySum(vec3 view, vec3 sun)
+{
+    float elevation = asin(clamp(view.z, -1.0, 1.0));
+    float slope = 1.0 / airMass(elevation);
+    float len = uTopScaleHeights * uRayleighHeight / slope;
+    return inscatter(uCameraAltitude, slope, len, dot(view, sun), SKY_TABLE_SAMPLES);
+}
+
+#ifndef ATMOSPHERE_TABLE
+// The frame's tables (render/AtmosphereTables.h): the aerial table's light per unit of (distance / range) over
+// azimuth, elevation and sqrt(distance / range); the sky's radiance over azimuth and elevation.
+uniform sampler3D uAerialTable;
+uniform sampler2D uSkyTable;
+uniform float uAerialRange;  // metres the aerial table spans
+
 // The light of a surface point `relative` metres from the camera, `radiance` where it is, as it reaches the
-// camera: times the air's transmittance, plus what the air scatters in.
+// camera: times the air's transmittance, plus what the air scatters in (one fetch of the aerial table).
 vec3 aerialPerspective(vec3 radiance, vec3 relative, vec3 sun)
 {
     float len = length(relative);
     if (len <= 0.0) {
         return radiance;
     }
-    vec3 view = relative / len;
-    return radiance * airTransmittance(uCameraAltitude, relative.z, len) +
-           inscatter(uCameraAltitude, view.z, len, dot(view, sun), AERIAL_SAMPLES);
+    vec2 direction = tableCoordinate(relative / len, sun);
+    float w = sqrt(min(len / uAerialRange, 1.0));
+    vec3 cells = vec3(AERIAL_TABLE_AZIMUTHS, AERIAL_TABLE_ELEVATIONS, AERIAL_TABLE_DISTANCES);
+    vec3 inscattered = texture(uAerialTable, (vec3(direction, w) * (cells - 1.0) + 0.5) / cells).rgb * (w * w);
+    return radiance * airTransmittance(uCameraAltitude, relative.z, len) + inscattered;
 }
 
-// The sky's radiance in unit direction `view` (the sun's disc not included).
+// The sky's radiance in unit direction `view` (the sun's disc not included; one fetch of the sky table).
 vec3 skyRadiance(vec3 view, vec3 sun)
 {
-    float elevation = asin(clamp(view.z, -1.0, 1.0));
-    float slope = 1.0 / airMass(elevation);
-    float len = uTopScaleHeights * uRayleighHeight / slope;
-    return inscatter(uCameraAltitude, slope, len, dot(view, sun), SKY_SAMPLES);
+    return texture(uSkyTable, onCells(tableCoordinate(view, sun), vec2(SKY_TABLE_AZIMUTHS, SKY_TABLE_ELEVATIONS))).rgb;
 }
+#endif
 
 // The filmic tone map (Narkowicz's ACES fit) of the exposed radiance, then the display's gamma.
 vec3 toneMap(vec3 radiance)

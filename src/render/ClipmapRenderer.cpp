@@ -235,6 +235,7 @@ void ClipmapRenderer::bindRingTextures() const
     }
     glActiveTexture(GL_TEXTURE0);
     mDetail.bind(units::kDetail);
+    mSky.bindAerialTable(units::kAerialTable);
 }
 
 ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, const ClipmapTerrain& terrain, int firstRing,

@@ -1,6 +1,8 @@
 // The frame setup the terrain renderers share (FrameSetup.h).
 #include "render/FrameSetup.h"
 
+#include "light/AtmosphereTables.h"
+
 #include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
@@ -10,8 +12,10 @@
 
 namespace terrain {
 
-void beginSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky)
+void beginSceneFrame(const Camera& camera, const SceneStyle& style, Sky& sky)
 {
+    sky.prepare(camera, style);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
     glViewport(0, 0, camera.viewportWidth, camera.viewportHeight);
     glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
     glClearDepth(1.0);
@@ -47,6 +51,7 @@ void setAtmosphereUniforms(const ShaderProgram& program, const Camera& camera, c
     glUniform1f(program.uniform("uExposure"), style.exposure);
     const double sunElevation = std::asin(std::clamp(double{glm::normalize(style.sunDirection).z}, -1.0, 1.0));
     glUniform1f(program.uniform("uSunAirMass"), static_cast<float>(airMass(sunElevation)));
+    glUniform1f(program.uniform("uAerialRange"), static_cast<float>(aerialTableRange(camera)));
 }
 
 void setSceneUniforms(const ShaderProgram& program, const Camera& camera, const SceneStyle& style,

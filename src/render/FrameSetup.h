@@ -12,16 +12,18 @@
 
 namespace terrain {
 
-/// Sets the viewport to the camera's, clears colour and depth, draws the sky (SceneStyle::drawSky), then turns
-/// depth testing on (less) and sets the polygon mode (SceneStyle::wireframe). Face culling is the caller's.
-void beginSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky);
+/// Brings the sky's air tables up to the frame (Sky::prepare), sets the viewport to the camera's, clears colour
+/// and depth, draws the sky (SceneStyle::drawSky), then turns depth testing on (less) and sets the polygon mode
+/// (SceneStyle::wireframe). Face culling is the caller's.
+void beginSceneFrame(const Camera& camera, const SceneStyle& style, Sky& sky);
 
 /// The map's input samples (prep's padding left out) as world metres: x0, y0, x1, y1 of the first and last
 /// samples.
 glm::dvec4 validRectangle(const MapHeader& header);
 
 /// Sets the atmosphere's uniforms (shaders/atmosphere.glsl) on `program`, which must be in use: the air's constants
-/// and the exposure of `style`, the camera's altitude (its z). Programs without the atmosphere ignore them.
+/// and the exposure of `style`, the camera's altitude (its z) and the aerial table's range (aerialTableRange).
+/// Programs without the atmosphere ignore them.
 void setAtmosphereUniforms(const ShaderProgram& program, const Camera& camera, const SceneStyle& style);
 
 /// Sets the uniforms every terrain program takes from the frame on `program` (which it uses): uViewProjection,

@@ -74,6 +74,15 @@ struct TextureTraits {
     }
     static void destroy(GLuint n) { glDeleteTextures(1, &n); }
 };
+struct FramebufferTraits {
+    static GLuint create()
+    {
+        GLuint n = 0;
+        glGenFramebuffers(1, &n);
+        return n;
+    }
+    static void destroy(GLuint n) { glDeleteFramebuffers(1, &n); }
+};
 struct ShaderTraits;  // shaders are created with a type: see Shader below
 struct ProgramTraits {
     static GLuint create() { return glCreateProgram(); }
@@ -83,6 +92,7 @@ struct ProgramTraits {
 using Buffer = Object<BufferTraits>;
 using VertexArray = Object<VertexArrayTraits>;
 using Texture = Object<TextureTraits>;
+using Framebuffer = Object<FramebufferTraits>;
 using Program = Object<ProgramTraits>;
 
 /// Owns a fence (glFenceSync): set after the commands it follows, signalled once the GL has finished them.

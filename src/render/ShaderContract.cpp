@@ -1,6 +1,6 @@
 #include "render/ShaderContract.h"
 
-#include "light/Atmosphere.h"
+#include "light/AtmosphereTables.h"
 
 #include "render/ShaderProgram.h"
 
@@ -21,8 +21,13 @@ std::vector<std::string> shaderContractDefines()
         define("BLOCK_SNAP_SHIFT", kBlockSnapShift),
         define("BLOCK_SNAP_BITS", kBlockSnapBits),
         define("BLOCK_CULLED_BIT", kBlockCulledBit),
-        define("AERIAL_SAMPLES", kAerialSamples),
-        define("SKY_SAMPLES", kSkySamples),
+        define("AERIAL_TABLE_AZIMUTHS", kAerialTableAzimuths),
+        define("AERIAL_TABLE_ELEVATIONS", kAerialTableElevations),
+        define("AERIAL_TABLE_DISTANCES", kAerialTableDistances),
+        define("AERIAL_TABLE_SAMPLES", kAerialSamples),
+        define("SKY_TABLE_AZIMUTHS", kSkyTableAzimuths),
+        define("SKY_TABLE_ELEVATIONS", kSkyTableElevations),
+        define("SKY_TABLE_SAMPLES", kSkySamples),
     };
 }
 

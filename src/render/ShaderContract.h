@@ -58,7 +58,7 @@ struct SamplerUnit {
     int unit;
 };
 
-/// The quadtree renderer's programs (terrain.*, terrain_tess.vert). Units 0-8; own pool arrays and parent pool
+/// The quadtree renderer's programs (terrain.*, terrain_tess.vert). Units 0-9; own pool arrays and parent pool
 /// arrays apart, so a draw binds one pair of arrays.
 namespace terrain_units {
 inline constexpr int kColour = 0;            ///< the node's colour texture (own pool array)
@@ -70,8 +70,9 @@ inline constexpr int kLevels = 5;            ///< tessellation: the frame's bloc
 inline constexpr int kNormalMaps = 6;        ///< normal maps (own pool array)
 inline constexpr int kParentColour = 7;      ///< colour textures (the parent's pool array)
 inline constexpr int kParentNormalMaps = 8;  ///< normal maps (the parent's pool array)
+inline constexpr int kAerialTable = 9;       ///< the frame's aerial-perspective table (AtmosphereTables)
 }  // namespace terrain_units
-inline constexpr std::array<SamplerUnit, 9> kTerrainSamplers = {{
+inline constexpr std::array<SamplerUnit, 10> kTerrainSamplers = {{
     {"uColour", terrain_units::kColour},
     {"uHeights", terrain_units::kHeights},
     {"uDetail", terrain_units::kDetail},
@@ -81,6 +82,7 @@ inline constexpr std::array<SamplerUnit, 9> kTerrainSamplers = {{
     {"uNormalMaps", terrain_units::kNormalMaps},
     {"uParentColour", terrain_units::kParentColour},
     {"uParentNormalMaps", terrain_units::kParentNormalMaps},
+    {"uAerialTable", terrain_units::kAerialTable},
 }};
 
 /// The clipmap renderer's programs (clipmap.*): the rings' textures now and as they were drawn before their morph.
@@ -94,8 +96,9 @@ inline constexpr int kMorph = 5;
 inline constexpr int kPreviousColour = 6;
 inline constexpr int kPreviousMaterials = 7;
 inline constexpr int kPreviousNormals = 8;
+inline constexpr int kAerialTable = 9;
 }  // namespace clipmap_units
-inline constexpr std::array<SamplerUnit, 9> kClipmapSamplers = {{
+inline constexpr std::array<SamplerUnit, 10> kClipmapSamplers = {{
     {"uHeights", clipmap_units::kHeights},
     {"uColour", clipmap_units::kColour},
     {"uDetail", clipmap_units::kDetail},
@@ -105,7 +108,11 @@ inline constexpr std::array<SamplerUnit, 9> kClipmapSamplers = {{
     {"uPreviousColour", clipmap_units::kPreviousColour},
     {"uPreviousMaterials", clipmap_units::kPreviousMaterials},
     {"uPreviousNormals", clipmap_units::kPreviousNormals},
+    {"uAerialTable", clipmap_units::kAerialTable},
 }};
+
+/// The sky's program (sky.*): the frame's sky table (AtmosphereTables).
+inline constexpr std::array<SamplerUnit, 1> kSkySamplers = {{{"uSkyTable", 0}}};
 
 /// The definitions every program is compiled with: the locations above (GRID_LOCATION, SKIRT_LOCATION,
 /// PATCH_LOCATION, NODE0_LOCATION .. NODE2_LOCATION, LAYER_ORIGIN_LOCATION) and the block codes' fields

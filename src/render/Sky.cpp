@@ -1,6 +1,7 @@
 #include "render/Sky.h"
 
 #include "render/FrameSetup.h"
+#include "render/ShaderContract.h"
 
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
@@ -17,12 +18,35 @@ Expected<Sky> Sky::create(const std::filesystem::path& shaderDirectory, const Li
     TERRAIN_TRY(program);
     Sky sky;
     sky.mProgram = std::move(program.value());
+    contract::bindSamplerUnits(sky.mProgram, contract::kSkySamplers);
     sky.mEmptyVao = gl::VertexArray::create();
+    if (lighting.atmosphere) {
+        auto tables = AtmosphereTextures::create(shaderDirectory);
+        TERRAIN_TRY(tables);
+        sky.mTables = std::move(tables.value());
+    }
     return sky;
+}
+
+void Sky::prepare(const Camera& camera, const SceneStyle& style)
+{
+    if (mTables) {
+        mTables->update(camera, style);
+    }
+}
+
+void Sky::bindAerialTable(int unit) const
+{
+    if (mTables) {
+        mTables->bindAerial(unit);
+    }
 }
 
 void Sky::draw(const Camera& camera, const SceneStyle& style) const
 {
+    if (mTables) {
+        mTables->bindSky(contract::kSkySamplers[0].unit);
+    }
     const glm::mat4 viewProjection(camera.projection() * camera.viewRotation());
     const glm::mat4 inverse = glm::inverse(viewProjection);
     mProgram.use();

@@ -1,17 +1,20 @@
 // The sky behind the terrain (shaders/sky.vert, sky.frag): one full-screen triangle shaded from the haze
-// colour at the horizon to the zenith colour, with the sun. Both renderers draw it first (the quadtree's
-// TerrainRenderer and the clipmap's ClipmapRenderer), with depth writes off.
+// colour at the horizon to the zenith colour, with the sun; with the atmosphere, read from the frame's sky table,
+// and the owner of the frame's air tables (AtmosphereTextures) the terrain reads too. Both renderers draw it first (the
+// quadtree's TerrainRenderer and the clipmap's ClipmapRenderer), with depth writes off.
 #pragma once
 
 #include "core/Camera.h"
 #include "core/Expected.h"
 #include "light/Atmosphere.h"
+#include "render/AtmosphereTextures.h"
 #include "render/GlObjects.h"
 #include "render/ShaderProgram.h"
 
 #include <glm/vec3.hpp>
 
 #include <filesystem>
+#include <optional>
 
 namespace terrain {
 
@@ -46,12 +49,18 @@ public:
     Sky() = default;
     /// Loads the sky program from `shaderDirectory`, the variant of `lighting`. Needs a current GL context.
     static Expected<Sky> create(const std::filesystem::path& shaderDirectory, const LightingModel& lighting = {});
+    /// With the atmosphere: brings the frame's air tables up to `camera` and `style` (AtmosphereTextures::update).
+    /// Before draw and before the terrain is drawn.
+    void prepare(const Camera& camera, const SceneStyle& style);
     /// Draws the sky for `camera` (leaves depth testing off and depth writes on).
     void draw(const Camera& camera, const SceneStyle& style) const;
+    /// With the atmosphere: binds the aerial table the terrain's programs read (uAerialTable) to unit `unit`.
+    void bindAerialTable(int unit) const;
 
 private:
     ShaderProgram mProgram;
-    gl::VertexArray mEmptyVao;  ///< the full-screen triangle needs no attributes
+    std::optional<AtmosphereTextures> mTables;  ///< with the atmosphere
+    gl::VertexArray mEmptyVao;                  ///< the full-screen triangle needs no attributes
 };
 
 }  // namespace terrain

@@ -559,6 +559,7 @@ void TerrainRenderer::setFrameUniforms(const Camera& camera, const SceneStyle& s
         glUniform1f(program.uniform("uNormalLayerTexels"), static_cast<float>(mNormalLayerSize));
     }
     mDetail.bind(contract::terrain_units::kDetail);
+    mSky.bindAerialTable(contract::terrain_units::kAerialTable);
     glActiveTexture(GL_TEXTURE0);
 }
 

@@ -1,11 +1,15 @@
 // shaders/atmosphere.glsl against its reference, light/Atmosphere.h: a probe program evaluates the shaders'
-// aerial perspective (transmittance and in-scattered light) and sky radiance for cases the C++ model evaluates
-// in double, into a float framebuffer. They agree to float's precision, so the frames show the model the tests
-// measure.
+// sums (what fills the air tables: in-scattered light, sky radiance) and transmittance for cases the C++ model
+// evaluates in double, into a float framebuffer; they agree to float's precision. Then the tables the renderer
+// fills (render/AtmosphereTextures.h) are read through the terrain's and the sky's lookups and compared with
+// the C++ tables (light/AtmosphereTables.h), which AtmosphereTablesTest holds to the model: so the frames show
+// the model the tests measure.
 #include "GlTestSupport.h"
 #include "TestSupport.h"
 
 #include "light/Atmosphere.h"
+#include "light/AtmosphereTables.h"
+#include "render/AtmosphereTextures.h"
 #include "render/FrameSetup.h"
 #include "render/GlWindow.h"
 #include "render/ShaderProgram.h"
@@ -41,8 +45,8 @@ void main()
 }
 )";
 
-// Row 0: aerialPerspective of radiance 0 (the in-scattered light); row 1: of radiance 1 (transmittance + it);
-// row 2: skyRadiance in the case's direction. Column: the case.
+// Row 0: the in-scattered light of the segment to the case's point; row 1: its transmittance; row 2: the sky's
+// radiance in the case's direction. Column: the case. With LOOKUP: rows 0 and 2 from the tables, row 1 unused.
 const char* kProbeFragment = R"(#version 330 core
 #include "atmosphere.glsl"
 uniform vec3 uRelative[64];
@@ -52,96 +56,190 @@ void main()
 {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec3 relative = uRelative[p.x];
+    vec3 view = normalize(relative);
+#ifdef LOOKUP
     vec3 value = p.y == 0 ? aerialPerspective(vec3(0.0), relative, uSun)
-               : p.y == 1 ? aerialPerspective(vec3(1.0), relative, uSun)
-                          : skyRadiance(normalize(relative), uSun);
+               : p.y == 1 ? vec3(0.0)
+                          : skyRadiance(view, uSun);
+#else
+    vec3 value = p.y == 0 ? aerialSum(view, length(relative), uSun)
+               : p.y == 1 ? airTransmittance(uCameraAltitude, relative.z, length(relative))
+                          : skySum(view, uSun);
+#endif
     fragColour = vec4(value, 1.0);
 }
 )";
+
+// The cases: segments of 300 m to 150 km at pitches from -25 to +3 degrees, all around, not through the ground.
+std::vector<glm::dvec3> probeCases(double altitude)
+{
+    std::vector<glm::dvec3> cases;
+    for (int k = 0; k < kCases; ++k) {
+        const double distance = 300.0 * std::pow(500.0, (k % 16) / 15.0);
+        const double pitch = -25.0 + 28.0 * ((k * 7) % 13) / 12.0;
+        glm::dvec3 relative = direction(k * 47.0, pitch) * distance;
+        if (altitude + relative.z < -400.0) {
+            relative = direction(k * 47.0, 1.0) * distance;
+        }
+        cases.push_back(relative);
+    }
+    return cases;
+}
+
+/// A kCases x 3 float framebuffer the probe draws into, and its reading.
+class ProbeTarget {
+public:
+    ProbeTarget()
+    {
+        glGenFramebuffers(1, &mFramebuffer);
+        glGenRenderbuffers(1, &mColour);
+        glBindRenderbuffer(GL_RENDERBUFFER, mColour);
+        glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA32F, kCases, 3);
+        glBindFramebuffer(GL_FRAMEBUFFER, mFramebuffer);
+        glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, mColour);
+        glGenVertexArrays(1, &mVao);
+    }
+    ~ProbeTarget()
+    {
+        glDeleteVertexArrays(1, &mVao);
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glDeleteRenderbuffers(1, &mColour);
+        glDeleteFramebuffers(1, &mFramebuffer);
+    }
+    bool complete() const { return glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE; }
+    /// Runs `program` (in use, its uniforms set) over the cases in `cases` with the sun in `sun`.
+    void draw(const ShaderProgram& program, const std::vector<glm::dvec3>& cases, const glm::dvec3& sun)
+    {
+        std::vector<float> relatives;
+        for (const glm::dvec3& r : cases) {
+            relatives.insert(relatives.end(), {float(r.x), float(r.y), float(r.z)});
+        }
+        glUniform3fv(program.uniform("uRelative"), kCases, relatives.data());
+        const glm::vec3 sunFloat(sun);
+        glUniform3fv(program.uniform("uSun"), 1, glm::value_ptr(sunFloat));
+        glBindFramebuffer(GL_FRAMEBUFFER, mFramebuffer);
+        glViewport(0, 0, kCases, 3);
+        glDisable(GL_DEPTH_TEST);
+        glBindVertexArray(mVao);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        mPixels.assign(static_cast<std::size_t>(kCases) * 3 * 4, 0.0f);
+        glReadPixels(0, 0, kCases, 3, GL_RGBA, GL_FLOAT, mPixels.data());
+    }
+    double at(int row, int k, int c) const { return mPixels[(static_cast<std::size_t>(row) * kCases + k) * 4 + c]; }
+
+private:
+    GLuint mFramebuffer = 0, mColour = 0, mVao = 0;
+    std::vector<float> mPixels;
+};
+
+Expected<ShaderProgram> loadProbe(const test::ScratchDir& dir, const std::vector<std::string>& defines)
+{
+    std::filesystem::copy_file(std::filesystem::path(TERRAIN_SHADER_DIR) / "atmosphere.glsl", dir / "atmosphere.glsl",
+                               std::filesystem::copy_options::overwrite_existing);
+    std::ofstream(dir / "probe.vert") << kProbeVertex;
+    std::ofstream(dir / "probe.frag") << kProbeFragment;
+    return ShaderProgram::load(dir.path(), "probe", defines);
+}
 
 TEST(AtmosphereGLTest, TheShadersAirIsTheModels)
 {
     auto window = test::openHiddenWindow(64, 64);
     ASSERT_TRUE(window.ok()) << window.error().message;
     test::ScratchDir dir;
-    std::filesystem::copy_file(std::filesystem::path(TERRAIN_SHADER_DIR) / "atmosphere.glsl", dir / "atmosphere.glsl");
-    std::ofstream(dir / "probe.vert") << kProbeVertex;
-    std::ofstream(dir / "probe.frag") << kProbeFragment;
-    auto program = ShaderProgram::load(dir.path(), "probe", {"ATMOSPHERE"});
+    auto program = loadProbe(dir, {"ATMOSPHERE"});
     ASSERT_TRUE(program.ok()) << program.error().message;
-
-    GLuint framebuffer = 0, colour = 0;
-    glGenFramebuffers(1, &framebuffer);
-    glGenRenderbuffers(1, &colour);
-    glBindRenderbuffer(GL_RENDERBUFFER, colour);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA32F, kCases, 3);
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colour);
-    ASSERT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), static_cast<GLenum>(GL_FRAMEBUFFER_COMPLETE));
-    GLuint vao = 0;
-    glGenVertexArrays(1, &vao);
+    ProbeTarget target;
+    ASSERT_TRUE(target.complete());
 
     const AtmosphereModel air;
     std::size_t compared = 0;
     for (double sunElevation : {4.0, 35.0, 70.0}) {
         const glm::dvec3 sun = direction(135.0, sunElevation);
         for (double altitude : {300.0, 2500.0, 4200.0}) {
-            // The cases: segments of 300 m to 150 km at pitches from -25 to +3 degrees, all around.
-            std::vector<glm::dvec3> cases;
-            for (int k = 0; k < kCases; ++k) {
-                const double distance = 300.0 * std::pow(500.0, (k % 16) / 15.0);
-                const double pitch = -25.0 + 28.0 * ((k * 7) % 13) / 12.0;
-                glm::dvec3 relative = direction(k * 47.0, pitch) * distance;
-                if (altitude + relative.z < -400.0) {
-                    relative = direction(k * 47.0, 1.0) * distance;  // not through the ground
-                }
-                cases.push_back(relative);
-            }
+            const std::vector<glm::dvec3> cases = probeCases(altitude);
             SceneStyle style;
             style.sunDirection = glm::vec3(sun);
             Camera camera;
             camera.position = {0.0, 0.0, altitude};
             program->use();
             setAtmosphereUniforms(*program, camera, style);
-            std::vector<float> relatives;
-            for (const glm::dvec3& r : cases) {
-                relatives.insert(relatives.end(), {float(r.x), float(r.y), float(r.z)});
-            }
-            glUniform3fv(program->uniform("uRelative"), kCases, relatives.data());
-            const glm::vec3 sunFloat(sun);
-            glUniform3fv(program->uniform("uSun"), 1, glm::value_ptr(sunFloat));
-            glViewport(0, 0, kCases, 3);
-            glDisable(GL_DEPTH_TEST);
-            glBindVertexArray(vao);
-            glDrawArrays(GL_TRIANGLES, 0, 3);
-            std::vector<float> pixels(static_cast<std::size_t>(kCases) * 3 * 4);
-            glReadPixels(0, 0, kCases, 3, GL_RGBA, GL_FLOAT, pixels.data());
-            auto at = [&](int row, int k, int c) {
-                return double{pixels[(static_cast<std::size_t>(row) * kCases + k) * 4 + c]};
-            };
+            target.draw(*program, cases, sun);
             for (int k = 0; k < kCases; ++k) {
                 const glm::dvec3 relative(glm::vec3(cases[k]));  // what the shader was given
-                const AerialPerspective reference = aerialPerspective(air, altitude, relative, sun);
-                const glm::dvec3 sky = skyRadiance(air, altitude, glm::normalize(relative), sun);
+                const AerialPerspective reference = aerialPerspective(air, altitude, relative, sun, kAerialSamples);
+                const glm::dvec3 sky = skyRadiance(air, altitude, glm::normalize(relative), sun, kSkySamples);
                 for (int c = 0; c < 3; ++c) {
                     const std::string where = "sun " + std::to_string(sunElevation) + ", altitude " +
                                               std::to_string(altitude) + ", case " + std::to_string(k) + ", channel " +
                                               std::to_string(c);
-                    EXPECT_NEAR(at(0, k, c), reference.inscattered[c], 2e-3 * reference.inscattered[c] + 1e-7) << where;
-                    EXPECT_NEAR(at(1, k, c) - at(0, k, c), reference.transmittance[c],
+                    EXPECT_NEAR(target.at(0, k, c), reference.inscattered[c], 2e-3 * reference.inscattered[c] + 1e-7)
+                        << where;
+                    EXPECT_NEAR(target.at(1, k, c), reference.transmittance[c],
                                 2e-3 * reference.transmittance[c] + 1e-6)
                         << where;
-                    EXPECT_NEAR(at(2, k, c), sky[c], 2e-3 * sky[c] + 1e-7) << where;
+                    EXPECT_NEAR(target.at(2, k, c), sky[c], 2e-3 * sky[c] + 1e-7) << where;
                     ++compared;
                 }
             }
         }
     }
     EXPECT_EQ(compared, 9u * kCases * 3);
-    glDeleteVertexArrays(1, &vao);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glDeleteRenderbuffers(1, &colour);
-    glDeleteFramebuffers(1, &framebuffer);
+}
+
+TEST(AtmosphereGLTest, TheRenderersTablesAreTheCppTables)
+{
+    auto window = test::openHiddenWindow(64, 64);
+    ASSERT_TRUE(window.ok()) << window.error().message;
+    test::ScratchDir dir;
+    auto program = loadProbe(dir, {"ATMOSPHERE", "LOOKUP"});
+    ASSERT_TRUE(program.ok()) << program.error().message;
+    auto textures = AtmosphereTextures::create(TERRAIN_SHADER_DIR);
+    ASSERT_TRUE(textures.ok()) << textures.error().message;
+    ProbeTarget target;
+    ASSERT_TRUE(target.complete());
+
+    const AtmosphereModel air;
+    std::size_t compared = 0;
+    double worst = 0.0;
+    for (double sunElevation : {4.0, 35.0}) {
+        const glm::dvec3 sun = direction(135.0, sunElevation);
+        for (double altitude : {300.0, 4200.0}) {
+            SceneStyle style;
+            style.sunDirection = glm::vec3(sun);
+            Camera camera;
+            camera.position = {0.0, 0.0, altitude};
+            camera.farPlane = 80000.0;  // cases beyond the range read its last slice
+            textures->update(camera, style);
+            textures->bindAerial(0);
+            textures->bindSky(1);
+            program->use();
+            glUniform1i(program->uniform("uAerialTable"), 0);
+            glUniform1i(program->uniform("uSkyTable"), 1);
+            setAtmosphereUniforms(*program, camera, style);
+            const std::vector<glm::dvec3> cases = probeCases(altitude);
+            target.draw(*program, cases, sun);
+            const AtmosphereTables tables(air, altitude, glm::dvec3(glm::normalize(glm::vec3(sun))),
+                                          aerialTableRange(camera));
+            for (int k = 0; k < kCases; ++k) {
+                const glm::dvec3 relative(glm::vec3(cases[k]));
+                const glm::dvec3 view = glm::normalize(relative);
+                const glm::dvec3 inscattered = tables.inscattered(view, glm::length(relative));
+                const glm::dvec3 sky = tables.sky(view);
+                for (int c = 0; c < 3; ++c) {
+                    const std::string where = "sun " + std::to_string(sunElevation) + ", altitude " +
+                                              std::to_string(altitude) + ", case " + std::to_string(k) + ", channel " +
+                                              std::to_string(c);
+                    EXPECT_NEAR(target.at(0, k, c), inscattered[c], 5e-3 * inscattered[c] + 1e-7) << where;
+                    EXPECT_NEAR(target.at(2, k, c), sky[c], 5e-3 * sky[c] + 1e-7) << where;
+                    worst = std::max({worst, std::abs(target.at(0, k, c) / inscattered[c] - 1.0),
+                                      std::abs(target.at(2, k, c) / sky[c] - 1.0)});
+                    ++compared;
+                }
+            }
+        }
+    }
+    EXPECT_EQ(compared, 4u * kCases * 3);
+    std::printf("largest difference between the GL and C++ tables: %.4f\n", worst);
 }
 
 }  // namespace

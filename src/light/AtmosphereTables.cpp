@@ -1,0 +1,132 @@
+// The air's tables on the CPU, the reference of the renderer's (AtmosphereTables.h).
+#include "light/AtmosphereTables.h"
+
+#include "core/Check.h"
+
+#include <glm/glm.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace terrain {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+/// The sun's azimuth (atan2(y, x)); 0 for a sun at the zenith or nadir.
+double azimuthOf(const glm::dvec3& v)
+{
+    return v.x == 0.0 && v.y == 0.0 ? 0.0 : std::atan2(v.y, v.x);
+}
+
+/// Cell i and the weight of cell i + 1 of coordinate c in [0, 1] over n cells on the grid points.
+std::pair<int, double> cellOf(double c, int n)
+{
+    const double x = std::clamp(c, 0.0, 1.0) * (n - 1);
+    const int i = std::min(static_cast<int>(x), n - 2);
+    return {i, x - i};
+}
+
+}  // namespace
+
+glm::dvec2 directionCoordinate(const glm::dvec3& view, const glm::dvec3& sun)
+{
+    const double cross = view.x * sun.y - view.y * sun.x;
+    const double dot = view.x * sun.x + view.y * sun.y;
+    const double azimuth = cross == 0.0 && dot == 0.0 ? 0.0 : std::atan2(std::abs(cross), dot);
+    const double elevation = std::asin(std::clamp(view.z, -1.0, 1.0));
+    const double e = std::sqrt(std::abs(elevation) / (kPi / 2.0));
+    return {std::sqrt(azimuth / kPi), 0.5 + 0.5 * std::copysign(e, elevation)};
+}
+
+glm::dvec3 directionAt(const glm::dvec2& coordinate, const glm::dvec3& sun)
+{
+    const double azimuth = azimuthOf(sun) - coordinate.x * coordinate.x * kPi;
+    const double e = 2.0 * coordinate.y - 1.0;
+    const double elevation = std::copysign(e * e, e) * (kPi / 2.0);
+    return {std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation)};
+}
+
+double distanceCoordinate(double distance, double range)
+{
+    TERRAIN_EXPECTS(range > 0.0, "a table range > 0");
+    return std::sqrt(std::clamp(distance / range, 0.0, 1.0));
+}
+
+double distanceAt(double coordinate, double range)
+{
+    return range * coordinate * coordinate;
+}
+
+double aerialTableRange(const Camera& camera)
+{
+    const double up = std::tan(camera.verticalFov / 2.0);
+    const double right = up * camera.aspect();
+    return camera.farPlane * std::sqrt(1.0 + up * up + right * right);
+}
+
+AtmosphereTables::AtmosphereTables(const AtmosphereModel& air, double altitude, const glm::dvec3& sun, double range)
+    : mSun(sun), mRange(range)
+{
+    TERRAIN_EXPECTS(range > 0.0, "a table range > 0");
+    mAerial.reserve(static_cast<std::size_t>(kAerialTableAzimuths) * kAerialTableElevations * kAerialTableDistances);
+    for (int d = 0; d < kAerialTableDistances; ++d) {
+        // The first cell holds the limit at distance 0: a segment a millionth of the range.
+        const double w = std::max(d / (kAerialTableDistances - 1.0), 1e-3);
+        const double distance = distanceAt(w, range);
+        for (int e = 0; e < kAerialTableElevations; ++e) {
+            for (int a = 0; a < kAerialTableAzimuths; ++a) {
+                const glm::dvec3 view =
+                    directionAt({a / (kAerialTableAzimuths - 1.0), e / (kAerialTableElevations - 1.0)}, sun);
+                mAerial.push_back(aerialPerspective(air, altitude, view * distance, sun, kAerialSamples).inscattered /
+                                  (w * w));
+            }
+        }
+    }
+    mSky.reserve(static_cast<std::size_t>(kSkyTableAzimuths) * kSkyTableElevations);
+    for (int e = 0; e < kSkyTableElevations; ++e) {
+        for (int a = 0; a < kSkyTableAzimuths; ++a) {
+            const glm::dvec3 view = directionAt({a / (kSkyTableAzimuths - 1.0), e / (kSkyTableElevations - 1.0)}, sun);
+            mSky.push_back(skyRadiance(air, altitude, view, sun, kSkySamples));
+        }
+    }
+}
+
+glm::dvec3 AtmosphereTables::aerialCell(int azimuth, int elevation, int distance) const
+{
+    return mAerial[(static_cast<std::size_t>(distance) * kAerialTableElevations + elevation) * kAerialTableAzimuths +
+                   azimuth];
+}
+
+glm::dvec3 AtmosphereTables::skyCell(int azimuth, int elevation) const
+{
+    return mSky[static_cast<std::size_t>(elevation) * kSkyTableAzimuths + azimuth];
+}
+
+glm::dvec3 AtmosphereTables::inscattered(const glm::dvec3& view, double distance) const
+{
+    const glm::dvec2 c = directionCoordinate(view, mSun);
+    const auto [a, wa] = cellOf(c.x, kAerialTableAzimuths);
+    const auto [e, we] = cellOf(c.y, kAerialTableElevations);
+    const double w = distanceCoordinate(distance, mRange);
+    const auto [d, wd] = cellOf(w, kAerialTableDistances);
+    glm::dvec3 sum(0.0);
+    for (int k = 0; k < 8; ++k) {
+        const int da = k & 1, de = (k >> 1) & 1, dd = k >> 2;
+        sum += (da ? wa : 1.0 - wa) * (de ? we : 1.0 - we) * (dd ? wd : 1.0 - wd) * aerialCell(a + da, e + de, d + dd);
+    }
+    return sum * (w * w);
+}
+
+glm::dvec3 AtmosphereTables::sky(const glm::dvec3& view) const
+{
+    const glm::dvec2 c = directionCoordinate(view, mSun);
+    const auto [a, wa] = cellOf(c.x, kSkyTableAzimuths);
+    const auto [e, we] = cellOf(c.y, kSkyTableElevations);
+    return (1.0 - we) * ((1.0 - wa) * skyCell(a, e) + wa * skyCell(a + 1, e)) +
+           we * ((1.0 - wa) * skyCell(a, e + 1) + wa * skyCell(a + 1, e + 1));
+}
+
+}  // namespace terrain

@@ -1,0 +1,77 @@
+// The air as tables, made once a frame so that a pixel reads its air in one fetch instead of summing it
+// (Hillaire 2020's sky-view table and aerial-perspective volume, indexed by direction rather than by screen).
+// Over a flat ground with densities that fall with height, the light the air scatters towards the viewer along a
+// ray depends only on the viewer's altitude, the sun, the ray's direction relative to the sun and its length, so
+// for one frame (one altitude, one sun) it is a function of three numbers:
+// - the azimuth between the ray and the sun, in [0, pi] (the air is symmetric about the sun's vertical plane);
+// - the ray's elevation, spaced finely near the horizon, where the light changes fastest (Hillaire's
+//   0.5 + 0.5 sign(e) sqrt(|e| / (pi / 2)));
+// - the distance, as sqrt(distance / range): dense near the viewer, where the light builds up.
+// The aerial table holds the in-scattered light of segments (aerialPerspective's .inscattered, phase functions
+// included) over those three, divided by the distance coordinate squared (distance / range): the light per
+// metre, which is smooth where the light itself starts from 0 in a straight line (a lookup multiplies it back); the sky
+// table the sky's radiance (skyRadiance) over the first two. The view ray's transmittance stays in closed form per
+// pixel (three exponentials, cheaper than a fetch on a CPU rasterizer).
+//
+// Cells sit on the coordinates' grid points: cell i of n is coordinate i / (n - 1), so the first and last
+// cells are the ends of each range exactly (OpenGL's texture coordinate (c (n - 1) + 0.5) / n). The renderer's
+// tables (render/AtmosphereTables.h) are filled by shaders/atmosphere_table.frag with the same layout; this file
+// is their reference, used by the tests to bound what a lookup costs in accuracy. Pure: no GL.
+#pragma once
+
+#include "core/Camera.h"
+#include "light/Atmosphere.h"
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <vector>
+
+namespace terrain {
+
+/// The aerial table's cells along azimuth, elevation and distance, and the sky table's along azimuth and
+/// elevation. Part of the C++/GLSL contract (AERIAL_TABLE_SIZE, SKY_TABLE_SIZE).
+inline constexpr int kAerialTableAzimuths = 32;
+inline constexpr int kAerialTableElevations = 64;
+inline constexpr int kAerialTableDistances = 32;
+inline constexpr int kSkyTableAzimuths = 64;
+inline constexpr int kSkyTableElevations = 128;
+
+/// The coordinates in [0, 1]^2 of unit view direction `view` with the sun in unit direction `sun`: x the
+/// azimuth between them over pi, y the elevation's (see above). Defined for every pair of unit vectors,
+/// vertical ones included (azimuth 0).
+glm::dvec2 directionCoordinate(const glm::dvec3& view, const glm::dvec3& sun);
+/// A unit view direction at coordinates `coordinate` (directionCoordinate's inverse; of the two mirror images
+/// about the sun's vertical plane, which the air does not tell apart, the one clockwise from the sun).
+glm::dvec3 directionAt(const glm::dvec2& coordinate, const glm::dvec3& sun);
+/// sqrt(distance / range), clamped to [0, 1]; `range` > 0.
+double distanceCoordinate(double distance, double range);
+/// range coordinate^2 (distanceCoordinate's inverse).
+double distanceAt(double coordinate, double range);
+
+/// The aerial table's range for `camera`: the distance to the far plane's corners (nothing drawn is farther).
+double aerialTableRange(const Camera& camera);
+
+/// The tables for one viewer altitude and sun, made on the CPU as the shaders make them, looked up with
+/// linear interpolation as OpenGL does.
+class AtmosphereTables {
+public:
+    /// Distances beyond `range` metres read the last cell (what is seen there is at least that far).
+    AtmosphereTables(const AtmosphereModel& air, double altitude, const glm::dvec3& sun, double range);
+
+    /// The in-scattered light of the segment `distance` metres along unit `view`.
+    glm::dvec3 inscattered(const glm::dvec3& view, double distance) const;
+    /// The sky's radiance in unit direction `view`.
+    glm::dvec3 sky(const glm::dvec3& view) const;
+
+private:
+    glm::dvec3 aerialCell(int azimuth, int elevation, int distance) const;
+    glm::dvec3 skyCell(int azimuth, int elevation) const;
+
+    glm::dvec3 mSun;
+    double mRange;
+    std::vector<glm::dvec3> mAerial;  ///< azimuth fastest, then elevation, then distance
+    std::vector<glm::dvec3> mSky;     ///< azimuth fastest
+};
+
+}  // namespace terrain
