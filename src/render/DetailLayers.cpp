@@ -3,6 +3,7 @@
 
 #include "core/Check.h"
 #include "heightfield/Image.h"
+#include "synthesis/DetailTexture.h"
 
 #include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
@@ -15,11 +16,13 @@ namespace terrain {
 
 namespace {
 
-/// The turn and scale of each detail layer's second sample (shaders/detail.glsl, uDetailTurn): 0.955 rad and
-/// 0.755, neither a rational multiple of the tile's period nor of a right angle, so the two lattices share no
-/// period and their sum does not tile.
-const glm::dmat2 kDetailTurn = 0.7548776662 * glm::dmat2(std::cos(0.9553166181), std::sin(0.9553166181),
-                                                         -std::sin(0.9553166181), std::cos(0.9553166181));
+/// Repeats to the coordinates of the tiling's triangle lattice (shaders/detail.glsl, uLatticeFromRepeats):
+/// equilateral triangles skewed onto the integer lattice, 2 sqrt 3 to a repeat (Heitz & Neyret 2018's
+/// TriangleGrid: each triangle spans about a third of the texture, so the blend keeps its features).
+const glm::dmat2 kLatticeFromRepeats =
+    2.0 * std::sqrt(3.0) * glm::dmat2(1.0, 0.0, -1.0 / std::sqrt(3.0), 2.0 / std::sqrt(3.0));
+/// Lattice vertices count modulo this (shaders/detail.glsl, latticeOffset).
+constexpr double kLatticePeriod = 4096.0;
 
 }  // namespace
 
@@ -43,7 +46,8 @@ Expected<DetailLayers> DetailLayers::create(const MaterialSet& materials)
                                  " but the first one is ", images.front().width, "x", images.front().height,
                                  " (all detail textures share one size)");
             }
-            images.push_back(std::move(image).value());
+            images.push_back(gaussianized(image.value()));
+            d.mMeans.push_back(meanGray(images.back()));
             d.mSizes.push_back(size);
             d.mMaterial.push_back(static_cast<int>(m));
             size /= 4.0;
@@ -109,10 +113,11 @@ void DetailLayers::setUniforms(const ShaderProgram& program, int unit) const
         mask[mMaterial[k]] = 1.0f;
         glUniform4fv(program.uniform(("uLayerMaterialMask" + index).c_str()), 1, glm::value_ptr(mask));
         glUniform1f(program.uniform(("uLayerScale" + index).c_str()), static_cast<float>(1.0 / mSizes[k]));
+        glUniform1f(program.uniform(("uLayerMean" + index).c_str()), static_cast<float>(mMeans[k]));
     }
     glUniform4fv(program.uniform("uMaterialTintColumns"), 3, glm::value_ptr(mTintColumns[0]));
-    const glm::mat2 turn(kDetailTurn);
-    glUniformMatrix2fv(program.uniform("uDetailTurn"), 1, GL_FALSE, glm::value_ptr(turn));
+    const glm::mat2 lattice(kLatticeFromRepeats);
+    glUniformMatrix2fv(program.uniform("uLatticeFromRepeats"), 1, GL_FALSE, glm::value_ptr(lattice));
 }
 
 void DetailLayers::bind(int unit) const
@@ -128,10 +133,10 @@ glm::vec4 DetailLayers::origin(int k, glm::dvec2 corner) const
 {
     const glm::dvec2 repeats = corner / mSizes[static_cast<std::size_t>(k)];
     const glm::dvec2 fraction = repeats - glm::floor(repeats);
-    const glm::dvec2 turned = kDetailTurn * repeats;
-    const glm::dvec2 turnedFraction = turned - glm::floor(turned);
-    return {static_cast<float>(fraction.x), static_cast<float>(fraction.y), static_cast<float>(turnedFraction.x),
-            static_cast<float>(turnedFraction.y)};
+    const glm::dvec2 lattice = kLatticeFromRepeats * repeats;
+    const glm::dvec2 reduced = lattice - kLatticePeriod * glm::floor(lattice / kLatticePeriod);
+    return {static_cast<float>(fraction.x), static_cast<float>(fraction.y), static_cast<float>(reduced.x),
+            static_cast<float>(reduced.y)};
 }
 
 }  // namespace terrain

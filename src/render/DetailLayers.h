@@ -1,8 +1,9 @@
-// The materials' detail textures (paper 3.4.5) on the GPU, shared by both LOD modes' renderers: gray tiles in one
-// texture array, material m's k-th detail_texture repeating every detail_texture_size / 4^k metres (a finer
-// layer of the same ground), multiplied over the terrain's colour by the material weights
-// (shaders/detail.glsl). Each layer is sampled twice, the second time turned and scaled (kDetailTurn), so the
-// tile shows no regular pattern; each fades out by kFadeRepeats of its repeats from the viewer.
+// The materials' detail textures (paper 3.4.5) on the GPU, shared by both LOD modes' renderers: gray textures in
+// one array, material m's k-th detail_texture repeating every detail_texture_size / 4^k metres (a finer layer of
+// the same ground), multiplied over the terrain's colour by the material weights (shaders/detail.glsl). Each
+// texture is made Gaussian when loaded (synthesis/DetailTexture.h, gaussianized) and sampled by
+// histogram-preserving tiling on a triangle lattice (kLatticeFromRepeats), so it shows no tile; each fades out
+// by kFadeRepeats of its repeats from the viewer.
 #pragma once
 
 #include "core/Expected.h"
@@ -41,15 +42,17 @@ public:
     void setUniforms(const ShaderProgram& program, int unit) const;
     /// Binds the texture array to texture unit `unit`.
     void bind(int unit) const;
-    /// Layer k's texture coordinates at world point `corner` (metres), reduced to [0, 1) in double: xy of the
-    /// plain sample, zw of the turned one. Programs add local metres times the layer's scale to it, so texture
-    /// coordinates stay small and exact however far from the origin the point is.
+    /// Layer k's coordinates at world point `corner` (metres), reduced in double: xy its texture coordinates
+    /// modulo 1, zw its lattice coordinates modulo the lattice's period (4096 vertices). Programs add local
+    /// metres times the layer's scale to them, so coordinates stay small and exact however far from the origin
+    /// the point is, and nodes side by side agree on every lattice vertex.
     glm::vec4 origin(int k, glm::dvec2 corner) const;
 
 private:
     gl::Texture mTexture;
     std::vector<double> mSizes;
     std::vector<int> mMaterial;      ///< the material each layer belongs to
+    std::vector<double> mMeans;      ///< each layer's mean gray, in [0, 1]
     glm::vec4 mTintColumns[3] = {};  ///< r, g, b of the materials' tints (brightness-preserving, kTintStrength)
 };
 

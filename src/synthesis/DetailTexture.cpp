@@ -4,7 +4,9 @@
 #include "core/Check.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <numeric>
 
 namespace terrain {
 
@@ -24,6 +26,67 @@ Image makeDetailTexture(const FractalParams& params, int size)
         }
     }
     return image;
+}
+
+namespace {
+
+/// The z with Phi(z) = u, u in (0, 1): bisection on the normal distribution function (erfc) over [-40, 40].
+double normalQuantile(double u)
+{
+    double lo = -40.0, hi = 40.0;
+    for (int i = 0; i < 100; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (0.5 * std::erfc(-mid / std::sqrt(2.0)) < u ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+double meanGray(const Image& image)
+{
+    TERRAIN_EXPECTS(image.channels == 1 && !image.pixels.empty(), "a one-channel image with pixels");
+    const double sum = std::accumulate(image.pixels.begin(), image.pixels.end(), 0.0);
+    return sum / static_cast<double>(image.pixels.size()) / 255.0;
+}
+
+Image gaussianized(const Image& image)
+{
+    TERRAIN_EXPECTS(image.channels == 1 && !image.pixels.empty(), "a one-channel image with pixels");
+    std::array<double, 256> count{};
+    for (std::uint8_t p : image.pixels) {
+        count[p] += 1.0;
+    }
+    const auto n = static_cast<double>(image.pixels.size());
+    double mean = 0.0, square = 0.0;
+    for (int v = 0; v < 256; ++v) {
+        mean += v * count[v] / n;
+        square += v * v * count[v] / n;
+    }
+    const double deviation = std::sqrt(std::max(square - mean * mean, 0.0));
+    // Each gray's normal quantile, then the quantiles scaled to zero mean and unit deviation over the pixels
+    // (ties gather a class at one quantile, which narrows the spread a little).
+    std::array<double, 256> z{};
+    double below = 0.0, zMean = 0.0, zSquare = 0.0;
+    for (int v = 0; v < 256; ++v) {
+        if (count[v] > 0.0) {
+            z[v] = normalQuantile((below + 0.5 * count[v]) / n);  // the mid-rank, in (0, 1)
+            zMean += z[v] * count[v] / n;
+            zSquare += z[v] * z[v] * count[v] / n;
+        }
+        below += count[v];
+    }
+    const double zDeviation = std::sqrt(std::max(zSquare - zMean * zMean, 0.0));
+    std::array<std::uint8_t, 256> map{};
+    for (int v = 0; v < 256; ++v) {
+        const double unit = zDeviation > 0.0 ? (z[v] - zMean) / zDeviation : 0.0;
+        map[v] = static_cast<std::uint8_t>(std::clamp(std::round(mean + deviation * unit), 0.0, 255.0));
+    }
+    Image out = image;
+    for (std::uint8_t& p : out.pixels) {
+        p = map[p];
+    }
+    return out;
 }
 
 }  // namespace terrain

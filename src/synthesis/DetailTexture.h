@@ -13,4 +13,13 @@ namespace terrain {
 /// amplitude), so it tiles without a seam. Preconditions: size > 0, params valid with amplitude > 0.
 Image makeDetailTexture(const FractalParams& params, int size);
 
+/// The one-channel image `image` with its histogram made Gaussian of the same mean and standard deviation, the
+/// order of its pixels kept: each gray takes the normal quantile of its pixels' mid-rank (the quantiles scaled to
+/// the image's mean and deviation over its pixels), rounded and clamped to [0, 255]. What histogram-preserving tiling (shaders/detail.glsl) needs of a texture. A flat image stays flat.
+/// Precondition: one channel, at least one pixel.
+Image gaussianized(const Image& image);
+
+/// The mean of a one-channel image's pixels, as a fraction of 255.
+double meanGray(const Image& image);
+
 }  // namespace terrain

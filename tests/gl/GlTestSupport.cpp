@@ -46,10 +46,13 @@ Expected<std::unique_ptr<DemoScene>> openDemoScene(int width, int height)
 }
 
 Status buildDetailMap(HeightField field, double spacing, const std::filesystem::path& path,
-                      const std::vector<std::filesystem::path>& materials)
+                      const std::vector<std::filesystem::path>& materials, const std::filesystem::path& texture)
 {
     BuildOptions options;
     options.spacing = spacing;
+    if (!texture.empty()) {
+        options.texture = texture;
+    }
     options.threads = 2;
     std::unique_ptr<const DetailSynthesizer> synthesizer;
     if (!materials.empty()) {

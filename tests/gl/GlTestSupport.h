@@ -38,9 +38,11 @@ bool mustHitTerrain(const Camera& camera, const MapHeader& header, double zMin, 
 /// with `materials` (.mat files, the first the ground), the leaves' detail errors for them and the recipe
 /// saying so; without, no detail errors and no recipe. The shared fixture of the GL tests.
 Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::filesystem::path>& materials = {});
-/// The same for any height field `field` with `spacing` metres between its samples.
+/// The same for any height field `field` with `spacing` metres between its samples, coloured by `texture` (an
+/// image prep's --texture takes) or, without, by height.
 Status buildDetailMap(HeightField field, double spacing, const std::filesystem::path& path,
-                      const std::vector<std::filesystem::path>& materials);
+                      const std::vector<std::filesystem::path>& materials,
+                      const std::filesystem::path& texture = {});
 
 /// An invisible window of `width` x `height` whose GL context is current.
 Expected<std::unique_ptr<GlWindow>> openHiddenWindow(int width, int height);

@@ -8,12 +8,15 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <complex>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <new>
+#include <numbers>
 #include <thread>
 
 namespace terrain::test {
@@ -209,6 +212,121 @@ std::string readTextFile(const std::filesystem::path& path)
 {
     std::ifstream in(path, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+namespace {
+
+/// In-place radix-2 FFT of `a` (size a power of 2); `inverse` without the 1/n.
+void fft(std::vector<std::complex<double>>& a, bool inverse)
+{
+    const std::size_t n = a.size();
+    for (std::size_t i = 1, j = 0; i < n; ++i) {
+        std::size_t bit = n >> 1;
+        for (; j & bit; bit >>= 1) {
+            j ^= bit;
+        }
+        j ^= bit;
+        if (i < j) {
+            std::swap(a[i], a[j]);
+        }
+    }
+    for (std::size_t len = 2; len <= n; len <<= 1) {
+        const double angle = 2.0 * std::numbers::pi / static_cast<double>(len) * (inverse ? 1.0 : -1.0);
+        const std::complex<double> step(std::cos(angle), std::sin(angle));
+        for (std::size_t i = 0; i < n; i += len) {
+            std::complex<double> w(1.0);
+            for (std::size_t k = 0; k < len / 2; ++k) {
+                const std::complex<double> u = a[i + k], v = a[i + k + len / 2] * w;
+                a[i + k] = u + v;
+                a[i + k + len / 2] = u - v;
+                w *= step;
+            }
+        }
+    }
+}
+
+/// The 2D FFT of a w x h row-major grid (both powers of 2).
+void fft2(std::vector<std::complex<double>>& grid, std::size_t w, std::size_t h, bool inverse)
+{
+    std::vector<std::complex<double>> line;
+    for (std::size_t y = 0; y < h; ++y) {
+        line.assign(grid.begin() + static_cast<std::ptrdiff_t>(y * w),
+                    grid.begin() + static_cast<std::ptrdiff_t>((y + 1) * w));
+        fft(line, inverse);
+        std::copy(line.begin(), line.end(), grid.begin() + static_cast<std::ptrdiff_t>(y * w));
+    }
+    line.resize(h);
+    for (std::size_t x = 0; x < w; ++x) {
+        for (std::size_t y = 0; y < h; ++y) {
+            line[y] = grid[y * w + x];
+        }
+        fft(line, inverse);
+        for (std::size_t y = 0; y < h; ++y) {
+            grid[y * w + x] = line[y];
+        }
+    }
+}
+
+/// |X|^2's inverse transform: the circular autocorrelation of the padded grid (unnormalised).
+std::vector<double> paddedAutocorrelation(std::vector<std::complex<double>> grid, std::size_t w, std::size_t h)
+{
+    fft2(grid, w, h, false);
+    for (auto& c : grid) {
+        c = std::norm(c);
+    }
+    fft2(grid, w, h, true);
+    std::vector<double> out(grid.size());
+    for (std::size_t i = 0; i < grid.size(); ++i) {
+        out[i] = grid[i].real() / static_cast<double>(grid.size());
+    }
+    return out;
+}
+
+}  // namespace
+
+AutocorrelationPeak autocorrelationPeak(const std::vector<double>& values, int width, int height, int minLag,
+                                        int maxLag)
+{
+    auto pow2 = [](int n) {
+        std::size_t p = 1;
+        while (p < static_cast<std::size_t>(n)) {
+            p <<= 1;
+        }
+        return p;
+    };
+    const std::size_t w = pow2(2 * width), h = pow2(2 * height);
+    double mean = 0.0;
+    for (double v : values) {
+        mean += v / static_cast<double>(values.size());
+    }
+    std::vector<std::complex<double>> grid(w * h), ones(w * h);
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            grid[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)] =
+                values[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)] -
+                mean;
+            ones[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)] = 1.0;
+        }
+    }
+    const std::vector<double> products = paddedAutocorrelation(std::move(grid), w, h);
+    const std::vector<double> overlaps = paddedAutocorrelation(std::move(ones), w, h);
+    const double variance = products[0] / overlaps[0];
+    AutocorrelationPeak peak{-1.0, 0, 0};
+    for (int dy = -maxLag; dy <= maxLag; ++dy) {
+        for (int dx = -maxLag; dx <= maxLag; ++dx) {
+            const int length2 = dx * dx + dy * dy;
+            if (length2 < minLag * minLag || length2 > maxLag * maxLag) {
+                continue;
+            }
+            const std::size_t i = static_cast<std::size_t>((dy + static_cast<int>(h)) % static_cast<int>(h)) * w +
+                                  static_cast<std::size_t>((dx + static_cast<int>(w)) % static_cast<int>(w));
+            const double r = products[i] / std::max(overlaps[i], 1.0) / variance;
+            if (r > peak.value) {
+                peak = {r, dx, dy};
+            }
+        }
+    }
+    return peak;
 }
 
 std::filesystem::path testDataPath(const std::string& name)

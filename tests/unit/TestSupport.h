@@ -75,6 +75,18 @@ std::string describe(const LimitedRun& run);
 /// The whole of a text file; empty if it cannot be read.
 std::string readTextFile(const std::filesystem::path& path);
 
+/// The largest normalised autocorrelation of `values` (width x height, row-major, its mean removed) at a lag of
+/// at least `minLag` and at most `maxLag` pixels (Euclidean length): each lag's sum of products over the pixels
+/// that overlap, divided by their count, over the variance. 1 for a pattern that repeats at such a lag, about 0
+/// for noise. By FFT (zero-padded, so no wrap-around).
+struct AutocorrelationPeak {
+    double value = 0.0;
+    int dx = 0;
+    int dy = 0;
+};
+AutocorrelationPeak autocorrelationPeak(const std::vector<double>& values, int width, int height, int minLag,
+                                        int maxLag);
+
 std::filesystem::path testDataPath(const std::string& name);  ///< tests/data/<name>
 std::filesystem::path demoDataPath(const std::string& name);  ///< demos/data/<name>
 
