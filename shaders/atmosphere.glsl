@@ -171,7 +171,8 @@ vec3 aerialPerspective(vec3 radiance, vec3 relative, vec3 sun)
 // The sky's radiance in unit direction `view` (the sun's disc not included; one fetch of the sky table).
 vec3 skyRadiance(vec3 view, vec3 sun)
 {
-    return texture(uSkyTable, onCells(tableCoordinate(view, sun), vec2(SKY_TABLE_AZIMUTHS, SKY_TABLE_ELEVATIONS))).rgb;
+    vec2 cells = vec2(SKY_TABLE_AZIMUTHS, SKY_TABLE_ELEVATIONS);
+    return texture(uSkyTable, onCells(tableCoordinate(view, sun), cells)).rgb;
 }
 #endif
 

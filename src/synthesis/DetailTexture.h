@@ -15,7 +15,8 @@ Image makeDetailTexture(const FractalParams& params, int size);
 
 /// The one-channel image `image` with its histogram made Gaussian of the same mean and standard deviation, the
 /// order of its pixels kept: each gray takes the normal quantile of its pixels' mid-rank (the quantiles scaled to
-/// the image's mean and deviation over its pixels), rounded and clamped to [0, 255]. What histogram-preserving tiling (shaders/detail.glsl) needs of a texture. A flat image stays flat.
+/// the image's mean and deviation over its pixels), rounded and clamped to [0, 255]. What histogram-preserving
+/// tiling (shaders/detail.glsl) needs of a texture. A flat image stays flat.
 /// Precondition: one channel, at least one pixel.
 Image gaussianized(const Image& image);
 

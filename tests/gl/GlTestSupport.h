@@ -41,8 +41,7 @@ Status buildDemoMap(const std::filesystem::path& path, const std::vector<std::fi
 /// The same for any height field `field` with `spacing` metres between its samples, coloured by `texture` (an
 /// image prep's --texture takes) or, without, by height.
 Status buildDetailMap(HeightField field, double spacing, const std::filesystem::path& path,
-                      const std::vector<std::filesystem::path>& materials,
-                      const std::filesystem::path& texture = {});
+                      const std::vector<std::filesystem::path>& materials, const std::filesystem::path& texture = {});
 
 /// An invisible window of `width` x `height` whose GL context is current.
 Expected<std::unique_ptr<GlWindow>> openHiddenWindow(int width, int height);
