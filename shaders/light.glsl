@@ -1,14 +1,20 @@
 // The terrain's light and air. Shared by the quadtree's and the clipmap's fragment programs (terrain.frag,
 // clipmap.frag); the sky (sky.frag) takes the same sun. The renderers set these from SceneStyle.
 // With ATMOSPHERE (atmosphere = true): the node colours as reflectances lit by the sun through the air
-// (sunTransmittance) and by the sky's irradiance, seen through the air (aerialPerspective), tone mapped
-// (atmosphere.glsl, included before this file). Without: the sun and an ambient light, and exponential haze with distance.
+// (sunTransmittance), by the sky's irradiance and by the light the ground around bounces onto slopes, seen
+// through the air (aerialPerspective), tone mapped (atmosphere.glsl, included before this file). Without: the sun
+// and an ambient light, and exponential haze with distance.
 
 uniform vec3 uSunDirection;  // unit, towards the sun
 uniform vec3 uSunColour;
 uniform vec3 uAmbient;
 uniform vec3 uHazeColour;
 uniform float uHazeDistance;  // metres at which haze reaches 63 %
+#ifdef ATMOSPHERE
+// The mean reflectance of the ground around a point, for the light it bounces onto slopes (grass, rock and soil
+// reflect 0.1 to 0.3 of visible light).
+const float kGroundAlbedo = 0.2;
+#endif
 
 // The surface colour `albedo` lit with unit normal n, seen through the air from `relative` metres away.
 vec3 litAndHazed(vec3 albedo, vec3 n, vec3 relative)
@@ -17,7 +23,11 @@ vec3 litAndHazed(vec3 albedo, vec3 n, vec3 relative)
     vec3 reflectance = pow(albedo, vec3(2.2));
     float altitude = uCameraAltitude + relative.z;
     vec3 sunlight = sunTransmittance(altitude);
-    vec3 irradiance = sunlight * max(dot(n, uSunDirection), 0.0) + skyIrradiance(sunlight, uSunDirection) * (0.5 + 0.5 * n.z);
+    vec3 sky = skyIrradiance(sunlight, uSunDirection);
+    // What the ground around receives, reflected back to a tilted surface from below its horizon: the
+    // surroundings taken as a lit flat ground of reflectance kGroundAlbedo, seen over (1 - n.z) / 2 of the sphere.
+    vec3 ground = kGroundAlbedo * (sunlight * max(uSunDirection.z, 0.0) + sky);
+    vec3 irradiance = sunlight * max(dot(n, uSunDirection), 0.0) + sky * (0.5 + 0.5 * n.z) + ground * (0.5 - 0.5 * n.z);
     return toneMap(aerialPerspective(reflectance / kPi * irradiance, relative, uSunDirection));
 #else
     vec3 light = uAmbient * (0.6 + 0.4 * n.z) + uSunColour * max(dot(n, uSunDirection), 0.0);
