@@ -33,7 +33,7 @@ in vec2 vLocal;
 uniform sampler2DArray uMaterials;  // per ring: n x n RGBA8 material weights, toroidal
 uniform sampler2DArray uPreviousMaterials;
 #ifndef DETAIL_TINT_ONLY
-uniform vec4 uLayerOrigin[LAYER_COUNT];  // the window origin in repeats (xy) and turned repeats (zw), fractional
+uniform vec4 uLayerOrigin[LAYER_COUNT];  // the window origin in repeats (xy) and lattice coordinates (zw), reduced
 #define LAYER_ORIGIN(k) uLayerOrigin[k]
 #endif
 #include "detail.glsl"

@@ -16,8 +16,8 @@ layout(location = NODE0_LOCATION) in vec4 aNode0;
 layout(location = NODE1_LOCATION) in vec4 aNode1;
 layout(location = NODE2_LOCATION) in vec4 aNode2;
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
-// The node's corner in repeats of each detail layer, fractional part (xy), and in repeats of the layer's
-// turned copy (zw: terrain.frag, uDetailTurn), an attribute a layer.
+// The node's corner in repeats of each detail layer, fractional part (xy), and in the layer's tiling lattice,
+// modulo its period (zw: detail.glsl, DetailLayers::origin), an attribute a layer.
 layout(location = LAYER_ORIGIN_LOCATION) in vec4 aLayerOrigin[LAYER_COUNT];
 #endif
 

@@ -512,7 +512,7 @@ void TerrainRenderer::uploadFrameNodes(const DrawList& frame, const SceneStyle& 
         instance.quadrantY = (selected.id.y & 1) ? 0.5f : 0.0f;
         std::memcpy(c, &instance, sizeof instance);
         if (split && f.program == static_cast<int>(kNear)) {
-            // The node's corner in repeats of each layer (and of its turned copy), reduced to [0, 1).
+            // The node's corner in each layer's repeats and lattice coordinates, reduced (DetailLayers::origin).
             const glm::dvec2 corner = glm::dvec2(selected.cameraRelativeOrigin) + glm::dvec2(frame.camera.position);
             for (int layer = 0; layer < mDetail.count(); ++layer) {
                 const glm::vec4 origin = mDetail.origin(layer, corner);

@@ -28,14 +28,10 @@
 namespace terrain {
 namespace {
 
+using test::direction;
+
 constexpr double kPi = std::numbers::pi;
 constexpr int kCases = 64;  // the probe's uniform arrays
-
-glm::dvec3 direction(double azimuthDegrees, double elevationDegrees)
-{
-    const double a = azimuthDegrees * kPi / 180.0, e = elevationDegrees * kPi / 180.0;
-    return {std::sin(a) * std::cos(e), std::cos(a) * std::cos(e), std::sin(e)};
-}
 
 const char* kProbeVertex = R"(#version 330 core
 void main()

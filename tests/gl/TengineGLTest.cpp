@@ -1221,12 +1221,16 @@ TEST_F(TengineGLTest, DistantRidgesLoseContrastAsTheAirsTransmittance)
         return (-b + std::sqrt(b * b - 4.0 * a * c)) / (2.0 * a) / kExposure;
     };
     const AtmosphereModel air;
+    std::vector<Image> images;
+    for (std::size_t k = 0; k < distances.size(); ++k) {
+        images.push_back(frame(dir / "frames", static_cast<int>(k)));
+        ASSERT_EQ(images.back().width, 1280);
+    }
     // Green, and blue, which the air dims most: a gray haze would not.
     for (int channel : {1, 2}) {
         std::array<double, 4> contrast{}, expected{};
         for (std::size_t k = 0; k < distances.size(); ++k) {
-            const Image image = frame(dir / "frames", static_cast<int>(k));
-            ASSERT_EQ(image.width, 1280);
+            const Image& image = images[k];
             // The middle rows where they meet the wall: half the band's angular width each way, at most the frame.
             const double halfWidth = std::atan(0.4 * kBand / distances[k]);
             const double pixelsPerRadian = (image.height / 2.0) / std::tan(30.0 * std::numbers::pi / 180.0);

@@ -4,6 +4,8 @@
 // distance).
 #include "light/Atmosphere.h"
 
+#include "TestSupport.h"
+
 #include <gtest/gtest.h>
 #include <glm/glm.hpp>
 
@@ -13,13 +15,9 @@
 namespace terrain {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using test::direction;
 
-glm::dvec3 direction(double azimuthDegrees, double elevationDegrees)
-{
-    const double a = azimuthDegrees * kPi / 180.0, e = elevationDegrees * kPi / 180.0;
-    return {std::sin(a) * std::cos(e), std::cos(a) * std::cos(e), std::sin(e)};
-}
+constexpr double kPi = std::numbers::pi;
 
 TEST(AtmosphereTest, TheDensityIntegralIsTheIntegralOfTheExponentialAlongTheSegment)
 {

@@ -4,6 +4,8 @@
 #include "heightfield/Image.h"
 #include "synthesis/Fractal.h"
 
+#include "TestSupport.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -407,36 +409,6 @@ TEST(Fractal, StandardDeviationScalesWithAmplitude)
     EXPECT_NEAR(stddev(small), 0.22, 0.06);
 }
 
-/// In-place radix-2 FFT (n a power of two).
-void fft(std::vector<std::complex<double>>& a)
-{
-    std::size_t n = a.size();
-    for (std::size_t i = 1, j = 0; i < n; ++i) {
-        std::size_t bit = n >> 1;
-        for (; j & bit; bit >>= 1) {
-            j ^= bit;
-        }
-        j ^= bit;
-        if (i < j) {
-            std::swap(a[i], a[j]);
-        }
-    }
-    for (std::size_t len = 2; len <= n; len <<= 1) {
-        double angle = -2.0 * std::numbers::pi / static_cast<double>(len);
-        std::complex<double> wl(std::cos(angle), std::sin(angle));
-        for (std::size_t i = 0; i < n; i += len) {
-            std::complex<double> w(1.0);
-            for (std::size_t k = 0; k < len / 2; ++k) {
-                std::complex<double> u = a[i + k];
-                std::complex<double> v = a[i + k + len / 2] * w;
-                a[i + k] = u + v;
-                a[i + k + len / 2] = u - v;
-                w *= wl;
-            }
-        }
-    }
-}
-
 /// Power in octave bands along many lines: band k spans [f_k / sqrt(lac), f_k * sqrt(lac)] around
 /// f_k = lac^k / wavelength. For a self-similar fBm, E_{k+1} / E_k = gain^2.
 std::vector<double> bandEnergies(const Fractal& f, int bands)
@@ -454,7 +426,7 @@ std::vector<double> bandEnergies(const Fractal& f, int bands)
             double w = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
             a[i] = w * f(static_cast<double>(i) * spacing, 977.0 * line);
         }
-        fft(a);
+        test::fft(a);
         for (std::size_t k = 1; k < n / 2; ++k) {
             double frequency = static_cast<double>(k) / length;
             double octave = std::log(frequency * p.wavelength) / std::log(p.lacunarity);

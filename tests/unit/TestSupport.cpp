@@ -214,9 +214,6 @@ std::string readTextFile(const std::filesystem::path& path)
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-namespace {
-
-/// In-place radix-2 FFT of `a` (size a power of 2); `inverse` without the 1/n.
 void fft(std::vector<std::complex<double>>& a, bool inverse)
 {
     const std::size_t n = a.size();
@@ -244,6 +241,14 @@ void fft(std::vector<std::complex<double>>& a, bool inverse)
         }
     }
 }
+
+glm::dvec3 direction(double azimuthDegrees, double elevationDegrees)
+{
+    const double a = azimuthDegrees * std::numbers::pi / 180.0, e = elevationDegrees * std::numbers::pi / 180.0;
+    return {std::sin(a) * std::cos(e), std::cos(a) * std::cos(e), std::sin(e)};
+}
+
+namespace {
 
 /// The 2D FFT of a w x h row-major grid (both powers of 2).
 void fft2(std::vector<std::complex<double>>& grid, std::size_t w, std::size_t h, bool inverse)

@@ -2,9 +2,11 @@
 #pragma once
 
 #include <sys/types.h>
+#include <complex>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <glm/vec3.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -74,6 +76,14 @@ std::string describe(const LimitedRun& run);
 
 /// The whole of a text file; empty if it cannot be read.
 std::string readTextFile(const std::filesystem::path& path);
+
+/// In-place radix-2 FFT of `a` (its size a power of 2): X_k = sum x_j e^(-2 pi i jk/n), or with `inverse` the
+/// same with e^(+...) and without the 1/n.
+void fft(std::vector<std::complex<double>>& a, bool inverse = false);
+
+/// The unit vector at `azimuthDegrees` (0 north, 90 east) and `elevationDegrees` above the horizon (world x east,
+/// y north, z up).
+glm::dvec3 direction(double azimuthDegrees, double elevationDegrees);
 
 /// The largest normalised autocorrelation of `values` (width x height, row-major, its mean removed) at a lag of
 /// at least `minLag` and at most `maxLag` pixels (Euclidean length): each lag's sum of products over the pixels
