@@ -82,5 +82,5 @@ void main()
 #else
     vec3 n = normalize(vNormal);
 #endif
-    fragColour = vec4(litAndHazed(albedo, n, vRelative), 1.0);
+    fragColour = vec4(litAndHazed(albedo, n, vRelative, vec2(1.0)), 1.0);
 }

@@ -16,8 +16,9 @@ uniform float uHazeDistance;  // metres at which haze reaches 63 %
 const float kGroundAlbedo = 0.2;
 #endif
 
-// The surface colour `albedo` lit with unit normal n, seen through the air from `relative` metres away.
-vec3 litAndHazed(vec3 albedo, vec3 n, vec3 relative)
+// The surface colour `albedo` lit with unit normal n, seen through the air from `relative` metres away. `visibility`:
+// the share of the sun (x) and of the sky (y) that the terrain around does not hide (1, 1 in the open).
+vec3 litAndHazed(vec3 albedo, vec3 n, vec3 relative, vec2 visibility)
 {
 #ifdef ATMOSPHERE
     vec3 reflectance = pow(albedo, vec3(2.2));
@@ -27,10 +28,11 @@ vec3 litAndHazed(vec3 albedo, vec3 n, vec3 relative)
     // What the ground around receives, reflected back to a tilted surface from below its horizon: the
     // surroundings taken as a lit flat ground of reflectance kGroundAlbedo, seen over (1 - n.z) / 2 of the sphere.
     vec3 ground = kGroundAlbedo * (sunlight * max(uSunDirection.z, 0.0) + sky);
-    vec3 irradiance = sunlight * max(dot(n, uSunDirection), 0.0) + sky * (0.5 + 0.5 * n.z) + ground * (0.5 - 0.5 * n.z);
+    vec3 irradiance = visibility.x * sunlight * max(dot(n, uSunDirection), 0.0) +
+                      visibility.y * (sky * (0.5 + 0.5 * n.z) + ground * (0.5 - 0.5 * n.z));
     return toneMap(aerialPerspective(reflectance / kPi * irradiance, relative, uSunDirection));
 #else
-    vec3 light = uAmbient * (0.6 + 0.4 * n.z) + uSunColour * max(dot(n, uSunDirection), 0.0);
+    vec3 light = visibility.y * uAmbient * (0.6 + 0.4 * n.z) + visibility.x * uSunColour * max(dot(n, uSunDirection), 0.0);
     vec3 colour = albedo * light;
     float haze = 1.0 - exp(-length(relative) / uHazeDistance);
     return mix(colour, uHazeColour, haze);

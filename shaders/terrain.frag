@@ -19,6 +19,7 @@ in vec3 vNormal;
 in vec2 vNodeUv;
 in vec2 vLocal;
 in vec4 vMaterials;
+
 flat in float vMorph;
 flat in vec2 vParentOffset;  // the node's quadrant in the parent's square: (0 or 0.5, 0 or 0.5)
 flat in ivec2 vSlots;        // layers: the node's in uColour, its parent's in uParentColour
@@ -32,6 +33,13 @@ uniform sampler2DArray uColour;   // per slot: the node's texture, corner texels
 uniform sampler2DArray uParentColour;  // the same textures in the parent's pool array
 uniform float uTexels;            // texels per side of a node's texture
 uniform float uLayerTexels;       // texels per side of a layer (>= uTexels: DXT1 pads to a multiple of 4)
+#ifdef SHADOWS
+// per slot: N x N visibilities of the sun and the sky at the node's samples (rg) and at the same places on its
+// parent's surface (ba), derived from the nodes' horizons for the frame's sun (lod/NodeHorizons.h); corner texels
+// on the node's corners
+uniform sampler2DArray uLight;
+uniform float uInverseCells;  // 1 / (N - 1)
+#endif
 #ifdef NORMAL_MAP
 uniform sampler2DArray uNormalMaps;  // per slot: unit normals (x, y) of the surface below, corner texels on corners
 uniform sampler2DArray uParentNormalMaps;  // the same maps in the parent's pool array
@@ -68,6 +76,18 @@ vec3 mappedNormal()
 }
 #endif
 
+// The share of the sun (x) and of the sky (y) the terrain around leaves the fragment, morphed like the colours.
+vec2 visibility()
+{
+#ifdef SHADOWS
+    float cells = 1.0 / uInverseCells;
+    vec4 light = texture(uLight, vec3((vNodeUv * cells + 0.5) / (cells + 1.0), float(vSlots.x)));
+    return mix(light.ba, light.rg, vMorph);
+#else
+    return vec2(1.0);
+#endif
+}
+
 void main()
 {
 #ifdef CLIP_TO_VALID
@@ -99,5 +119,5 @@ void main()
 #else
     vec3 n = normalize(vNormal);
 #endif
-    fragColour = vec4(litAndHazed(albedo, n, vRelative), 1.0);
+    fragColour = vec4(litAndHazed(albedo, n, vRelative, visibility()), 1.0);
 }

@@ -17,10 +17,10 @@ CacheChoice chooseCacheSize(const TengineOptions& o, const MapHeader& header, co
         }
     }
     const int normalTexels = o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0;
-    const SlotBytes slot =
-        o.clipmap
-            ? SlotBytes{}
-            : poolSlotBytes(header, {normalTexels, compressNormals, o.nodeTextureCompression && s3tc, detailLayers});
+    const SlotBytes slot = o.clipmap
+                               ? SlotBytes{}
+                               : poolSlotBytes(header, {normalTexels, compressNormals, o.nodeTextureCompression && s3tc,
+                                                        detailLayers, o.shadows});
     constexpr double kMiB = 1024.0 * 1024.0;
     auto kb = [](std::size_t bytes) { return static_cast<double>(bytes) / 1024.0; };
     const std::size_t perNode = std::max<std::size_t>(1, slot.total() + nodeBytes);

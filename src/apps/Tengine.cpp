@@ -260,7 +260,7 @@ Status openRenderer(Scene& scene, const TengineOptions& o, const std::filesystem
         TerrainRenderer::create(shaders, header, o.vertexCacheSize,
                                 PoolOptions{session.cache().nodes, o.nodeTextureCompression, session.tessellation(),
                                             o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0,
-                                            session.compressedNormalMaps(), session.countsPixels()},
+                                            session.compressedNormalMaps(), session.countsPixels(), session.shadows()},
                                 session.materials(), lighting);
     TERRAIN_TRY(renderer);
     scene.renderer = std::move(renderer).value();

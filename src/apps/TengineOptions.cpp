@@ -571,6 +571,11 @@ std::vector<OptionSpec> makeOptionTable()
                            "Aerial perspective: at distance d the terrain keeps exp(-d / haze_distance) of its own "
                            "colour. 0 turns haze off.",
                            &O::hazeDistance, atLeast(0), "metres"));
+    t.push_back(boolOption("shadows", kGroupDisplay,
+                           "Terrain shadows and sky visibility: the sun hidden behind the relief (soft, from the "
+                           "horizons of every node's surface over the static map) and the sky hidden in valleys. "
+                           "Quadtree modes only (lod_mode = clipmap draws without).",
+                           &O::shadows));
     t.push_back(boolOption("atmosphere", kGroupDisplay,
                            "A physically based sky and air: sunlight and skylight through an atmosphere of Rayleigh "
                            "and Mie scattering, aerial perspective with distance (in place of haze_distance and "

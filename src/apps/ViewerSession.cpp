@@ -2,6 +2,7 @@
 
 #include "apps/DetailSetup.h"
 #include "lod/HeightQuery.h"
+#include "lod/NodeHorizons.h"
 #include "lod/TessellationLevels.h"
 #include "synthesis/NormalMap.h"
 
@@ -15,6 +16,8 @@ namespace {
 /// between that depth and the one drawn with it (TerrainRenderer::kPixelCountLag), most at silhouettes a low
 /// flight crosses.
 constexpr int kOcclusionMarginPixels = 8;
+/// The most samples a side of the height grid the shadows' horizons are searched over (staticHeightGrid): 16 MiB.
+constexpr int kHorizonGridSide = 2049;
 
 /// lod_mode = clipmap: the finest ring's quadtree level, the deepest whose spacing is at least
 /// clipmap_finest_spacing (and lod_minimum_spacing), below the map's data only with synthesis.
@@ -151,14 +154,38 @@ Status ViewerSession::startStreaming(const GlCapabilities& gl)
     const int blockQuads = mTessellation ? kTessellationBlockQuads : 0;
     // The cache holds what the viewer's would: its nodes' CPU bytes are those of the viewer's source (a static
     // root, which holds its height codes too, costs at least what a dynamic node does).
-    const DetailPolicy viewerPolicy{
-        mSynthesizer.get(), o.lodMinimumSpacing, blockQuads, o.dynamicTextureSize, true, mRgtc2};
+    DetailPolicy viewerPolicy{mSynthesizer.get(), o.lodMinimumSpacing, blockQuads, o.dynamicTextureSize, true, mRgtc2};
+    mShadows = o.shadows && !clipmap && view;
+    if (o.shadows && clipmap && view) {
+        mLog("warning: shadows are drawn in the quadtree modes; lod_mode = clipmap draws without");
+    }
+    if (mShadows) {
+        std::vector<std::string> unreadable;
+        auto grid = staticHeightGrid(*mMap, kHorizonGridSide, &unreadable);
+        TERRAIN_TRY(grid);
+        if (!unreadable.empty()) {
+            // The loading threads report each node as they meet it; here only that the shadows make do.
+            mLog("warning: shadows: " + std::to_string(unreadable.size()) +
+                 " static node(s) could not be read; the horizons use their parents' heights there");
+        }
+        viewerPolicy.horizonGrid = std::make_shared<const HeightGrid>(std::move(grid).value());
+    }
     mSource = std::make_unique<TerrainNodeSource>(
         *mMap, view ? viewerPolicy : DetailPolicy{mSynthesizer.get(), o.lodMinimumSpacing, blockQuads});
     auto root = view ? mSource->loadRoot() : TerrainNodeSource(*mMap, viewerPolicy).loadRoot();
     TERRAIN_TRY(root);
-    mCache = chooseCacheSize(o, header(), materials(), gl.s3tc, mRgtc2, residentBytes(**root),
-                             clipmap ? SIZE_MAX : gl.maxSlots);
+    // With shadows a node holds horizons: the root's (a point at each of its samples, as every static node's) do
+    // not stand in for a dynamic node's, whose lattice is at most the leaves' quarter: the largest dynamic node's,
+    // twice (its own and its parent's).
+    std::size_t nodeBytes =
+        residentBytes(**root) - (*root)->horizons.codes.capacity() - (*root)->parentHorizons.codes.capacity();
+    if (o.shadows && !clipmap) {
+        const int n = static_cast<int>(header().chunkSize);
+        const double gridSpacing = header().spacingAt(staticHeightGridLevel(header(), kHorizonGridSide));
+        const int lattice = horizonLatticeSize(n, header().spacingAt(static_cast<int>(header().levels)), gridSpacing);
+        nodeBytes += static_cast<std::size_t>(2 * lattice * lattice * viewerPolicy.horizonOptions.azimuths);
+    }
+    mCache = chooseCacheSize(o, header(), materials(), gl.s3tc, mRgtc2, nodeBytes, clipmap ? SIZE_MAX : gl.maxSlots);
 
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = mCache.nodes;

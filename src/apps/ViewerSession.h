@@ -80,6 +80,8 @@ public:
     bool countsPixels() const { return mCountPixels; }
     /// Normal maps as RGTC2 blocks.
     bool compressedNormalMaps() const { return mRgtc2; }
+    /// Whether the viewer's nodes carry horizons and the renderer draws shadows (shadows, quadtree modes).
+    bool shadows() const { return mShadows; }
     /// The selection's tau: all of lod_error, or in tessellation mode what the blocks leave of it.
     double nodePixels() const { return mNodePixels; }
     /// Tessellation mode: the blocks' part of lod_error; else 0.
@@ -141,6 +143,7 @@ private:
     bool mTessellation = false;
     bool mCountPixels = false;
     bool mRgtc2 = false;
+    bool mShadows = false;
     double mNodePixels = 0.0;
     double mBlockPixels = 0.0;
     CacheChoice mCache;

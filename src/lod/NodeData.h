@@ -3,6 +3,7 @@
 #pragma once
 
 #include "core/Expected.h"
+#include "light/Horizon.h"
 #include "lod/BlockErrors.h"
 #include "quadtree/NodeId.h"
 #include "synthesis/DualHeightMap.h"
@@ -35,6 +36,11 @@ struct NodeData {
     /// The same normal map as RGTC2 blocks (lod/NodeTextures.h, compressRgtc2) where the source keeps them so
     /// (DetailPolicy::compressNormalMaps); normalMap is then empty.
     std::vector<std::uint8_t> normalMapBlocks;
+    /// The horizons of the node's surface at a lattice of its samples (lod/NodeHorizons.h) and its parent's
+    /// over the node's square (latticeQuadrant; the node's own, halved, for the root), for the shadows and sky
+    /// visibility the renderer draws; size 0 where the source makes no horizons (DetailPolicy::horizonGrid null).
+    HorizonLattice horizons;
+    HorizonLattice parentHorizons;
     /// The tessellation render mode's block errors of the drawn surface (base plus displacement), made with
     /// the node when that mode is on (DetailPolicy::tessellationBlockQuads); null otherwise.
     std::shared_ptr<const TessellationErrors> tessellation;

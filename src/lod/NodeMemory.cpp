@@ -23,7 +23,8 @@ std::size_t residentBytes(const NodeData& node)
     std::size_t bytes = sizeof(NodeData) + heapBytes(node.codes) + heapBytes(node.heights.base) +
                         heapBytes(node.heights.displacement) + heapBytes(node.heights.slope) +
                         heapBytes(node.materialWeights) + heapBytes(node.texture) + heapBytes(node.normalMap) +
-                        heapBytes(node.normalMapBlocks);
+                        heapBytes(node.normalMapBlocks) + heapBytes(node.horizons.codes) +
+                        heapBytes(node.parentHorizons.codes);
     if (node.tessellation) {
         const TessellationErrors& t = *node.tessellation;
         bytes += sizeof(TessellationErrors) + heapBytes(t.blocks.lambda) + heapBytes(t.snap) + heapBytes(t.flip) +
@@ -43,6 +44,7 @@ SlotBytes poolSlotBytes(const MapHeader& header, const PoolLayout& layout)
     b.normals = layout.normalMapTexels == 0 ? m * m * 2 : 0;
     b.colour = layout.dxt1 ? blocks(t) * blocks(t) / 2 : t * t * 3;
     b.weights = layout.detailLayers > 0 ? n * n * sizeof(std::uint16_t) : 0;
+    b.light = layout.shadows ? n * n * 4 : 0;
     const auto texels = static_cast<std::size_t>(layout.normalMapTexels);
     b.normalMap = layout.compressNormals ? blocks(texels) * blocks(texels) : texels * texels * 2;
     b.constants = (3 + static_cast<std::size_t>(layout.detailLayers)) * 4 * sizeof(float);

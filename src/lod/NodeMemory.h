@@ -17,8 +17,9 @@ struct SlotBytes {
     std::size_t colour = 0;     ///< the colour texture (RGB8, or DXT1 with node_texture_compression)
     std::size_t weights = 0;    ///< material weights (RGBA4), 0 without detail layers
     std::size_t normalMap = 0;  ///< the normal map of the surface below (RGTC2, or RG8), 0 without normal maps
+    std::size_t light = 0;  ///< the sun's and sky's visibility, own and parent's (RGBA8 a sample), 0 without shadows
     std::size_t constants = 0;  ///< per drawn node, in the frame's constants buffer
-    std::size_t total() const { return heights + normals + colour + weights + normalMap + constants; }
+    std::size_t total() const { return heights + normals + colour + weights + normalMap + light + constants; }
 };
 
 /// The most texture arrays each of the renderer's pools spreads its slots over: with 2048 layers an array
@@ -32,6 +33,7 @@ struct PoolLayout {
     bool compressNormals = false;  ///< RGTC2 normal maps (1 byte a texel, padded to 4 x 4 blocks), else RG8
     bool dxt1 = false;             ///< DXT1 colour (half a byte a texel, padded to 4 x 4 blocks), else RGB8
     int detailLayers = 0;          ///< the materials' detail textures: > 0 adds the weights and their constants
+    bool shadows = false;          ///< the sun's and sky's visibility at the samples (lod/NodeHorizons.h)
 };
 /// The slot of a node of `header`'s maps in pools of `layout` (no GL: the tool sizes caches with it too).
 SlotBytes poolSlotBytes(const MapHeader& header, const PoolLayout& layout);

@@ -4,6 +4,7 @@
 #include "lod/NodeTextures.h"
 
 #include "core/Check.h"
+#include "lod/NodeHorizons.h"
 #include "synthesis/NormalMap.h"
 
 #include <algorithm>
@@ -101,7 +102,47 @@ Expected<NodePtr> TerrainNodeSource::loadStatic(const NodeId& id, const NodeData
     data->texture = std::move(node->texture);
     addTessellationErrors(*data);
     addNormalMap(*data, placement(id));
+    addHorizons(*data, placement(id), parent);
     return NodePtr(std::move(data));
+}
+
+void TerrainNodeSource::addHorizons(NodeData& data, const WindowPlacement& where, const NodeData* parent) const
+{
+    if (!mPolicy.horizonGrid) {
+        return;
+    }
+    const int n = static_cast<int>(mMap.header().chunkSize);
+    const int size = horizonLatticeSize(n, data.spacing, mPolicy.horizonGrid->spacing);
+    if (parent && parent->horizons.size >= 3) {
+        data.parentHorizons = latticeQuadrant(parent->horizons, data.id.quadrant());
+    }
+    if (!data.isStatic && data.parentHorizons.size == size) {
+        // The lattice's points are all the parent's samples, where a dynamic node's surface is its parent's
+        // (synthesis/DetailSynthesizer.h, "Nesting"): the same points, heights and grid, the same horizons.
+        data.horizons = data.parentHorizons;
+        return;
+    }
+    std::vector<float> window(data.heights.base.size());
+    data.heights.surface(window);
+    data.horizons = nodeHorizons(*mPolicy.horizonGrid, where, window, n, size, mPolicy.horizonOptions);
+    if (!parent || parent->horizons.size < 3) {
+        // The root (no parent drawn below it): its own lattice at every other point, as coarse as a parent's.
+        const HorizonLattice& own = data.horizons;
+        const int half = (own.size - 1) / 2 + 1;
+        const auto a = static_cast<std::size_t>(own.azimuths);
+        data.parentHorizons = {half, own.azimuths,
+                               std::vector<std::uint8_t>(static_cast<std::size_t>(half) * half * a)};
+        for (int j = 0; j < half; ++j) {
+            for (int i = 0; i < half; ++i) {
+                const auto from = (static_cast<std::size_t>(2 * j) * static_cast<std::size_t>(own.size) +
+                                   static_cast<std::size_t>(2 * i)) *
+                                  a;
+                std::copy_n(own.codes.begin() + static_cast<std::ptrdiff_t>(from), a,
+                            data.parentHorizons.codes.begin() +
+                                static_cast<std::ptrdiff_t>((static_cast<std::size_t>(j) * half + i) * a));
+            }
+        }
+    }
 }
 
 void TerrainNodeSource::addTessellationErrors(NodeData& data) const
@@ -179,6 +220,7 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     if (mPolicy.normalMapSize > 0) {
         keepNormalMap(*data, makeNormalMap(synthesizer, data->heights, children, where, mPolicy.normalMapSize));
     }
+    addHorizons(*data, where, &parent);
     return data;
 }
 

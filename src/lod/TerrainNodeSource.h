@@ -4,6 +4,7 @@
 // material displacement, so a static leaf and its dynamic children nest exactly.
 #pragma once
 
+#include "light/Horizon.h"
 #include "lod/NodeData.h"
 #include "quadtree/MapFile.h"
 #include "synthesis/DetailErrorModel.h"
@@ -36,6 +37,11 @@ struct DetailPolicy {
     /// The normal maps kept as RGTC2 blocks (NodeData::normalMapBlocks, lod/NodeTextures.h: half the bytes,
     /// what the renderer's compressed pools take as they are) instead of RG8 texels (NodeData::normalMap).
     bool compressNormalMaps = false;
+    /// Non-null: every node gets the horizons of its surface over this grid (NodeData::horizons,
+    /// lod/NodeHorizons.h; staticHeightGrid of the map), made on the loading thread with the node, searched with
+    /// `horizonOptions`. Null: none (no shadows).
+    std::shared_ptr<const HeightGrid> horizonGrid = nullptr;
+    HorizonOptions horizonOptions{16, 20000.0, 0.2};
 };
 
 class TerrainNodeSource final : public NodeSource {
@@ -61,6 +67,8 @@ private:
     bool childrenAllowed(const NodeId& id, bool hasStaticChildren) const;
     void addTessellationErrors(NodeData& data) const;
     void addNormalMap(NodeData& data, const WindowPlacement& where) const;
+    /// NodeData::horizons of `data` at `where` and its parent's over its square (DetailPolicy::horizonGrid).
+    void addHorizons(NodeData& data, const WindowPlacement& where, const NodeData* parent) const;
     /// Puts `map` into data.normalMap, or into data.normalMapBlocks as RGTC2 (DetailPolicy::compressNormalMaps).
     void keepNormalMap(NodeData& data, std::vector<std::int8_t> map) const;
 

@@ -58,7 +58,7 @@ struct SamplerUnit {
     int unit;
 };
 
-/// The quadtree renderer's programs (terrain.*, terrain_tess.vert). Units 0-9; own pool arrays and parent pool
+/// The quadtree renderer's programs (terrain.*, terrain_tess.vert). Units 0-10; own pool arrays and parent pool
 /// arrays apart, so a draw binds one pair of arrays.
 namespace terrain_units {
 inline constexpr int kColour = 0;            ///< the node's colour texture (own pool array)
@@ -71,8 +71,9 @@ inline constexpr int kNormalMaps = 6;        ///< normal maps (own pool array)
 inline constexpr int kParentColour = 7;      ///< colour textures (the parent's pool array)
 inline constexpr int kParentNormalMaps = 8;  ///< normal maps (the parent's pool array)
 inline constexpr int kAerialTable = 9;       ///< the frame's aerial-perspective table (AtmosphereTables)
+inline constexpr int kLight = 10;            ///< the sun's and sky's visibility at the nodes' samples (own array)
 }  // namespace terrain_units
-inline constexpr std::array<SamplerUnit, 10> kTerrainSamplers = {{
+inline constexpr std::array<SamplerUnit, 11> kTerrainSamplers = {{
     {"uColour", terrain_units::kColour},
     {"uHeights", terrain_units::kHeights},
     {"uDetail", terrain_units::kDetail},
@@ -83,6 +84,7 @@ inline constexpr std::array<SamplerUnit, 10> kTerrainSamplers = {{
     {"uParentColour", terrain_units::kParentColour},
     {"uParentNormalMaps", terrain_units::kParentNormalMaps},
     {"uAerialTable", terrain_units::kAerialTable},
+    {"uLight", terrain_units::kLight},
 }};
 
 /// The clipmap renderer's programs (clipmap.*): the rings' textures now and as they were drawn before their morph.

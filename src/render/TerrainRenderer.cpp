@@ -5,6 +5,7 @@
 #include "gpudata/TemplateMesh.h"
 #include "gpudata/ZigzagIndexBuffer.h"
 #include "heightfield/Image.h"
+#include "light/Horizon.h"
 #include "lod/NodeTextures.h"
 #include "lod/TessellationLevels.h"
 #include "quadtree/ChunkGeometry.h"
@@ -12,6 +13,7 @@
 #include "render/ShaderContract.h"
 #include "render/TextureArrays.h"
 
+#include <glm/geometric.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
 #include <algorithm>
@@ -100,6 +102,10 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     }
     if (lighting.atmosphere) {
         defines.emplace_back("ATMOSPHERE");
+    }
+    r->mShadows = pools.shadows;
+    if (r->mShadows) {
+        defines.emplace_back("SHADOWS");
     }
     TERRAIN_TRY(r->createPrograms(shaderDirectory, std::move(defines), lighting));
     r->createTemplateMesh(vertexCacheSize);
@@ -235,7 +241,8 @@ Status TerrainRenderer::createPools(const PoolOptions& pools)
     const int t = static_cast<int>(mHeader.textureSize);
     mDxt1 = pools.compressColour && epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
     mColourLayerSize = mDxt1 ? blockLayerSize(t) : t;
-    mSlotBytes = poolSlotBytes(mHeader, {pools.normalMapTexels, pools.compressNormals, mDxt1, mDetail.count()});
+    mSlotBytes =
+        poolSlotBytes(mHeader, {pools.normalMapTexels, pools.compressNormals, mDxt1, mDetail.count(), pools.shadows});
     mRgtc2 = mNormalTexels > 0 && pools.compressNormals;
     mNormalLayerSize = mRgtc2 ? blockLayerSize(mNormalTexels) : mNormalTexels;
     const TextureArrayFormat heights{GL_R16, GL_RED, GL_UNSIGNED_SHORT, GL_NEAREST};
@@ -265,6 +272,10 @@ Status TerrainRenderer::createPools(const PoolOptions& pools)
         if (mNormalTexels > 0) {
             pool.normalMaps = createTextureArray(normalMaps, mNormalLayerSize, layers);
         }
+        if (mShadows) {
+            pool.light =
+                createTextureArray({GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, GL_CLAMP_TO_EDGE}, n, layers);
+        }
     }
     mSlotHeights.assign(slots, {0.0f, 0.0f});
     TERRAIN_ASSERT(mSlotBytes.constants == static_cast<std::size_t>(mNodeTexels) * 4 * sizeof(float));
@@ -275,6 +286,24 @@ Status TerrainRenderer::createPools(const PoolOptions& pools)
                          " (out of GPU memory? a smaller memory_budget or quad_cache_size needs less)");
     }
     return {};
+}
+
+void TerrainRenderer::fillLight(int slot)
+{
+    const NodeData& node = *mSlotData[static_cast<std::size_t>(slot)];
+    const int n = static_cast<int>(mHeader.chunkSize);
+    std::vector<std::uint8_t> light(static_cast<std::size_t>(n) * static_cast<std::size_t>(n) * 4, 255);
+    if (node.horizons.size >= 2 && node.parentHorizons.size >= 2) {
+        // The sun's direction angle from +x towards +y and its elevation, as the horizons measure them.
+        const double azimuth = std::atan2(double{mSun.y}, double{mSun.x});
+        const double elevation = std::asin(std::clamp(double{mSun.z}, -1.0, 1.0));
+        latticeVisibility(node.horizons, azimuth, elevation, kShadowSoftness, n, light, 4, 0);
+        latticeVisibility(node.parentHorizons, azimuth, elevation, kShadowSoftness, n, light, 4, 2);
+    }
+    const PoolArrays& pool = mArrays[static_cast<std::size_t>(arrayOf(slot))];
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, pool.light.name());
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layerOf(slot), n, n, 1, GL_RGBA, GL_UNSIGNED_BYTE, light.data());
 }
 
 void TerrainRenderer::fill(int slot, const NodePtr& node, RenderStats& stats)
@@ -325,6 +354,9 @@ void TerrainRenderer::fill(int slot, const NodePtr& node, RenderStats& stats)
         glBindTexture(GL_TEXTURE_2D_ARRAY, pool.weights.name());
         glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, n, n, 1, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4,
                         weights.data());
+    }
+    if (pool.light) {
+        fillLight(slot);
     }
     if (pool.normalMaps) {
         const auto texels = static_cast<std::size_t>(mNormalTexels);
@@ -415,6 +447,18 @@ RenderStats TerrainRenderer::draw(const DrawList& frame, const SceneStyle& style
         mCounter->begin(mFrame, camera);
     }
     beginSceneFrame(camera, style, mSky);
+    if (mShadows) {
+        // Every held slot's visibility follows the sun when it moves; nodes filled below get it as they come.
+        const glm::vec3 sun = glm::normalize(style.sunDirection);
+        if (sun != mSun) {
+            mSun = sun;
+            for (std::size_t slot = 0; slot < mSlotData.size(); ++slot) {
+                if (mSlotData[slot]) {
+                    fillLight(static_cast<int>(slot));
+                }
+            }
+        }
+    }
     orderFrameNodes(frame, stats);
     const std::size_t count = mFrameNodes.size();
     stats.nodes = count;
@@ -587,7 +631,8 @@ void TerrainRenderer::drawGroups(RenderStats& stats, TriangleFeedback* feedback)
                                                                {units::kParentNormals, &own.parentNormals},
                                                                {units::kNormalMaps, &own.normalMaps},
                                                                {units::kParentColour, &parents.colour},
-                                                               {units::kParentNormalMaps, &parents.normalMaps}};
+                                                               {units::kParentNormalMaps, &parents.normalMaps},
+                                                               {units::kLight, &own.light}};
         for (const auto& [unit, texture] : bindings) {
             if (*texture) {
                 glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));

@@ -71,6 +71,11 @@ struct PoolOptions {
     /// Count each drawn node's visible pixels (visibility_lod; takePixelCounts()): needs GL 4.3 or
     /// its shader storage and early fragment test extensions (pixelCountsSupported()).
     bool pixelCounts = false;
+    /// Shadows and sky visibility (shadows): nodes carry horizons (NodeData::horizons, lod/NodeHorizons.h), from
+    /// which each slot gets the sun's and sky's visibility at its samples for the frame's sun (re-derived for
+    /// every slot when the sun moves); the fragment program reads them bilinearly, morphed like the colours, and
+    /// applies them to the sun's and the sky's light.
+    bool shadows = false;
     /// Layers of each texture array (0: GL_MAX_ARRAY_TEXTURE_LAYERS): more slots take more arrays per pool.
     /// Tests set a few to draw with several arrays.
     std::size_t layersPerArray = 0;
@@ -142,6 +147,8 @@ private:
     Status createPools(const PoolOptions& pools);
     /// Copies `node` into `slot` unless the slot holds it already.
     void fill(int slot, const NodePtr& node, RenderStats& stats);
+    /// Writes the sun's and sky's visibility of the node in `slot` for mSun into its light layer.
+    void fillLight(int slot);
     /// draw()'s parts: the frame's nodes in drawing order (filling their slots), their per-instance constants
     /// (and block codes) uploaded, the programs' uniforms, and the instanced draws.
     void orderFrameNodes(const DrawList& frame, RenderStats& stats);
@@ -174,6 +181,7 @@ private:
         gl::Texture colour;         ///< DXT1 (or GL_RGB8), mColourLayerSize^2 per layer
         gl::Texture weights;        ///< GL_RGBA4, N^2 per layer; none without materials
         gl::Texture normalMaps;     ///< RGTC2 (or GL_RG8_SNORM), mNormalLayerSize^2 per layer; or none
+        gl::Texture light;          ///< GL_RGBA8, N^2 per layer: sun, sky, parent's sun, parent's sky (linear); or none
     };
     std::vector<PoolArrays> mArrays;
     std::size_t mLayersPerArray = 1;
@@ -185,7 +193,9 @@ private:
     int mColourLayerSize = 0;
     SlotBytes mSlotBytes;
     std::vector<NodePtr> mSlotData;  ///< per slot: the node it holds (identity for reloads), or null
-    std::size_t mSlotsHeld = 0;      ///< slots that have held a node
+    bool mShadows = false;
+    glm::vec3 mSun{0.0f};        ///< the sun the light layers were derived for (towards it, unit)
+    std::size_t mSlotsHeld = 0;  ///< slots that have held a node
     // The frame's per-node constants (terrain.vert's per-instance attributes: mNodeTexels vec4s a node).
     int mNodeTexels = 3;
     std::vector<float> mConstants;

@@ -5,6 +5,8 @@
 // Prints figures, never gates.
 #include "heightfield/HeightFieldIo.h"
 #include "lod/BlockErrors.h"
+#include "lod/NodeHorizons.h"
+#include "lod/TerrainNodeSource.h"
 #include "synthesis/DetailErrorModel.h"
 #include "synthesis/DetailSynthesizer.h"
 #include "synthesis/NormalMap.h"
@@ -28,7 +30,7 @@ struct Leaf {
     std::vector<std::uint8_t> texture;
 };
 
-Leaf makeLeaf(const DetailSynthesizer& synthesizer)
+const HeightField& demoField()
 {
     static const HeightField field = [] {
         auto f = readHeightField(std::filesystem::path(TERRAIN_DEMO_DATA_DIR) / "trinidad_co_srtm3_crop_1025.png");
@@ -38,6 +40,12 @@ Leaf makeLeaf(const DetailSynthesizer& synthesizer)
         }
         return std::move(f).value();
     }();
+    return field;
+}
+
+Leaf makeLeaf(const DetailSynthesizer& synthesizer)
+{
+    const HeightField& field = demoField();
     Leaf leaf;
     leaf.where = {0.0, 0.0, 0.0, kSpacing, 512 - kBorder, 512 - kBorder};
     leaf.map.size = kWindow;
@@ -199,6 +207,51 @@ void tessellationErrors(benchmark::State& state)
 }
 
 BENCHMARK(tessellationErrors)->Unit(benchmark::kMicrosecond)->Repetitions(5)->ReportAggregatesOnly(true);
+
+/// What the shadows add to a node on the loading threads (lod/NodeHorizons.h): the horizons of a dynamic child of
+/// the real leaf (grass, rock, roughness) over the whole demo terrain as the viewer's grid (1025 x 1025 samples at
+/// 90 m), with the viewer's search (DetailPolicy::horizonOptions: 16 azimuths to 20 km), at the lattice
+/// horizonLatticeSize gives a node `state.range(0)` levels below the 90 m leaves: 0, a static leaf's 65 x 65
+/// points; 1, the child's 33 x 33; 2, 17 x 17; 3 and deeper, 9 x 9 (most dynamic nodes).
+void horizons(benchmark::State& state)
+{
+    const HeightField& field = demoField();
+    HeightGrid grid;
+    grid.width = field.width;
+    grid.height = field.height;
+    grid.spacing = kSpacing;
+    grid.heights.resize(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height));
+    for (int j = 0; j < grid.height; ++j) {
+        for (int i = 0; i < grid.width; ++i) {
+            grid.heights[static_cast<std::size_t>(j) * static_cast<std::size_t>(grid.width) +
+                         static_cast<std::size_t>(i)] = field.at(i, j);
+        }
+    }
+    grid.setTop();
+    const auto noise = roughness();
+    auto synthesizer = DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, shippedMaterials(), noise, noise}).value();
+    const Leaf leaf = makeLeaf(*synthesizer);
+    const WindowPlacement where = childPlacement(leaf.where, 0, kChunk);
+    const DualHeightMap child = synthesizer->synthesizeChild(leaf.map, 0, where);
+    std::vector<float> window(child.base.size());
+    child.surface(window);
+    const HorizonOptions options = DetailPolicy{}.horizonOptions;
+    const int size = horizonLatticeSize(kChunk, kSpacing / static_cast<double>(1 << state.range(0)), kSpacing);
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(nodeHorizons(grid, where, window, kChunk, size, options).codes.data());
+    }
+    state.counters["nodes/s"] =
+        benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+BENCHMARK(horizons)
+    ->Arg(0)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(3)
+    ->Unit(benchmark::kMicrosecond)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
 
 }  // namespace
 }  // namespace terrain

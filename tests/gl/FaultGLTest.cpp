@@ -185,16 +185,7 @@ TEST_F(FaultGLTest, NodeWithFlippedBitsIsReportedAndItsParentDrawnInstead)
     test::ScratchDir work;
     const auto damaged = work / "damaged.map";
     std::filesystem::copy_file(map(), damaged);
-    {
-        std::fstream file(damaged, std::ios::in | std::ios::out | std::ios::binary);
-        const auto at = static_cast<std::streamoff>(entry->offset + entry->payloadBytes() / 3);
-        char byte = 0;
-        file.seekg(at);
-        file.read(&byte, 1);
-        byte = static_cast<char>(byte ^ 0x10);
-        file.seekp(at);
-        file.write(&byte, 1);
-    }
+    ASSERT_TRUE(test::flipBits(damaged, entry->offset + entry->payloadBytes() / 3, 0x10));
     const auto frames = work / "frames";
     auto run = test::runProgram(TERRAIN_TENGINE_EXE, videoArgs(damaged, frames, {"worker_threads=2"}));
     ASSERT_EQ(run.exitCode, 0) << run.output;

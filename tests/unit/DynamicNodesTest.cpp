@@ -29,16 +29,8 @@ protected:
     void SetUp() override
     {
         mSynthesizer = test::grassAndRockSynthesizer(kChunk);
-        BuildOptions options;
-        options.chunkSize = kChunk;
-        options.spacing = 10.0;
-        options.threads = 2;
-        options.leafDetailError = leafDetailErrorFunction(*mSynthesizer);
-        auto report = buildMap(test::hillyField(257, 257), options, mDir / "hills.map");
-        ASSERT_TRUE(report.ok()) << report.error().message;
-        auto map = MapFile::open(mDir / "hills.map", ReaderKind::MemoryMapped);
-        ASSERT_TRUE(map.ok()) << map.error().message;
-        mMap = std::move(map.value());
+        mMap = test::detailErrorMap(test::hillyField(257, 257), 10.0, *mSynthesizer, mDir / "hills.map");
+        ASSERT_TRUE(mMap);
         ASSERT_TRUE(mMap->header().hasDetailErrors());
     }
 

@@ -101,5 +101,122 @@ TEST(HorizonTest, SunVisibilityMatchesRaysMarchedTowardsTheSunOverRealTerrain)
     }
 }
 
+// The search stops where even the grid's highest sample could not rise above the horizon found (HeightGrid::top):
+// the same horizons as searching to the end, for points in valleys, on peaks and above the whole grid.
+TEST(HorizonTest, StoppingAtTheGridsTopFindsTheSameHorizons)
+{
+    auto field = readHeightField(test::demoDataPath("trinidad_co_srtm3_crop_1025.png"));
+    ASSERT_TRUE(field.ok()) << field.error().message;
+    const HeightGrid full{field->width, field->height, 0.0, 0.0, 90.0, field->samples};
+    HeightGrid topped = full;
+    topped.setTop();
+    ASSERT_LT(topped.top, 1e6);
+    const HorizonOptions options{16, 20000.0, 0.2};
+    int points = 0;
+    for (int j = 0; j < full.height; j += 97) {
+        for (int i = 0; i < full.width; i += 89) {
+            const double x = i * 90.0 + 13.0, y = j * 90.0 + 29.0;
+            for (double lift : {0.0, 40.0, 3000.0}) {
+                const double z = full.at(x, y) + lift;
+                ASSERT_EQ(horizonTangents(full, x, y, z, options), horizonTangents(topped, x, y, z, options))
+                    << x << ", " << y << " lifted " << lift;
+                ++points;
+            }
+        }
+    }
+    EXPECT_GT(points, 300);
+}
+
+TEST(HorizonTest, CodesKeepTheHorizonsAngleWithinHalfAStep)
+{
+    const double step = 0.75 * kPi / 255.0;
+    for (double angle = -0.25 * kPi; angle < 0.4999 * kPi; angle += 0.0007) {
+        const double back = std::atan(decodeHorizon(encodeHorizon(std::tan(angle))));
+        ASSERT_NEAR(back, angle, 0.5 * step + 1e-9) << angle;
+    }
+    EXPECT_EQ(encodeHorizon(-5.0), 0) << "below -1: the lowest code";
+    EXPECT_EQ(encodeHorizon(1e9), 255);
+    EXPECT_EQ(encodeHorizon(std::nan("")), 0);
+    EXPECT_TRUE(std::isfinite(decodeHorizon(255)));
+}
+
+/// A lattice of `size` points whose codes are a function of the point and azimuth.
+HorizonLattice patternLattice(int size, int azimuths)
+{
+    HorizonLattice lattice{size, azimuths, {}};
+    for (int j = 0; j < size; ++j) {
+        for (int i = 0; i < size; ++i) {
+            for (int k = 0; k < azimuths; ++k) {
+                lattice.codes.push_back(static_cast<std::uint8_t>((i * 7 + j * 13 + k * 29) % 200 + 20));
+            }
+        }
+    }
+    return lattice;
+}
+
+TEST(HorizonTest, AQuadrantIsTheLatticesPointsOverTheChildsSquare)
+{
+    const HorizonLattice lattice = patternLattice(9, 4);
+    for (int q = 0; q < 4; ++q) {
+        const HorizonLattice quarter = latticeQuadrant(lattice, q);
+        ASSERT_EQ(quarter.size, 5);
+        ASSERT_EQ(quarter.azimuths, 4);
+        for (int j = 0; j < 5; ++j) {
+            for (int i = 0; i < 5; ++i) {
+                for (int k = 0; k < 4; ++k) {
+                    const int pi = i + (q & 1) * 4, pj = j + (q >> 1) * 4;
+                    ASSERT_EQ(quarter.codes[static_cast<std::size_t>((j * 5 + i) * 4 + k)],
+                              lattice.codes[static_cast<std::size_t>((pj * 9 + pi) * 4 + k)])
+                        << q << " " << i << " " << j;
+                }
+            }
+        }
+    }
+}
+
+// The visibilities written for a node's samples: at the samples on lattice points, the visibility of that point's
+// horizons; between them, between their values.
+TEST(HorizonTest, LatticeVisibilityIsThePointsVisibilityBilinearlyBetweenThem)
+{
+    const int size = 5, azimuths = 8, n = 17;  // a lattice point every 4 samples
+    const HorizonLattice lattice = patternLattice(size, azimuths);
+    const double sunAzimuth = 0.7, sunElevation = 0.3, softness = 0.05;
+    std::vector<std::uint8_t> out(static_cast<std::size_t>(n) * n * 4, 7);
+    latticeVisibility(lattice, sunAzimuth, sunElevation, softness, n, out, 4, 2);
+    auto point = [&](int i, int j) {
+        std::vector<float> t(azimuths);
+        for (int k = 0; k < azimuths; ++k) {
+            t[static_cast<std::size_t>(k)] = static_cast<float>(
+                decodeHorizon(lattice.codes[static_cast<std::size_t>((j * size + i) * azimuths + k)]));
+        }
+        return std::pair{sunVisibility(t, sunAzimuth, sunElevation, softness), skyVisibility(t)};
+    };
+    int shaded = 0;
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            const std::size_t at = (static_cast<std::size_t>(j) * n + static_cast<std::size_t>(i)) * 4;
+            ASSERT_EQ(out[at], 7) << "channels outside the offset are left alone";
+            ASSERT_EQ(out[at + 1], 7);
+            const int li = i / 4, lj = j / 4;
+            if (i % 4 == 0 && j % 4 == 0) {
+                const auto [sun, sky] = point(li, lj);
+                ASSERT_NEAR(out[at + 2] / 255.0, sun, 0.5 / 255.0 + 1e-6) << i << " " << j;
+                ASSERT_NEAR(out[at + 3] / 255.0, sky, 0.5 / 255.0 + 1e-6) << i << " " << j;
+                shaded += sun < 0.5;
+            } else {
+                const int hi = std::min(li + 1, size - 1), hj = std::min(lj + 1, size - 1);
+                const double lo =
+                    std::min({point(li, lj).first, point(hi, lj).first, point(li, hj).first, point(hi, hj).first});
+                const double up =
+                    std::max({point(li, lj).first, point(hi, lj).first, point(li, hj).first, point(hi, hj).first});
+                ASSERT_GE(out[at + 2] / 255.0, lo - 0.5 / 255.0 - 1e-6) << i << " " << j;
+                ASSERT_LE(out[at + 2] / 255.0, up + 0.5 / 255.0 + 1e-6) << i << " " << j;
+            }
+        }
+    }
+    EXPECT_GT(shaded, 0) << "the pattern hides the sun somewhere";
+    EXPECT_LT(shaded, size * size) << "and shows it somewhere";
+}
+
 }  // namespace
 }  // namespace terrain

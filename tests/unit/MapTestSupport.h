@@ -9,6 +9,7 @@
 #include "heightfield/HeightField.h"
 #include "quadtree/MapFile.h"
 #include "quadtree/QuadtreeBuilder.h"
+#include "synthesis/DetailErrorModel.h"
 #include "synthesis/DetailSynthesizer.h"
 
 #include <gtest/gtest.h>
@@ -362,6 +363,25 @@ inline std::unique_ptr<MapFile> openMap(const std::filesystem::path& path, Reade
         return nullptr;
     }
     return std::move(map.value());
+}
+
+/// `field` built into a map at `path` (chunks of the synthesizer's size, `spacing` metres, 2 threads) whose leaves
+/// carry the detail errors of `synthesizer` (3.4.1), opened memory-mapped; null (a test failure recorded) when
+/// either fails.
+inline std::unique_ptr<MapFile> detailErrorMap(HeightField field, double spacing, const DetailSynthesizer& synthesizer,
+                                               const std::filesystem::path& path)
+{
+    BuildOptions options;
+    options.chunkSize = synthesizer.chunkSize();
+    options.spacing = spacing;
+    options.threads = 2;
+    options.leafDetailError = leafDetailErrorFunction(synthesizer);
+    auto report = buildMap(std::move(field), options, path);
+    if (!report.ok()) {
+        ADD_FAILURE() << report.error().message;
+        return nullptr;
+    }
+    return openMap(path, ReaderKind::MemoryMapped);
 }
 
 /// The shipped grass and rock materials under Kobbelt subdivision (the viewer's detail), for chunk size N.

@@ -153,15 +153,7 @@ TEST_F(TerrainStreamerTest, ACorruptNodeIsReportedOnceAndItsParentKeepsBeingDraw
     ASSERT_NE(victim, nullptr);
     const auto offset = victim->offset + victim->heightBytes / 2;
     mMap.reset();
-    {
-        std::fstream file(mDir / "hills.map", std::ios::in | std::ios::out | std::ios::binary);
-        file.seekg(static_cast<std::streamoff>(offset));
-        char byte = 0;
-        file.read(&byte, 1);
-        byte = static_cast<char>(byte ^ 0x5a);
-        file.seekp(static_cast<std::streamoff>(offset));
-        file.write(&byte, 1);
-    }
+    ASSERT_TRUE(test::flipBits(mDir / "hills.map", offset, 0x5a));
     auto map = MapFile::open(mDir / "hills.map", ReaderKind::MemoryMapped);
     ASSERT_TRUE(map.ok());
     TerrainNodeSource source(**map, {});

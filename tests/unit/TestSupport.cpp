@@ -214,6 +214,18 @@ std::string readTextFile(const std::filesystem::path& path)
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
+bool flipBits(const std::filesystem::path& path, std::uint64_t offset, std::uint8_t mask)
+{
+    std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
+    char byte = 0;
+    file.seekg(static_cast<std::streamoff>(offset));
+    file.read(&byte, 1);
+    byte = static_cast<char>(byte ^ static_cast<char>(mask));
+    file.seekp(static_cast<std::streamoff>(offset));
+    file.write(&byte, 1);
+    return file.good();
+}
+
 void fft(std::vector<std::complex<double>>& a, bool inverse)
 {
     const std::size_t n = a.size();

@@ -77,6 +77,10 @@ std::string describe(const LimitedRun& run);
 /// The whole of a text file; empty if it cannot be read.
 std::string readTextFile(const std::filesystem::path& path);
 
+/// Flips the bits `mask` of the byte at `offset` of `file` in place (a damaged file for fault tests); false when
+/// the byte could not be read and written.
+[[nodiscard]] bool flipBits(const std::filesystem::path& file, std::uint64_t offset, std::uint8_t mask);
+
 /// In-place radix-2 FFT of `a` (its size a power of 2): X_k = sum x_j e^(-2 pi i jk/n), or with `inverse` the
 /// same with e^(+...) and without the 1/n.
 void fft(std::vector<std::complex<double>>& a, bool inverse = false);
