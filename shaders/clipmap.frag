@@ -61,10 +61,12 @@ void main()
         fragColour = vec4(0.05, 0.05, 0.05, 1.0);
         return;
     }
-    vec3 albedo = morphed(uColour, uPreviousColour, vFineUv, uRing, vRemaining).rgb;
+    // rgb the albedo, a the sun's visibility (lod/ClipmapTerrain.h: 1 without shadows).
+    vec4 colour = morphed(uColour, uPreviousColour, vFineUv, uRing, vRemaining);
     if (uHasCoarser != 0) {
-        albedo = mix(albedo, morphed(uColour, uPreviousColour, vCoarseUv, uRing + 1, vCoarseRemaining).rgb, vBlend);
+        colour = mix(colour, morphed(uColour, uPreviousColour, vCoarseUv, uRing + 1, vCoarseRemaining), vBlend);
     }
+    vec3 albedo = colour.rgb;
 #ifdef DETAIL
     vec4 materials = morphed(uMaterials, uPreviousMaterials, vFineUv, uRing, vRemaining);
     if (uHasCoarser != 0) {
@@ -82,5 +84,5 @@ void main()
 #else
     vec3 n = normalize(vNormal);
 #endif
-    fragColour = vec4(litAndHazed(albedo, n, vRelative, vec2(1.0)), 1.0);
+    fragColour = vec4(litAndHazed(albedo, n, vRelative, vec2(colour.a, 1.0)), 1.0);
 }

@@ -573,8 +573,8 @@ std::vector<OptionSpec> makeOptionTable()
                            &O::hazeDistance, atLeast(0), "metres"));
     t.push_back(boolOption("shadows", kGroupDisplay,
                            "Terrain shadows and sky visibility: the sun hidden behind the relief (soft, from the "
-                           "horizons of every node's surface over the static map) and the sky hidden in valleys. "
-                           "Quadtree modes only (lod_mode = clipmap draws without).",
+                           "horizons of every node's surface over the static map) and the sky hidden in valleys "
+                           "(lod_mode = clipmap: the sun's shadows, for the sun the session starts with).",
                            &O::shadows));
     t.push_back(boolOption("atmosphere", kGroupDisplay,
                            "A physically based sky and air: sunlight and skylight through an atmosphere of Rayleigh "

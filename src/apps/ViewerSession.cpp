@@ -7,6 +7,7 @@
 #include "synthesis/NormalMap.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace terrain {
 
@@ -115,9 +116,15 @@ void ViewerSession::openClipmap()
     const bool detailTextures = set && std::any_of(set->materials().begin(), set->materials().end(),
                                                    [](const Material& m) { return !m.detailTextures.empty(); });
     const int normalTexels = o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0;
+    // The sun's visibility in the rings' colours, for the session's sun (sun_azimuth: clockwise from north).
+    std::optional<ClipmapSun> sun;
+    if (o.shadows) {
+        const double azimuth = o.sunAzimuth * kRadiansPerDegree;
+        sun = ClipmapSun{std::atan2(std::cos(azimuth), std::sin(azimuth)), o.sunElevation * kRadiansPerDegree};
+    }
     mClipmap = std::make_unique<ClipmapTerrain>(*mClipmapLayout, static_cast<int>(header().chunkSize),
                                                 static_cast<int>(header().textureSize), detailTextures, normalTexels,
-                                                o.clipmapMorphSeconds);
+                                                o.clipmapMorphSeconds, sun);
 }
 
 Status ViewerSession::startStreaming(const GlCapabilities& gl)
@@ -155,11 +162,9 @@ Status ViewerSession::startStreaming(const GlCapabilities& gl)
     // The cache holds what the viewer's would: its nodes' CPU bytes are those of the viewer's source (a static
     // root, which holds its height codes too, costs at least what a dynamic node does).
     DetailPolicy viewerPolicy{mSynthesizer.get(), o.lodMinimumSpacing, blockQuads, o.dynamicTextureSize, true, mRgtc2};
+    // The renderer's pools hold the quadtree's shadows; the clipmap's rings hold the sun's visibility themselves.
     mShadows = o.shadows && !clipmap && view;
-    if (o.shadows && clipmap && view) {
-        mLog("warning: shadows are drawn in the quadtree modes; lod_mode = clipmap draws without");
-    }
-    if (mShadows) {
+    if (o.shadows && view) {
         std::vector<std::string> unreadable;
         auto grid = staticHeightGrid(*mMap, kHorizonGridSide, &unreadable);
         TERRAIN_TRY(grid);
@@ -179,7 +184,7 @@ Status ViewerSession::startStreaming(const GlCapabilities& gl)
     // twice (its own and its parent's).
     std::size_t nodeBytes =
         residentBytes(**root) - (*root)->horizons.codes.capacity() - (*root)->parentHorizons.codes.capacity();
-    if (o.shadows && !clipmap) {
+    if (o.shadows) {
         const int n = static_cast<int>(header().chunkSize);
         const double gridSpacing = header().spacingAt(staticHeightGridLevel(header(), kHorizonGridSide));
         const int lattice = horizonLatticeSize(n, header().spacingAt(static_cast<int>(header().levels)), gridSpacing);

@@ -2,6 +2,7 @@
 #include "lod/ClipmapTerrain.h"
 
 #include "core/Check.h"
+#include "light/Horizon.h"
 #include "quadtree/ChunkGeometry.h"
 
 #include <algorithm>
@@ -13,13 +14,14 @@
 namespace terrain {
 
 ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize, bool materials,
-                               int normalMapTexels, double morphSeconds)
+                               int normalMapTexels, double morphSeconds, std::optional<ClipmapSun> sun)
     : mSamples(layout.samples()),
       mChunk(chunkSize),
       mTexture(textureSize),
       mNormalTexels(normalMapTexels),
       mNormalPerCell(normalMapTexels > 0 ? std::max(1, (normalMapTexels - 1) / (chunkSize - 1)) : 0),
       mMorphSeconds(morphSeconds),
+      mSun(sun),
       mRings(static_cast<std::size_t>(layout.ringCount()))
 {
     TERRAIN_EXPECTS(chunkSize >= 3 && textureSize >= 2, "chunks have at least 3 samples and textures 2 texels");
@@ -162,15 +164,22 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
     // Per sample of `rect` (row-major), for its normal texels: how far its morph had gone when it restarted
     // (in [0, 1]), kReset when its morph was cleared, kKept when it was left as it was.
     std::vector<float> state(static_cast<std::size_t>(rect.area()), kKept);
-    // Node lookups are per node, not per sample: the last one is kept.
+    // Node lookups are per node, not per sample: the last one is kept, with its sun visibility (sun, sky a sample).
     NodeId lastId{-1, 0, 0};
     NodePtr node;
+    std::vector<std::uint8_t> visibility;
     for (std::int64_t gy = rect.y0; gy < rect.y1; ++gy) {
         for (std::int64_t gx = rect.x0; gx < rect.x1; ++gx) {
             const NodeSample at = nodeSampleAt(level, gx, gy, mChunk);
             if (!(at.id == lastId)) {
                 lastId = at.id;
                 node = resident(at.id);
+                visibility.clear();
+                if (mSun && node && node->horizons.size >= 2) {
+                    visibility.resize(static_cast<std::size_t>(mChunk) * static_cast<std::size_t>(mChunk) * 2);
+                    latticeVisibility(node->horizons, mSun->azimuth, mSun->elevation, kShadowSoftness, mChunk,
+                                      visibility, 2, 0);
+                }
             }
             const std::size_t t = static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n);
             const bool haveColour = node && !node->texture.empty();
@@ -201,6 +210,12 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                 for (int c = 0; c < 3; ++c) {
                     ring.colour[t * 4 + c] = node->texture[k + c];
                 }
+                ring.colour[t * 4 + 3] =
+                    visibility.empty()
+                        ? 255
+                        : visibility[(static_cast<std::size_t>(at.v - kBorder) * static_cast<std::size_t>(mChunk) +
+                                      static_cast<std::size_t>(at.u - kBorder)) *
+                                     2];
             }
             if (haveMaterials) {
                 const std::size_t k =
@@ -215,7 +230,7 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                 const std::int64_t cx = gx >> 1, cy = gy >> 1;
                 const std::int64_t dx = gx & 1, dy = gy & 1;
                 float h = 0.0f;
-                float rgb[3] = {0.0f, 0.0f, 0.0f};
+                float rgba[4] = {0.0f, 0.0f, 0.0f, 0.0f};
                 float weights[4] = {0.0f, 0.0f, 0.0f, 0.0f};
                 for (std::int64_t j = 0; j <= dy; ++j) {
                     for (std::int64_t i = 0; i <= dx; ++i) {
@@ -223,8 +238,8 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                         const std::size_t u =
                             static_cast<std::size_t>(toroidalTexel(cy + j, n)) * n + toroidalTexel(cx + i, n);
                         h += weight * up->heights[u];
-                        for (int c = 0; c < 3; ++c) {
-                            rgb[c] += weight * up->colour[u * 4 + c];
+                        for (int c = 0; c < 4; ++c) {
+                            rgba[c] += weight * up->colour[u * 4 + c];
                         }
                         for (int c = 0; c < 4 && withMaterials; ++c) {
                             weights[c] += weight * up->materials[u * 4 + c];
@@ -234,8 +249,8 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                 if (!node) {
                     ring.heights[t] = h;
                 }
-                for (int c = 0; c < 3 && !haveColour; ++c) {
-                    ring.colour[t * 4 + c] = static_cast<std::uint8_t>(std::lround(rgb[c]));
+                for (int c = 0; c < 4 && !haveColour; ++c) {
+                    ring.colour[t * 4 + c] = static_cast<std::uint8_t>(std::lround(rgba[c]));
                 }
                 for (int c = 0; c < 4 && withMaterials && !haveMaterials; ++c) {
                     ring.materials[t * 4 + c] = static_cast<std::uint8_t>(std::lround(weights[c]));

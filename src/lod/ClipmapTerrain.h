@@ -22,8 +22,9 @@ namespace terrain {
 
 /// One ring's samples, toroidal: sample (gx, gy) of the window at texel (gx mod n, gy mod n), row-major.
 struct ClipmapRing {
-    std::vector<float> heights;           ///< metres above the map's height offset (as NodeData::heights)
-    std::vector<std::uint8_t> colour;     ///< RGBA8 (alpha 255), the nodes' textures at the samples
+    std::vector<float> heights;  ///< metres above the map's height offset (as NodeData::heights)
+    /// RGBA8, the nodes' textures at the samples; alpha the sun's visibility there (255 without shadows)
+    std::vector<std::uint8_t> colour;
     std::vector<std::uint8_t> materials;  ///< RGBA8, the nodes' 4 material weights at the samples; or empty
     /// The nodes' normal maps (NodeData::normalMap: x, y as RG8_SNORM) on a toroidal (r n)^2 texel grid, r texels
     /// a cell (normalTexelsPerCell), sample g's texel at r g mod r n; or empty.
@@ -48,6 +49,13 @@ struct ClipmapRing {
     std::unordered_map<std::uint64_t, Upsampled> upsampled;  ///< by node key
 };
 
+/// The sun the rings' shadows are drawn for (radians, as light/Horizon.h measures them): direction angle from +x
+/// towards +y, elevation.
+struct ClipmapSun {
+    double azimuth = 0.0;
+    double elevation = 0.0;
+};
+
 /// ClipmapRing::morph's time of a sample that never changed in view (far in the past: its morph is over).
 inline constexpr float kNoMorph = -1e30f;
 
@@ -58,8 +66,10 @@ public:
     /// `normalMapTexels` > 0, the nodes' normal maps of that many texels a side (dynamic_texture_size,
     /// normalMapTexels()), at r = max(1, (normalMapTexels - 1) / (chunkSize - 1)) texels a cell. Samples that
     /// were drawn upsampled morph to their node's heights over `morphSeconds` (clipmap_morph_seconds; 0 pops).
+    /// With `sun`, the colours' alpha is the sun's visibility at the samples (the nodes' horizons,
+    /// NodeData::horizons; 1 where a node has none), blended and morphed with the colours.
     ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize, bool materials = false,
-                   int normalMapTexels = 0, double morphSeconds = 0.0);
+                   int normalMapTexels = 0, double morphSeconds = 0.0, std::optional<ClipmapSun> sun = std::nullopt);
 
     /// After layout.moveTo() returned `entered`: fills the samples that entered each window and fills again
     /// the samples of nodes that became resident since they were upsampled (and, below a ring that changed,
@@ -131,6 +141,7 @@ private:
     int mNormalTexels = 0;   ///< the nodes' normal map texels a side, 0 for none
     int mNormalPerCell = 0;  ///< r
     double mMorphSeconds = 0.0;
+    std::optional<ClipmapSun> mSun;
     bool mFirst = true;   ///< no update yet
     double mEpoch = 0.0;  ///< the first update's time
     double mNow = 0.0;    ///< the last update's time

@@ -5,6 +5,7 @@
 #include "lod/ClipmapTerrain.h"
 
 #include "MapTestSupport.h"
+#include "lod/NodeHorizons.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "synthesis/NormalMap.h"
@@ -12,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <numbers>
 
 namespace terrain {
 namespace {
@@ -449,6 +451,64 @@ TEST_F(ClipmapTerrainTest, RingsHoldTheNodesNormalMapsAtTheirTexels)
     EXPECT_EQ(mismatches, 0);
     EXPECT_GT(checked, 6 * 40 * 40);
     EXPECT_GT(tilted, checked / 10) << "the hills' normals are not all flat";
+}
+
+TEST_F(ClipmapTerrainTest, RingsHoldTheSunsVisibilityOfTheirNodesSamplesInTheColoursAlpha)
+{
+    // Under a low sun every sample's colour alpha is its node's sun visibility there (latticeVisibility of the
+    // node's horizons); without a sun it stays 255.
+    auto grid = staticHeightGrid(*mMap, 2049);
+    ASSERT_TRUE(grid.ok()) << grid.error().message;
+    DetailPolicy policy;
+    policy.horizonGrid = std::make_shared<const HeightGrid>(std::move(grid).value());
+    TerrainNodeSource source(*mMap, policy);
+    auto streamer = inlineStreamer(source, 600);
+    ASSERT_TRUE(streamer);
+    const int n = 31;
+    const ClipmapSun sun{0.6, 60.0 * std::numbers::pi / 180};
+    ClipmapLayout layout(extentOf(mMap->header()), 17, n, 4, 0);
+    ClipmapTerrain terrain(layout, 17, 17, false, 0, 0.0, sun);
+    ClipmapLayout plainLayout(extentOf(mMap->header()), 17, n, 4, 0);
+    ClipmapTerrain plain(plainLayout, 17, 17);
+    settle(layout, terrain, *streamer, 140.0, 90.0);
+    settle(plainLayout, plain, *streamer, 140.0, 90.0);
+    ASSERT_EQ(terrain.upsampledNodes(), 0u);
+    int checked = 0, mismatches = 0, shadowed = 0;
+    for (int r = 0; r < layout.ringCount(); ++r) {
+        const ClipmapWindow& win = layout.window(r);
+        const std::int64_t last = std::int64_t{16} << win.level;
+        for (std::int64_t gy = win.y0; gy < win.y0 + n; ++gy) {
+            for (std::int64_t gx = win.x0; gx < win.x0 + n; ++gx) {
+                if (gx < 0 || gy < 0 || gx > last || gy > last) {
+                    continue;  // outside the terrain: clamped
+                }
+                const auto nx = static_cast<std::uint32_t>(std::min<std::int64_t>(gx / 16, (1 << win.level) - 1));
+                const auto ny = static_cast<std::uint32_t>(std::min<std::int64_t>(gy / 16, (1 << win.level) - 1));
+                NodePtr node = streamer->node({win.level, nx, ny});
+                ASSERT_TRUE(node && node->horizons.size >= 2);
+                std::vector<std::uint8_t> visibility(17 * 17 * 2);
+                latticeVisibility(node->horizons, sun.azimuth, sun.elevation, kShadowSoftness, 17, visibility, 2, 0);
+                const auto u = static_cast<std::size_t>(gx - std::int64_t{nx} * 16);
+                const auto v = static_cast<std::size_t>(gy - std::int64_t{ny} * 16);
+                const std::size_t t =
+                    (static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n)) * 4 + 3;
+                const std::uint8_t want = visibility[(v * 17 + u) * 2];
+                if (terrain.ring(r).colour[t] != want && ++mismatches <= 3) {
+                    ADD_FAILURE() << "ring " << r << " sample (" << gx << ", " << gy << ") of node "
+                                  << node->id.toString() << ": " << int{terrain.ring(r).colour[t]} << ", not "
+                                  << int{want};
+                }
+                ASSERT_EQ(plain.ring(r).colour[t], 255);
+                shadowed += want < 128;
+                ++checked;
+            }
+        }
+    }
+    EXPECT_EQ(mismatches, 0);
+    EXPECT_GT(checked, 4 * 25 * 25);
+    EXPECT_GT(shadowed, checked / 50)
+        << "a 60 degree sun over the steep hills (60 m bumps 36 m apart) leaves some samples in shadow";
+    EXPECT_GT(checked - shadowed, checked / 50) << "and some in the sun";
 }
 
 TEST_F(ClipmapTerrainTest, MemoryIsBoundedByTheClipmapSizeOverALongFlight)
