@@ -17,7 +17,8 @@ const float kGroundAlbedo = 0.2;
 #endif
 
 // The surface colour `albedo` lit with unit normal n, seen through the air from `relative` metres away. `visibility`:
-// the share of the sun (x) and of the sky (y) that the terrain around does not hide (1, 1 in the open).
+// the share of the sun (x) and of the sky (y) that the terrain around does not hide (1, 1 in the open); the sky's
+// also scales the light the ground around bounces (what hides the sky hides the ground around too).
 vec3 litAndHazed(vec3 albedo, vec3 n, vec3 relative, vec2 visibility)
 {
 #ifdef ATMOSPHERE

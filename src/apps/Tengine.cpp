@@ -268,7 +268,8 @@ Status openRenderer(Scene& scene, const TengineOptions& o, const std::filesystem
     log("node pools: " + std::to_string(scene.renderer->slots()) + " slots of " + std::to_string(b.total()) +
         " bytes (heights " + std::to_string(b.heights) + ", parent normals " + std::to_string(b.normals) + ", colour " +
         std::to_string(b.colour) + ", material weights " + std::to_string(b.weights) + ", normal map " +
-        std::to_string(b.normalMap) + ", constants " + std::to_string(b.constants) + ")");
+        std::to_string(b.normalMap) + ", light " + std::to_string(b.light) + ", constants " +
+        std::to_string(b.constants) + ")");
     return {};
 }
 

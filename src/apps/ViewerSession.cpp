@@ -179,16 +179,23 @@ Status ViewerSession::startStreaming(const GlCapabilities& gl)
         *mMap, view ? viewerPolicy : DetailPolicy{mSynthesizer.get(), o.lodMinimumSpacing, blockQuads});
     auto root = view ? mSource->loadRoot() : TerrainNodeSource(*mMap, viewerPolicy).loadRoot();
     TERRAIN_TRY(root);
-    // With shadows a node holds horizons: the root's (a point at each of its samples, as every static node's) do
-    // not stand in for a dynamic node's, whose lattice is at most the leaves' quarter: the largest dynamic node's,
-    // twice (its own and its parent's).
+    // With shadows a node holds horizons, its own lattice and its parent's quarter: at most what a node of the
+    // grid's level holds (a point a sample, static nodes no finer than the grid), or the first dynamic level's
+    // (the leaves' quarter, twice), whichever is larger.
     std::size_t nodeBytes =
         residentBytes(**root) - (*root)->horizons.codes.capacity() - (*root)->parentHorizons.codes.capacity();
     if (o.shadows) {
         const int n = static_cast<int>(header().chunkSize);
-        const double gridSpacing = header().spacingAt(staticHeightGridLevel(header(), kHorizonGridSide));
-        const int lattice = horizonLatticeSize(n, header().spacingAt(static_cast<int>(header().levels)), gridSpacing);
-        nodeBytes += static_cast<std::size_t>(2 * lattice * lattice * viewerPolicy.horizonOptions.azimuths);
+        const int gridLevel = staticHeightGridLevel(header(), kHorizonGridSide);
+        const double gridSpacing = header().spacingAt(gridLevel);
+        auto latticeBytes = [&](int level) {
+            const int own = horizonLatticeSize(n, header().spacingAt(level), gridSpacing);
+            const int parent = level > 0
+                                   ? (horizonLatticeSize(n, header().spacingAt(level - 1), gridSpacing) - 1) / 2 + 1
+                                   : (own - 1) / 2 + 1;
+            return static_cast<std::size_t>((own * own + parent * parent) * viewerPolicy.horizonOptions.azimuths);
+        };
+        nodeBytes += std::max(latticeBytes(gridLevel), latticeBytes(static_cast<int>(header().levels)));
     }
     mCache = chooseCacheSize(o, header(), materials(), gl.s3tc, mRgtc2, nodeBytes, clipmap ? SIZE_MAX : gl.maxSlots);
 

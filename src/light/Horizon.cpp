@@ -82,7 +82,8 @@ void horizonTangents(const HeightGrid& grid, double x, double y, double z, const
 
 double sunVisibility(std::span<const float> tangents, double sunAzimuth, double sunElevation, double softness)
 {
-    TERRAIN_EXPECTS(!tangents.empty() && softness > 0.0, "horizons and a softness > 0");
+    TERRAIN_EXPECTS(!tangents.empty() && softness > 0.0 && std::isfinite(sunAzimuth) && std::isfinite(sunElevation),
+                    "horizons, a softness > 0 and a sun");
     const auto n = static_cast<double>(tangents.size());
     double a = sunAzimuth / (2.0 * std::numbers::pi) * n;
     a -= n * std::floor(a / n);  // in [0, n)

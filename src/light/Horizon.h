@@ -5,8 +5,8 @@
 // seen where it stands above the horizon at its azimuth, softly over its disc and the penumbra), and so does the
 // sky's (the share of the cosine-weighted sky above every horizon: ambient occlusion).
 //
-// The march steps grow with distance (each a fixed fraction of the distance reached, at least the grid's
-// spacing), so a horizon costs a few dozen height lookups however far it reaches: near the point the steps are
+// The march steps grow with distance (each a fixed fraction of the distance reached, at least a quarter of the
+// grid's spacing), so a horizon costs a few dozen height lookups however far it reaches: near the point the steps are
 // fine where small relief matters, far away coarse where only large relief can rise above the horizon.
 // Pure: no GL, no threads.
 #pragma once

@@ -164,21 +164,27 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
     // Per sample of `rect` (row-major), for its normal texels: how far its morph had gone when it restarted
     // (in [0, 1]), kReset when its morph was cleared, kKept when it was left as it was.
     std::vector<float> state(static_cast<std::size_t>(rect.area()), kKept);
-    // Node lookups are per node, not per sample: the last one is kept, with its sun visibility (sun, sky a sample).
+    // Node lookups are per node, not per sample: the last one is kept. The nodes' sun visibility (sun, sky a
+    // sample) is derived once a node in this fill (rows cross the same nodes again).
     NodeId lastId{-1, 0, 0};
     NodePtr node;
-    std::vector<std::uint8_t> visibility;
+    std::unordered_map<std::uint64_t, std::vector<std::uint8_t>> visibilities;
+    const std::vector<std::uint8_t>* visibility = nullptr;
     for (std::int64_t gy = rect.y0; gy < rect.y1; ++gy) {
         for (std::int64_t gx = rect.x0; gx < rect.x1; ++gx) {
             const NodeSample at = nodeSampleAt(level, gx, gy, mChunk);
             if (!(at.id == lastId)) {
                 lastId = at.id;
                 node = resident(at.id);
-                visibility.clear();
+                visibility = nullptr;
                 if (mSun && node && node->horizons.size >= 2) {
-                    visibility.resize(static_cast<std::size_t>(mChunk) * static_cast<std::size_t>(mChunk) * 2);
-                    latticeVisibility(node->horizons, mSun->azimuth, mSun->elevation, kShadowSoftness, mChunk,
-                                      visibility, 2, 0);
+                    auto [it, made] = visibilities.try_emplace(at.id.key());
+                    if (made) {
+                        it->second.resize(static_cast<std::size_t>(mChunk) * static_cast<std::size_t>(mChunk) * 2);
+                        latticeVisibility(node->horizons, mSun->azimuth, mSun->elevation, kShadowSoftness, mChunk,
+                                          it->second, 2, 0);
+                    }
+                    visibility = &it->second;
                 }
             }
             const std::size_t t = static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n);
@@ -211,11 +217,11 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                     ring.colour[t * 4 + c] = node->texture[k + c];
                 }
                 ring.colour[t * 4 + 3] =
-                    visibility.empty()
+                    !visibility
                         ? 255
-                        : visibility[(static_cast<std::size_t>(at.v - kBorder) * static_cast<std::size_t>(mChunk) +
-                                      static_cast<std::size_t>(at.u - kBorder)) *
-                                     2];
+                        : (*visibility)[(static_cast<std::size_t>(at.v - kBorder) * static_cast<std::size_t>(mChunk) +
+                                         static_cast<std::size_t>(at.u - kBorder)) *
+                                        2];
             }
             if (haveMaterials) {
                 const std::size_t k =

@@ -448,9 +448,11 @@ RenderStats TerrainRenderer::draw(const DrawList& frame, const SceneStyle& style
     }
     beginSceneFrame(camera, style, mSky);
     if (mShadows) {
-        // Every held slot's visibility follows the sun when it moves; nodes filled below get it as they come.
-        const glm::vec3 sun = glm::normalize(style.sunDirection);
-        if (sun != mSun) {
+        // Every held slot's visibility follows the sun when it moves; nodes filled below get it as they come. A
+        // style without a sun direction (zero or not finite) keeps the last one.
+        const float length = glm::length(style.sunDirection);
+        const glm::vec3 sun = std::isfinite(length) && length > 1e-6f ? style.sunDirection / length : mSun;
+        if (sun != mSun && sun != glm::vec3(0.0f)) {
             mSun = sun;
             for (std::size_t slot = 0; slot < mSlotData.size(); ++slot) {
                 if (mSlotData[slot]) {

@@ -212,7 +212,9 @@ BENCHMARK(tessellationErrors)->Unit(benchmark::kMicrosecond)->Repetitions(5)->Re
 /// the real leaf (grass, rock, roughness) over the whole demo terrain as the viewer's grid (1025 x 1025 samples at
 /// 90 m), with the viewer's search (DetailPolicy::horizonOptions: 16 azimuths to 20 km), at the lattice
 /// horizonLatticeSize gives a node `state.range(0)` levels below the 90 m leaves: 0, a static leaf's 65 x 65
-/// points; 1, the child's 33 x 33; 2, 17 x 17; 3 and deeper, 9 x 9 (most dynamic nodes).
+/// points; 1, the child's 33 x 33; 2, 17 x 17; 3 and deeper, 9 x 9. The source searches only where a node's lattice
+/// is not its parent's quarter: static nodes (0) and, below the 90 m leaves, levels 4 and deeper (9 x 9); levels 1-3
+/// copy their parent's (the cost of 1 and 2 is what they would cost searched).
 void horizons(benchmark::State& state)
 {
     const HeightField& field = demoField();
