@@ -240,12 +240,10 @@ std::optional<std::vector<double>> parseNumberList(std::string_view text, std::s
     return values;
 }
 
-std::vector<OptionSpec> makeOptionTable()
+/// The map and the level of detail.
+void addMapOptions(std::vector<OptionSpec>& t)
 {
     using O = TengineOptions;
-    std::vector<OptionSpec> t;
-
-    // ---- Map and level of detail ----
     t.push_back(pathOption("map_file", kGroupMap,
                            "The terrain map (.map) made by prep. A map file given on the command line replaces it. "
                            "Relative paths are taken from this config file's directory.",
@@ -337,8 +335,12 @@ std::vector<OptionSpec> makeOptionTable()
                            "With visibility_lod: when hidden terrain comes into view, each level of detail it gains "
                            "morphs in over this long, a level after the other, instead of popping in.",
                            &O::visibilityRevealSeconds, above(0), "seconds"));
+}
 
-    // ---- Detail synthesis ----
+/// Detail synthesis below the data.
+void addDetailOptions(std::vector<OptionSpec>& t)
+{
+    using O = TengineOptions;
     t.push_back(boolOption("detail_create_new_nodes", kGroupDetail,
                            "Create dynamic nodes below the map's finest level by subdivision.",
                            &O::detailCreateNewNodes));
@@ -411,8 +413,12 @@ std::vector<OptionSpec> makeOptionTable()
                            "No new dynamic nodes while the camera moves faster than this many of their sample "
                            "spacings per second (3.4.4): fine detail is not perceptible at speed. 0: no limit.",
                            &O::detailVelocityLimit, atLeast(0), "samples per second"));
+}
 
-    // ---- Camera ----
+/// The camera.
+void addCameraOptions(std::vector<OptionSpec>& t)
+{
+    using O = TengineOptions;
     t.push_back(realOption("camera_fov", kGroupCamera, "Vertical field of view.", &O::cameraFov, openInterval(1, 179),
                            "degrees"));
     t.push_back(realOption("camera_z_near", kGroupCamera, "Distance to the near clipping plane.", &O::cameraZNear,
@@ -458,8 +464,12 @@ std::vector<OptionSpec> makeOptionTable()
                            closedInterval(-360, 360), "degrees"));
     t.push_back(realOption("camera_pitch", kGroupCamera, "Start pitch when no path is flown: positive looks up.",
                            &O::cameraPitch, closedInterval(-90, 90), "degrees"));
+}
 
-    // ---- Display ----
+/// The window, what is drawn and how (render and LOD modes, compression).
+void addDisplayOptions(std::vector<OptionSpec>& t)
+{
+    using O = TengineOptions;
     t.push_back(intOption("window_width", kGroupDisplay, "Window width.", &O::windowWidth, 16, 16384, "pixels"));
     t.push_back(intOption("window_height", kGroupDisplay, "Window height.", &O::windowHeight, 16, 16384, "pixels"));
     t.push_back(boolOption("draw_user_interface", kGroupDisplay,
@@ -563,6 +573,12 @@ std::vector<OptionSpec> makeOptionTable()
                            "With render_mode = tessellation: the part of lod_error the blocks inside a node may spend; "
                            "the nodes are selected for the rest, so the drawn surface stays within lod_error.",
                            &O::tessellationShare, openInterval(0, 1), ""));
+}
+
+/// The sun, the air and the shadows; the shader and log files.
+void addLightOptions(std::vector<OptionSpec>& t)
+{
+    using O = TengineOptions;
     t.push_back(realOption("sun_azimuth", kGroupDisplay, "Direction the sunlight comes from: 0 north, 90 east.",
                            &O::sunAzimuth, closedInterval(0, 360), "degrees"));
     t.push_back(realOption("sun_elevation", kGroupDisplay, "Height of the sun above the horizon.", &O::sunElevation,
@@ -608,8 +624,12 @@ std::vector<OptionSpec> makeOptionTable()
     t.push_back(pathOption("log_file", kGroupDisplay,
                            "Also write the log to this file. Relative paths are taken from the working directory.",
                            &O::logFile, PathKind::Output, "a path (empty: log to stderr only)"));
+}
 
-    // ---- Demo and video mode ----
+/// Demo and video mode.
+void addVideoOptions(std::vector<OptionSpec>& t)
+{
+    using O = TengineOptions;
     t.push_back(boolOption("demo_mode", kGroupVideo,
                            "Fly camera_path over and over (needs camera_path). Demo and video mode exclude each other: "
                            "setting one to true turns the other off (the later setting wins, and says so).",
@@ -637,6 +657,17 @@ std::vector<OptionSpec> makeOptionTable()
                           "decides what shows), as tengine-tool error does, into frames.csv (error_max_px, "
                           "error_p99_px) and a summary line; slow: seconds a frame. 0 measures nothing.",
                           &O::videoMeasureErrorEvery, 0, INT_MAX, "frames"));
+}
+
+std::vector<OptionSpec> makeOptionTable()
+{
+    std::vector<OptionSpec> t;
+    addMapOptions(t);
+    addDetailOptions(t);
+    addCameraOptions(t);
+    addDisplayOptions(t);
+    addLightOptions(t);
+    addVideoOptions(t);
     return t;
 }
 

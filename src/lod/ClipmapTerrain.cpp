@@ -176,16 +176,7 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
             if (!(at.id == lastId)) {
                 lastId = at.id;
                 node = resident(at.id);
-                visibility = nullptr;
-                if (mSun && node && node->horizons.size >= 2) {
-                    auto [it, made] = visibilities.try_emplace(at.id.key());
-                    if (made) {
-                        it->second.resize(static_cast<std::size_t>(mChunk) * static_cast<std::size_t>(mChunk) * 2);
-                        latticeVisibility(node->horizons, mSun->azimuth, mSun->elevation, kShadowSoftness, mChunk,
-                                          it->second, 2, 0);
-                    }
-                    visibility = &it->second;
-                }
+                visibility = sunVisibility(node.get(), visibilities);
             }
             const std::size_t t = static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n);
             const bool haveColour = node && !node->texture.empty();
@@ -209,19 +200,7 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                 ring.heights[t] = node->heights.height(static_cast<std::size_t>(at.v) * w + at.u);
             }
             if (haveColour) {
-                // Texel nearest the sample (textures have T x T texels over the node's square, corners on corners).
-                const int tx = static_cast<int>(std::lround((at.u - kBorder) * (mTexture - 1.0) / (mChunk - 1)));
-                const int ty = static_cast<int>(std::lround((at.v - kBorder) * (mTexture - 1.0) / (mChunk - 1)));
-                const std::size_t k = (static_cast<std::size_t>(ty) * mTexture + tx) * 3;
-                for (int c = 0; c < 3; ++c) {
-                    ring.colour[t * 4 + c] = node->texture[k + c];
-                }
-                ring.colour[t * 4 + 3] =
-                    !visibility
-                        ? 255
-                        : (*visibility)[(static_cast<std::size_t>(at.v - kBorder) * static_cast<std::size_t>(mChunk) +
-                                         static_cast<std::size_t>(at.u - kBorder)) *
-                                        2];
+                colourOf(*node, visibility, at.u - kBorder, at.v - kBorder, &ring.colour[t * 4]);
             }
             if (haveMaterials) {
                 const std::size_t k =
@@ -305,6 +284,36 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
         fillNormals(layout, r, rect, resident, state);
     }
     ring.changed.push_back(rect);
+}
+
+const std::vector<std::uint8_t>* ClipmapTerrain::sunVisibility(
+    const NodeData* node, std::unordered_map<std::uint64_t, std::vector<std::uint8_t>>& cache) const
+{
+    if (!mSun || !node || node->horizons.size < 2) {
+        return nullptr;
+    }
+    auto [it, made] = cache.try_emplace(node->id.key());
+    if (made) {
+        it->second.resize(static_cast<std::size_t>(mChunk) * static_cast<std::size_t>(mChunk) * 2);
+        latticeVisibility(node->horizons, mSun->azimuth, mSun->elevation, kShadowSoftness, mChunk, it->second, 2, 0);
+    }
+    return &it->second;
+}
+
+void ClipmapTerrain::colourOf(const NodeData& node, const std::vector<std::uint8_t>* visibility, int u, int v,
+                              std::uint8_t* rgba) const
+{
+    // Texel nearest the sample (textures have T x T texels over the node's square, corners on corners).
+    const int tx = static_cast<int>(std::lround(u * (mTexture - 1.0) / (mChunk - 1)));
+    const int ty = static_cast<int>(std::lround(v * (mTexture - 1.0) / (mChunk - 1)));
+    const std::size_t k = (static_cast<std::size_t>(ty) * mTexture + tx) * 3;
+    for (int c = 0; c < 3; ++c) {
+        rgba[c] = node.texture[k + c];
+    }
+    rgba[3] = visibility ? (*visibility)[(static_cast<std::size_t>(v) * static_cast<std::size_t>(mChunk) +
+                                          static_cast<std::size_t>(u)) *
+                                         2]
+                         : 255;
 }
 
 void ClipmapTerrain::fillNormals(const ClipmapLayout& layout, int r, const LatticeRect& rect,

@@ -130,6 +130,14 @@ private:
     };
     /// Fills the samples of `rect` (level grid) of ring `r`, clipped to its window; records the change.
     void fill(const ClipmapLayout& layout, int r, LatticeRect rect, const ResidentNodeLookup& resident, Fill how);
+    /// The sun's visibility at `node`'s N x N samples (sun, sky a sample) for mSun, derived once a node into
+    /// `cache`; null without a sun or without the node's horizons.
+    const std::vector<std::uint8_t>* sunVisibility(
+        const NodeData* node, std::unordered_map<std::uint64_t, std::vector<std::uint8_t>>& cache) const;
+    /// The colour (RGBA8) of `node`'s sample (u, v) (inner samples, 0 .. N - 1): its nearest texel, and the sun's
+    /// visibility there (`visibility`, sunVisibility's) or 255.
+    void colourOf(const NodeData& node, const std::vector<std::uint8_t>* visibility, int u, int v,
+                  std::uint8_t* rgba) const;
     /// The normal texels of the samples of `rect` (level grid, within the window) of ring `r`; `state` is
     /// fill()'s per sample of `rect`: a restarted morph's fraction done before, or whether it was reset.
     void fillNormals(const ClipmapLayout& layout, int r, const LatticeRect& rect, const ResidentNodeLookup& resident,
