@@ -347,7 +347,7 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, const ClipmapTer
         stats.rings += drewRing ? 1 : 0;
     }
     glBindVertexArray(0);
-    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    endSceneFrame(camera, style, mSky);
     return stats;
 }
 

@@ -20,12 +20,17 @@ void beginSceneFrame(const Camera& camera, const SceneStyle& style, Sky& sky)
     glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
     glClearDepth(1.0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    if (style.drawSky) {
-        sky.draw(camera, style);
-    }
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
+}
+
+void endSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky)
+{
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    if (style.drawSky) {
+        sky.draw(camera, style);
+    }
 }
 
 glm::dvec4 validRectangle(const MapHeader& header)

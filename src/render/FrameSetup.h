@@ -13,9 +13,13 @@
 namespace terrain {
 
 /// Brings the sky's air tables up to the frame (Sky::prepare), sets the viewport to the camera's, clears colour
-/// and depth, draws the sky (SceneStyle::drawSky), then turns depth testing on (less) and sets the polygon mode
-/// (SceneStyle::wireframe). Face culling is the caller's.
+/// and depth, then turns depth testing on (less) and sets the polygon mode (SceneStyle::wireframe). Face culling is
+/// the caller's.
 void beginSceneFrame(const Camera& camera, const SceneStyle& style, Sky& sky);
+
+/// After the terrain: the polygon mode back to fill and the sky (SceneStyle::drawSky) where the terrain left the
+/// depth's clear value, so only the pixels it shows run the sky's program.
+void endSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky);
 
 /// The map's input samples (prep's padding left out) as world metres: x0, y0, x1, y1 of the first and last
 /// samples.

@@ -57,10 +57,13 @@ void Sky::draw(const Camera& camera, const SceneStyle& style) const
     glUniform3fv(mProgram.uniform("uSunDirection"), 1, glm::value_ptr(sun));
     glUniform3fv(mProgram.uniform("uSunColour"), 1, glm::value_ptr(style.sunColour));
     setAtmosphereUniforms(mProgram, camera, style);
+    // At the far plane, where the depth test passes only what nothing was drawn over (the depth's clear value).
     glDepthMask(GL_FALSE);
-    glDisable(GL_DEPTH_TEST);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LEQUAL);
     glBindVertexArray(mEmptyVao.name());
     glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
 }
 

@@ -52,7 +52,8 @@ public:
     /// With the atmosphere: brings the frame's air tables up to `camera` and `style` (AtmosphereTextures::update).
     /// Before draw and before the terrain is drawn.
     void prepare(const Camera& camera, const SceneStyle& style);
-    /// Draws the sky for `camera` (leaves depth testing off and depth writes on).
+    /// Draws the sky for `camera` at the far plane: where the depth buffer holds its clear value (1), so after the
+    /// terrain only the pixels the terrain left. Leaves depth testing on (less) and depth writes on.
     void draw(const Camera& camera, const SceneStyle& style) const;
     /// With the atmosphere: binds the aerial table the terrain's programs read (uAerialTable) to unit `unit`.
     void bindAerialTable(int unit) const;

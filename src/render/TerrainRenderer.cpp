@@ -470,7 +470,7 @@ RenderStats TerrainRenderer::draw(const DrawList& frame, const SceneStyle& style
     stats.occludedBlocks = frame.occludedBlocks;
     stats.gpuNodes = mSlotsHeld;
     if (count == 0) {
-        glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+        endSceneFrame(camera, style, mSky);
         return stats;
     }
     uploadFrameNodes(frame, style);
@@ -485,7 +485,7 @@ RenderStats TerrainRenderer::draw(const DrawList& frame, const SceneStyle& style
         mFeedback->begin(stats.triangles);
     }
     drawGroups(stats, feedback ? &*mFeedback : nullptr);
-    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    endSceneFrame(camera, style, mSky);
     if (mCounter) {
         mCounter->finish();
     }
