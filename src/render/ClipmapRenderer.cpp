@@ -247,7 +247,7 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, const ClipmapTer
     for (int ring = 0; ring < layout.ringCount(); ++ring) {
         upload(terrain, ring, stats);
     }
-    beginSceneFrame(camera, style, mSky);
+    beginSceneFrame(camera, style, mSky, SkyOrder::AfterTerrain);
     glDisable(GL_CULL_FACE);
     const glm::dvec4 valid = validRectangle(mHeader);
     const double vx0 = valid.x, vy0 = valid.y, vx1 = valid.z, vy1 = valid.w;
@@ -347,7 +347,7 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, const ClipmapTer
         stats.rings += drewRing ? 1 : 0;
     }
     glBindVertexArray(0);
-    endSceneFrame(camera, style, mSky);
+    endSceneFrame(camera, style, mSky, SkyOrder::AfterTerrain);
     return stats;
 }
 

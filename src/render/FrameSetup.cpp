@@ -12,7 +12,7 @@
 
 namespace terrain {
 
-void beginSceneFrame(const Camera& camera, const SceneStyle& style, Sky& sky)
+void beginSceneFrame(const Camera& camera, const SceneStyle& style, Sky& sky, SkyOrder order)
 {
     sky.prepare(camera, style);
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
@@ -20,15 +20,18 @@ void beginSceneFrame(const Camera& camera, const SceneStyle& style, Sky& sky)
     glClearColor(style.clearColour.r, style.clearColour.g, style.clearColour.b, 1.0f);
     glClearDepth(1.0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    if (style.drawSky && order == SkyOrder::BeforeTerrain) {
+        sky.draw(camera, style);
+    }
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glPolygonMode(GL_FRONT_AND_BACK, style.wireframe ? GL_LINE : GL_FILL);
 }
 
-void endSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky)
+void endSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky, SkyOrder order)
 {
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-    if (style.drawSky) {
+    if (style.drawSky && order == SkyOrder::AfterTerrain) {
         sky.draw(camera, style);
     }
 }

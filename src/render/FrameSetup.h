@@ -12,14 +12,18 @@
 
 namespace terrain {
 
-/// Brings the sky's air tables up to the frame (Sky::prepare), sets the viewport to the camera's, clears colour
-/// and depth, then turns depth testing on (less) and sets the polygon mode (SceneStyle::wireframe). Face culling is
-/// the caller's.
-void beginSceneFrame(const Camera& camera, const SceneStyle& style, Sky& sky);
+/// When the sky is drawn (SceneStyle::drawSky). After the terrain, only the pixels the terrain leaves at the
+/// depth's clear value run the sky's program; before it, every pixel does. A terrain whose discarded fragments
+/// write depth (early fragment tests with discards) needs the sky first, or those pixels keep the clear colour.
+enum class SkyOrder { AfterTerrain, BeforeTerrain };
 
-/// After the terrain: the polygon mode back to fill and the sky (SceneStyle::drawSky) where the terrain left the
-/// depth's clear value, so only the pixels it shows run the sky's program.
-void endSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky);
+/// Brings the sky's air tables up to the frame (Sky::prepare), sets the viewport to the camera's, clears colour
+/// and depth, draws the sky when `order` is BeforeTerrain, then turns depth testing on (less) and sets the polygon
+/// mode (SceneStyle::wireframe). Face culling is the caller's.
+void beginSceneFrame(const Camera& camera, const SceneStyle& style, Sky& sky, SkyOrder order);
+
+/// After the terrain: the polygon mode back to fill and, when `order` is AfterTerrain, the sky.
+void endSceneFrame(const Camera& camera, const SceneStyle& style, const Sky& sky, SkyOrder order);
 
 /// The map's input samples (prep's padding left out) as world metres: x0, y0, x1, y1 of the first and last
 /// samples.

@@ -90,6 +90,10 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
         }
         defines.emplace_back("PIXEL_COUNTS");
         r->mCounter = PixelCounter::create();
+        // Counting needs early fragment tests, under which the padding's discarded fragments write depth.
+        if (std::find(defines.begin(), defines.end(), "CLIP_TO_VALID") != defines.end()) {
+            r->mSkyOrder = SkyOrder::BeforeTerrain;
+        }
     }
     r->mTessellation = pools.tessellation;
     if (r->mTessellation) {
@@ -446,7 +450,7 @@ RenderStats TerrainRenderer::draw(const DrawList& frame, const SceneStyle& style
     if (mCounter) {
         mCounter->begin(mFrame, camera);
     }
-    beginSceneFrame(camera, style, mSky);
+    beginSceneFrame(camera, style, mSky, mSkyOrder);
     if (mShadows) {
         // Every held slot's visibility follows the sun when it moves; nodes filled below get it as they come. A
         // style without a sun direction (zero or not finite) keeps the last one.
@@ -470,7 +474,7 @@ RenderStats TerrainRenderer::draw(const DrawList& frame, const SceneStyle& style
     stats.occludedBlocks = frame.occludedBlocks;
     stats.gpuNodes = mSlotsHeld;
     if (count == 0) {
-        endSceneFrame(camera, style, mSky);
+        endSceneFrame(camera, style, mSky, mSkyOrder);
         return stats;
     }
     uploadFrameNodes(frame, style);
@@ -485,7 +489,7 @@ RenderStats TerrainRenderer::draw(const DrawList& frame, const SceneStyle& style
         mFeedback->begin(stats.triangles);
     }
     drawGroups(stats, feedback ? &*mFeedback : nullptr);
-    endSceneFrame(camera, style, mSky);
+    endSceneFrame(camera, style, mSky, mSkyOrder);
     if (mCounter) {
         mCounter->finish();
     }

@@ -17,6 +17,7 @@
 #include "lod/TessellationLevels.h"
 #include "quadtree/MapFormat.h"
 #include "render/DetailLayers.h"
+#include "render/FrameSetup.h"
 #include "render/GlObjects.h"
 #include "render/PixelCounter.h"
 #include "render/ShaderProgram.h"
@@ -166,6 +167,7 @@ private:
     static constexpr std::size_t kNear = 0;
     static constexpr std::size_t kFar = 1;
     Sky mSky;
+    SkyOrder mSkyOrder = SkyOrder::AfterTerrain;  ///< before the terrain only where its discards write depth
     gl::VertexArray mTemplateVao;
     gl::Buffer mTemplateVertices;
     gl::Buffer mTemplateIndices;
