@@ -22,7 +22,7 @@ const float kGroundAlbedo = 0.2;
 vec3 litAndHazed(vec3 albedo, vec3 n, vec3 relative, vec2 visibility)
 {
 #ifdef ATMOSPHERE
-    vec3 reflectance = pow(albedo, vec3(2.2));
+    vec3 reflectance = albedo * albedo;  // the display's gamma 2 (toneMap) undone
     float altitude = uCameraAltitude + relative.z;
     vec3 sunlight = sunTransmittance(altitude);
     vec3 sky = skyIrradiance(sunlight, uSunDirection);

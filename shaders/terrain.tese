@@ -72,6 +72,13 @@ void main()
     }
 
     emitSurfaceVertex(p, eNode0, eNode1, eNode2, drop);
+    if (eBlock.z != 0) {
+        // A skirt loses every tie in depth, its top included: where it meets a surface at the same depth (its own
+        // node's or a neighbour's edge), the surface shows whichever is drawn first, so the frame does not depend
+        // on the order of the draws (TerrainRenderer::drawPatchRanges). 2^-20 of w is a few steps of a 24-bit
+        // depth buffer anywhere in the view.
+        gl_Position.z += gl_Position.w * (1.0 / 1048576.0);
+    }
 #if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
     for (int k = 0; k < LAYER_COUNT; ++k) {
         vLayerOrigin[k] = eLayerOrigin[k];

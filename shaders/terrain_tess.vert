@@ -21,6 +21,8 @@ out vec4 cLayer6;
 out vec4 cLayer7;
 #endif
 
+uniform int uFirstPatch;  // the draw's first patch (TerrainRenderer::drawPatchRanges): aPatch counts from it
+
 out float cPatch;
 out float cInstance;
 out vec4 cNode0;
@@ -29,7 +31,7 @@ out vec4 cNode2;
 
 void main()
 {
-    cPatch = aPatch;
+    cPatch = aPatch + float(uFirstPatch);
     cInstance = float(gl_InstanceID);
     cNode0 = aNode0;
     cNode1 = aNode1;

@@ -194,11 +194,12 @@ private:
 /// Video mode's frames.csv columns. Per frame: cache_hits, cache_misses, requests_made, requests_completed
 /// and requests_failed (groups that could not be loaded); now: cache_nodes, requests_pending (queued plus
 /// loading), resident_bytes (the process's resident set), deepest_level (of the nodes drawn; below the
-/// map's levels - 1 they are dynamic) and draw_calls (for the terrain: 1); since the start: requests_pending_peak (the
-/// most queued plus loading at once, NodeServerStats::peakPending). With visibility_lod (else 0): nodes_hidden
-/// (drawn as they are, hidden), requests_skipped_hidden (of those, the ones whose children were not resident),
-/// nodes_revealing (morphing in after a reveal). dynamic_groups_made: groups of four dynamic nodes the workers
-/// synthesized that arrived this frame (FrameStats::synthesized). New columns go at the end: readers cut
+/// map's levels - 1 they are dynamic) and draw_calls (the terrain's: one per program in chunks mode, runs of
+/// nodes times ranges of patches in tessellation mode, TerrainRenderer::drawPatchRanges); since the start:
+/// requests_pending_peak (the most queued plus loading at once, NodeServerStats::peakPending). With visibility_lod
+/// (else 0): nodes_hidden (drawn as they are, hidden), requests_skipped_hidden (of those, the ones whose children were
+/// not resident), nodes_revealing (morphing in after a reveal). dynamic_groups_made: groups of four dynamic nodes the
+/// workers synthesized that arrived this frame (FrameStats::synthesized). New columns go at the end: readers cut
 /// columns by position. blocks_occluded: tessellation mode with visibility_lod, blocks of drawn nodes made
 /// coarsest, behind the previous frame's depth. error_max_px, error_p99_px: with video_measure_error_every, the
 /// measured screen-space error of what the frame shows (empty in frames not measured). cache_short: groups of

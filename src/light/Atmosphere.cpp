@@ -135,7 +135,7 @@ glm::dvec3 toneMap(const glm::dvec3& radiance, double exposure)
 {
     const glm::dvec3 x = glm::max(radiance * exposure, glm::dvec3(0.0));
     const glm::dvec3 mapped = glm::clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
-    return glm::pow(mapped, glm::dvec3(1.0 / 2.2));
+    return glm::sqrt(mapped);
 }
 
 }  // namespace terrain

@@ -79,7 +79,7 @@ glm::dvec3 skyRadiance(const AtmosphereModel& air, double altitude, const glm::d
                        int samples = kSkySamples);
 
 /// The filmic tone map (Narkowicz's fit of ACES) of `exposure` times linear radiance, then the display's gamma
-/// 2.2: what the frames show of a radiance, each channel in [0, 1].
+/// 2 (a square root, as shaders/atmosphere.glsl): what the frames show of a radiance, each channel in [0, 1].
 glm::dvec3 toneMap(const glm::dvec3& radiance, double exposure);
 
 }  // namespace terrain

@@ -648,25 +648,51 @@ void TerrainRenderer::drawGroups(RenderStats& stats, TriangleFeedback* feedback)
         glActiveTexture(GL_TEXTURE0);
         ShaderProgram& program = mPrograms[static_cast<std::size_t>(group[0])];
         program.use();
-        // The instances' constants start at `first`: the per-instance attributes are pointed there.
         pointNodeConstants(mConstantsBuffer, mNodeTexels, first);
         glUniform1i(program.uniform("uFirstInstance"), static_cast<GLint>(first));
         const auto instances = static_cast<GLsizei>(last - first);
-        if (mTessellation) {
-            if (feedback) {
-                feedback->beginDraw();
-            }
+        if (mTessellation && feedback) {
+            // Every patch of every node in one draw: the captured triangles come node by node, in the list's order.
+            glUniform1i(program.uniform("uFirstPatch"), 0);
+            feedback->beginDraw();
             glDrawArraysInstanced(GL_PATCHES, 0, patches, instances);
-            if (feedback) {
-                feedback->endDraw(stats.generatedTriangles);
-            }
+            feedback->endDraw(stats.generatedTriangles);
+            ++stats.drawCalls;
+        } else if (mTessellation) {
+            stats.drawCalls += drawPatchRanges(program, first, last, patches);
         } else {
             glDrawElementsInstanced(GL_TRIANGLES, mIndexCount, mIndexType, nullptr, instances);
+            ++stats.drawCalls;
         }
-        ++stats.drawCalls;
         first = last;
     }
     glBindVertexArray(0);
+}
+
+int TerrainRenderer::drawPatchRanges(ShaderProgram& program, std::size_t first, std::size_t last, int patches)
+{
+    // Mesa's draw module (llvmpipe) grows its tessellation output with a reallocation per patch, for each
+    // instance: the copying grows with the square of the patches an instance draws. So the group's nodes are drawn
+    // kNodesPerRun at a time, and each run's patches kPatchesPerDraw at a time (patch ranges in order), which
+    // keeps the nodes nearly front to back. The drawn order then depends on the runs, which can differ with the
+    // pool arrays' grouping; terrain.tese keeps the skirts behind any surface at equal depth, so no pixel depends
+    // on it. The first patch comes as a uniform with `first` 0: llvmpipe fetches the wrong patches for a
+    // GL_PATCHES draw with `first` above 0.
+    const GLint firstPatch = program.uniform("uFirstPatch");
+    const GLint firstInstance = program.uniform("uFirstInstance");
+    int draws = 0;
+    for (std::size_t run = first; run < last; run += kNodesPerRun) {
+        const std::size_t end = std::min(last, run + kNodesPerRun);
+        pointNodeConstants(mConstantsBuffer, mNodeTexels, run);
+        glUniform1i(firstInstance, static_cast<GLint>(run));
+        for (int patch = 0; patch < patches; patch += kPatchesPerDraw) {
+            glUniform1i(firstPatch, patch);
+            glDrawArraysInstanced(GL_PATCHES, 0, std::min(kPatchesPerDraw, patches - patch),
+                                  static_cast<GLsizei>(end - run));
+            ++draws;
+        }
+    }
+    return draws;
 }
 
 }  // namespace terrain

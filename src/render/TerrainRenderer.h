@@ -137,6 +137,11 @@ public:
     const SlotBytes& slotBytes() const { return mSlotBytes; }
     std::size_t slots() const { return mSlotData.size(); }
 
+    /// The tessellation mode draws a group's nodes this many at a time, and their patches this many a draw
+    /// (drawPatchRanges): one draw for every node and patch would grow Mesa's tessellation output patch by patch.
+    static constexpr std::size_t kNodesPerRun = 16;
+    static constexpr int kPatchesPerDraw = 8;
+
 private:
     TerrainRenderer(const MapHeader& header) : mHeader(header) {}
     /// create()'s parts: the programs for `defines`, the template mesh's and the tessellation patches' vertex
@@ -156,6 +161,8 @@ private:
     void uploadFrameNodes(const DrawList& frame, const SceneStyle& style);
     void setFrameUniforms(const Camera& camera, const SceneStyle& style);
     void drawGroups(RenderStats& stats, TriangleFeedback* feedback);
+    /// The tessellation mode's draws of frame nodes [first, last) (one group), `patches` a node: returns the draws.
+    int drawPatchRanges(ShaderProgram& program, std::size_t first, std::size_t last, int patches);
     int arrayOf(int slot) const { return slot / static_cast<int>(mLayersPerArray); }
     int layerOf(int slot) const { return slot % static_cast<int>(mLayersPerArray); }
 

@@ -102,7 +102,12 @@ TEST_P(PoolArraysGLTest, ManySmallArraysDrawTheFrameOneArrayDraws)
     const Image split = drawWith(kLayers, many);
     ASSERT_EQ(reference.width, split.width);
     ASSERT_EQ(reference.height, split.height);
-    EXPECT_EQ(one.drawCalls, 1u);
+    // One array: one group, drawn at once (chunks) or in runs of nodes and ranges of patches (tessellation).
+    const auto blocks = static_cast<std::size_t>((header.chunkSize - 1) / kTessellationBlockQuads);
+    const std::size_t patches = blocks * (blocks + 4);
+    const std::size_t runs = (one.nodes + TerrainRenderer::kNodesPerRun - 1) / TerrainRenderer::kNodesPerRun;
+    const std::size_t ranges = (patches + TerrainRenderer::kPatchesPerDraw - 1) / TerrainRenderer::kPatchesPerDraw;
+    EXPECT_EQ(one.drawCalls, tessellation ? runs * ranges : 1u);
     const std::size_t arraysUsed = (many.gpuNodes + kLayers - 1) / kLayers;
     EXPECT_GT(many.drawCalls, arraysUsed) << "some nodes must be drawn with their parent in another array";
     EXPECT_EQ(many.triangles, one.triangles);

@@ -76,9 +76,14 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
     const int w = camera.viewportWidth, h = camera.viewportHeight;
     const std::vector<float> frame = readDepth(w, h);
 
-    // The reference: a pixel belongs to the first node in drawing order whose depth there, drawn alone, is
-    // the frame's (with GL_LESS the first fragment at the final depth is the one that passed).
+    // The reference: a pixel belongs to the node whose depth there, drawn alone, is the frame's (with GL_LESS the
+    // first fragment at the final depth is the one that passed). Where several nodes reach that depth, the pixel
+    // goes to whichever drew it first, which depends on how the renderer splits its draws: such a pixel counts
+    // as owned by the first in the list for the sums, and for none of them node by node.
     std::vector<std::size_t> owned(counts.nodes.size(), 0);
+    std::vector<std::size_t> ownedAlone(counts.nodes.size(), 0);
+    std::vector<int> owners(frame.size(), 0);
+    std::vector<std::size_t> firstOwner(frame.size(), 0);
     std::vector<bool> taken(frame.size(), false);
     std::size_t terrainPixels = 0;
     for (float d : frame) {
@@ -93,22 +98,34 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
         (*renderer)->draw(makeDrawList(alone, s, camera, tessellation ? blockPixels : 0.0), style);
         const std::vector<float> depth = readDepth(w, h);
         for (std::size_t p = 0; p < depth.size(); ++p) {
-            if (!taken[p] && depth[p] < 1.0f && depth[p] == frame[p]) {
-                taken[p] = true;
-                ++owned[i];
+            if (depth[p] < 1.0f && depth[p] == frame[p]) {
+                owners[p] += 1;
+                if (!taken[p]) {
+                    taken[p] = true;
+                    firstOwner[p] = i;
+                    ++owned[i];
+                }
             }
         }
         PixelCounts single;
         ASSERT_TRUE((*renderer)->takePixelCounts(single, 0));
         ASSERT_EQ(single.nodes.size(), 1u);
     }
+    std::size_t tied = 0;
+    for (std::size_t p = 0; p < frame.size(); ++p) {
+        if (owners[p] == 1) {
+            ++ownedAlone[firstOwner[p]];
+        }
+        tied += owners[p] > 1 ? 1 : 0;
+    }
+    EXPECT_LT(tied, frame.size() / 1000) << "nodes tie in depth at only a few pixels (shared edges)";
     std::size_t visible = 0, hidden = 0, countedSum = 0, ownedSum = 0;
     for (std::size_t i = 0; i < owned.size(); ++i) {
-        if (owned[i] > 0) {
+        if (ownedAlone[i] > 0) {
             EXPECT_GT(counts.pixels[i], 0u)
-                << counts.nodes[i].toString() << " owns " << owned[i] << " visible pixels but was counted 0";
+                << counts.nodes[i].toString() << " owns " << ownedAlone[i] << " visible pixels but was counted 0";
         }
-        EXPECT_GE(counts.pixels[i], owned[i]) << counts.nodes[i].toString();
+        EXPECT_GE(counts.pixels[i], ownedAlone[i]) << counts.nodes[i].toString();
         (counts.pixels[i] > 0 ? visible : hidden) += 1;
         countedSum += counts.pixels[i];
         ownedSum += owned[i];
@@ -119,9 +136,10 @@ TEST_P(VisibilityGLTest, EveryNodeOwningAVisiblePixelIsCountedAndCountsMatchTheP
     EXPECT_GT(visible, 5u);
     EXPECT_GT(hidden, 5u) << "the valley view hides nodes behind its ridges";
     std::printf(
-        "%s: %zu nodes, %zu with visible pixels, %zu hidden; %zu fragments counted, %zu pixels owned, %zu "
-        "terrain pixels\n",
-        tessellation ? "tessellation" : "chunks", owned.size(), visible, hidden, countedSum, ownedSum, terrainPixels);
+        "%s: %zu nodes, %zu with visible pixels, %zu hidden; %zu fragments counted, %zu pixels owned (%zu tied), "
+        "%zu terrain pixels\n",
+        tessellation ? "tessellation" : "chunks", owned.size(), visible, hidden, countedSum, ownedSum, tied,
+        terrainPixels);
 }
 
 TEST_P(VisibilityGLTest, CountsComeTwoFramesLateInOrderAndUntakenOnesAreDropped)
