@@ -1,4 +1,5 @@
-// The air between the viewer, the terrain and the sun, in float: single Rayleigh and Mie scattering in an
+// The air between the viewer, the terrain and the sun, in float: Rayleigh and Mie scattering (once, and more often as
+// Hillaire's psi_ms) in an
 // exponential atmosphere over a flat ground, HDR radiance relative to the sun's irradiance above the air, and the
 // filmic tone map. The same model as src/light/Atmosphere.h, its reference (AtmosphereGLTest compares them);
 // read the equations there. The sums (inscatter) reuse each sample's densities for its sunlight, and the sun's
@@ -17,6 +18,9 @@ uniform float uTopScaleHeights;
 uniform float uCameraAltitude;  // metres (world z)
 uniform float uExposure;
 uniform float uSunAirMass;  // airMass() of the sun's elevation, per frame
+// psi_ms (light/Atmosphere.h, multipleScattering) at altitudes top (i / (n - 1))^2, for the frame's sun.
+uniform vec3 uMultipleScattering[MULTIPLE_SCATTERING_ALTITUDES];
+uniform float uMultipleScatteringTop;
 
 const float kPi = 3.14159265358979;
 
@@ -75,6 +79,18 @@ float miePhase(float mu, float g)
     return 3.0 / (8.0 * kPi) * (1.0 - g2) * (1.0 + mu * mu) / ((2.0 + g2) * pow(1.0 + g2 - 2.0 * g * mu, 1.5));
 }
 
+// psi_ms at `altitude` metres, linear between the altitudes held (MultipleScattering::at).
+vec3 multipleScatteringAt(float altitude)
+{
+    const int n = MULTIPLE_SCATTERING_ALTITUDES;
+    if (!(uMultipleScatteringTop > 0.0)) {
+        return vec3(0.0);  // not set: single scattering
+    }
+    float x = sqrt(clamp(altitude / uMultipleScatteringTop, 0.0, 1.0)) * float(n - 1);
+    int i = min(int(x), n - 2);
+    return mix(uMultipleScattering[i], uMultipleScattering[i + 1], x - float(i));
+}
+
 // The in-scattered light of a segment from `altitude`, `len` metres rising `slope` a metre, at cos(view, sun)
 // `mu`: midpoints of u in [0, 1], t = len u^2.
 vec3 inscatter(float altitude, float slope, float len, float mu, int samples)
@@ -102,7 +118,11 @@ vec3 inscatter(float altitude, float slope, float len, float mu, int samples)
         float rayleighDensity = rayleighStart * rayleighFall, mieDensity = mieStart * mieFall;
         vec3 scattering = uRayleighScattering * (rayleighDensity * rayleighPhaseValue) +
                           vec3(uMieScattering * mieDensity * miePhaseValue);
-        sum += viewTransmittance * scattering * sunTransmittanceAt(rayleighDensity, mieDensity) * (2.0 * len * u);
+        // Scattered once, from the sun; more than once, psi_ms times the scattering coefficient.
+        vec3 light = scattering * sunTransmittanceAt(rayleighDensity, mieDensity) +
+                     (uRayleighScattering * rayleighDensity + vec3(uMieScattering * mieDensity)) *
+                         multipleScatteringAt(altitude + rise);
+        sum += viewTransmittance * light * (2.0 * len * u);
     }
     return sum / float(samples);
 }

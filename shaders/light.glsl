@@ -11,9 +11,8 @@ uniform vec3 uAmbient;
 uniform vec3 uHazeColour;
 uniform float uHazeDistance;  // metres at which haze reaches 63 %
 #ifdef ATMOSPHERE
-// The mean reflectance of the ground around a point, for the light it bounces onto slopes (grass, rock and soil
-// reflect 0.1 to 0.3 of visible light).
-const float kGroundAlbedo = 0.2;
+// The mean reflectance of the ground around a point, for the light it bounces onto slopes (light/Atmosphere.h).
+const float kGroundAlbedo = GROUND_ALBEDO;
 #endif
 
 // The surface colour `albedo` lit with unit normal n, seen through the air from `relative` metres away. `visibility`:

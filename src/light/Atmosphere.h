@@ -4,8 +4,11 @@
 // 2020's sky and aerial perspective as a model of what to compute). The view ray's transmittance is in closed
 // form (the integral of an exponential density along a straight line); its in-scattered light is a midpoint sum
 // over kAerialSamples points spaced quadratically from the viewer, each lit by the sun through the air above it (the
-// Kasten & Young air mass stands in for the Earth's curvature towards a low sun). The sky's irradiance on the ground is
-// half the sunlight the air above scatters out of the sun's beam. Ozone and multiple scattering are left out.
+// Kasten & Young air mass stands in for the Earth's curvature towards a low sun). Light scattered more than once
+// enters as Hillaire 2020's multiple-scattering term (section 5.5): per altitude, the isotropic light psi_ms that
+// the orders from the second on add to each scattering event (multipleScattering), summed into the in-scattered
+// light wherever a MultipleScattering is given. The sky's irradiance on the ground is half the sunlight the air
+// above scatters out of the sun's beam. Ozone is left out.
 //
 // shaders/atmosphere.glsl computes the same in float; this is its reference (AtmosphereGLTest) and what the
 // tests measure the frames against. Units: metres, radiance relative to the sun's irradiance at the top of the
@@ -13,6 +16,8 @@
 #pragma once
 
 #include <glm/vec3.hpp>
+
+#include <array>
 
 namespace terrain {
 
@@ -29,6 +34,10 @@ struct AtmosphereModel {
 
     bool operator==(const AtmosphereModel&) const = default;
 };
+
+/// The mean reflectance of the ground (grass, rock and soil reflect 0.1 to 0.3 of visible light): the light the
+/// ground around bounces onto slopes (shaders/light.glsl) and up into the air (multipleScattering).
+inline constexpr double kGroundAlbedo = 0.2;
 
 /// Midpoints the view ray's in-scattered light is summed over, as a cell of the aerial table sums it
 /// (light/AtmosphereTables.h): within 1% of many samples over every segment of AtmosphereTest (4096 samples as
@@ -60,6 +69,29 @@ glm::dvec3 skyIrradiance(const AtmosphereModel& air, double altitude, double sun
 double rayleighPhase(double mu);
 double miePhase(double mu, double g);
 
+/// Altitudes multipleScattering holds psi_ms at: top (i / (n - 1))^2, i = 0 .. n - 1, dense near the ground
+/// where the air is. Part of the C++/GLSL contract (MULTIPLE_SCATTERING_ALTITUDES).
+inline constexpr int kMultipleScatteringAltitudes = 16;
+
+/// Hillaire's psi_ms over altitude, for one sun: radiance per unit of scattering coefficient (times the
+/// scattering coefficient at a point, the light that scattering more than once adds there, in every direction).
+struct MultipleScattering {
+    std::array<glm::dvec3, kMultipleScatteringAltitudes> psi{};
+    double top = 1.0;  ///< the highest altitude, metres (AtmosphereModel::topScaleHeights Rayleigh scale heights)
+    /// psi_ms at `altitude` metres, linear between the altitudes held (the ground's below 0, the top's above).
+    glm::dvec3 at(double altitude) const;
+    bool operator==(const MultipleScattering&) const = default;
+};
+
+/// psi_ms for the sun at elevation `sunElevation` (radians) over a flat ground of reflectance `groundAlbedo`:
+/// at each altitude the second order L2 (the single-scattered light of `directions` rays spread evenly over the
+/// sphere, the ground's reflection of the sunlight included, with an isotropic phase), and the share f_ms of
+/// light that the air around scatters back (the same rays' scattering, summed), psi_ms = L2 / (1 - f_ms): the
+/// orders from the second on as a geometric series. Rays climb at the air mass's slope (as the sky's) and
+/// descend at the ground's; `samples` midpoints a ray.
+MultipleScattering multipleScattering(const AtmosphereModel& air, double sunElevation,
+                                      double groundAlbedo = kGroundAlbedo, int directions = 64, int samples = 32);
+
 /// What the air does to light from a point seen along a segment: the point's light arrives times
 /// `transmittance`, plus `inscattered` (radiance, relative to the sun's irradiance above the air).
 struct AerialPerspective {
@@ -69,14 +101,16 @@ struct AerialPerspective {
 
 /// The segment from a viewer at `altitude` to `relative` metres away (z up), lit by the sun in unit direction
 /// `sun`, summed over `samples` midpoints (kAerialSamples as the tables; more for a reference).
+/// With `multiple`, the light scattered more than once is added (for the same sun).
 AerialPerspective aerialPerspective(const AtmosphereModel& air, double altitude, const glm::dvec3& relative,
-                                    const glm::dvec3& sun, int samples = kAerialSamples);
+                                    const glm::dvec3& sun, int samples = kAerialSamples,
+                                    const MultipleScattering* multiple = nullptr);
 
 /// The sky's radiance seen from `altitude` in unit direction `view` (rays at or below the horizon see the
 /// horizon's), the sun's disc not included: the in-scattered light up to topScaleHeights above the viewer,
 /// with the ray climbing at the air mass's slope so that it leaves the air at the horizon too.
 glm::dvec3 skyRadiance(const AtmosphereModel& air, double altitude, const glm::dvec3& view, const glm::dvec3& sun,
-                       int samples = kSkySamples);
+                       int samples = kSkySamples, const MultipleScattering* multiple = nullptr);
 
 /// The filmic tone map (Narkowicz's fit of ACES) of `exposure` times linear radiance, then the display's gamma
 /// 2 (a square root, as shaders/atmosphere.glsl): what the frames show of a radiance, each channel in [0, 1].

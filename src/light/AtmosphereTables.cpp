@@ -67,7 +67,8 @@ double aerialTableRange(const Camera& camera)
     return camera.farPlane * std::sqrt(1.0 + up * up + right * right);
 }
 
-AtmosphereTables::AtmosphereTables(const AtmosphereModel& air, double altitude, const glm::dvec3& sun, double range)
+AtmosphereTables::AtmosphereTables(const AtmosphereModel& air, double altitude, const glm::dvec3& sun, double range,
+                                   const MultipleScattering* multiple)
     : mSun(sun), mRange(range)
 {
     TERRAIN_EXPECTS(range > 0.0, "a table range > 0");
@@ -80,8 +81,9 @@ AtmosphereTables::AtmosphereTables(const AtmosphereModel& air, double altitude, 
             for (int a = 0; a < kAerialTableAzimuths; ++a) {
                 const glm::dvec3 view =
                     directionAt({a / (kAerialTableAzimuths - 1.0), e / (kAerialTableElevations - 1.0)}, sun);
-                mAerial.push_back(aerialPerspective(air, altitude, view * distance, sun, kAerialSamples).inscattered /
-                                  (w * w));
+                mAerial.push_back(
+                    aerialPerspective(air, altitude, view * distance, sun, kAerialSamples, multiple).inscattered /
+                    (w * w));
             }
         }
     }
@@ -89,7 +91,7 @@ AtmosphereTables::AtmosphereTables(const AtmosphereModel& air, double altitude, 
     for (int e = 0; e < kSkyTableElevations; ++e) {
         for (int a = 0; a < kSkyTableAzimuths; ++a) {
             const glm::dvec3 view = directionAt({a / (kSkyTableAzimuths - 1.0), e / (kSkyTableElevations - 1.0)}, sun);
-            mSky.push_back(skyRadiance(air, altitude, view, sun, kSkySamples));
+            mSky.push_back(skyRadiance(air, altitude, view, sun, kSkySamples, multiple));
         }
     }
 }

@@ -57,7 +57,9 @@ double aerialTableRange(const Camera& camera);
 class AtmosphereTables {
 public:
     /// Distances beyond `range` metres read the last cell (what is seen there is at least that far).
-    AtmosphereTables(const AtmosphereModel& air, double altitude, const glm::dvec3& sun, double range);
+    /// With `multiple`, the light scattered more than once is in both tables (as the renderer's have it).
+    AtmosphereTables(const AtmosphereModel& air, double altitude, const glm::dvec3& sun, double range,
+                     const MultipleScattering* multiple = nullptr);
 
     /// The in-scattered light of the segment `distance` metres along unit `view`.
     glm::dvec3 inscattered(const glm::dvec3& view, double distance) const;

@@ -7,7 +7,9 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace terrain {
 
@@ -82,10 +84,17 @@ void AtmosphereTextures::update(const Camera& camera, const SceneStyle& style)
     glBindFramebuffer(GL_FRAMEBUFFER, mFramebuffer.name());
     glBindVertexArray(mEmptyVao.name());
 
+    const double sunElevation = std::asin(std::clamp(double{wanted.sun.z}, -1.0, 1.0));
+    if (!mMultiple || mMultipleElevation != sunElevation || !(mMultipleAir == style.air)) {
+        mMultiple = terrain::multipleScattering(style.air, sunElevation);
+        mMultipleElevation = sunElevation;
+        mMultipleAir = style.air;
+    }
     auto setUniforms = [&](const ShaderProgram& program) {
         program.use();
         setAtmosphereUniforms(program, camera, style);
         glUniform3fv(program.uniform("uSunDirection"), 1, glm::value_ptr(wanted.sun));
+        setMultipleScatteringUniforms(program, *mMultiple);
     };
     setUniforms(mAerialProgram);
     glViewport(0, 0, kAerialTableAzimuths, kAerialTableElevations);

@@ -1,7 +1,9 @@
 // The frame's air tables on the GPU (light/AtmosphereTables.h gives their layout and is their reference): the
 // aerial table, a 3D texture the terrain's fragment programs read their in-scattered light from, and the sky
 // table, a 2D texture the sky reads. Filled by shaders/atmosphere_table.frag, one draw per slice, whenever the
-// viewer's altitude, the sun, the air or the table's range changed since the last fill.
+// viewer's altitude, the sun, the air or the table's range changed since the last fill. The light scattered
+// more than once (light/Atmosphere.h, multipleScattering) is made on the CPU whenever the sun's elevation or the
+// air changed, and handed to the filling programs as uniforms.
 #pragma once
 
 #include "core/Camera.h"
@@ -35,6 +37,9 @@ public:
     void bindAerial(int unit) const;
     void bindSky(int unit) const;
 
+    /// psi_ms of the last fill (for the sun and air of its SceneStyle; none before the first).
+    const std::optional<MultipleScattering>& multipleScattering() const { return mMultiple; }
+
 private:
     /// What the tables were filled for.
     struct Filled {
@@ -52,6 +57,10 @@ private:
     gl::Framebuffer mFramebuffer;
     gl::VertexArray mEmptyVao;
     std::optional<Filled> mFilled;
+    /// psi_ms, and the sun's elevation (radians) and the air it was made for.
+    std::optional<MultipleScattering> mMultiple;
+    double mMultipleElevation = 0.0;
+    AtmosphereModel mMultipleAir;
 };
 
 }  // namespace terrain

@@ -8,6 +8,7 @@
 #include <glm/mat4x4.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace terrain {
@@ -60,6 +61,16 @@ void setAtmosphereUniforms(const ShaderProgram& program, const Camera& camera, c
     const double sunElevation = std::asin(std::clamp(double{glm::normalize(style.sunDirection).z}, -1.0, 1.0));
     glUniform1f(program.uniform("uSunAirMass"), static_cast<float>(airMass(sunElevation)));
     glUniform1f(program.uniform("uAerialRange"), static_cast<float>(aerialTableRange(camera)));
+}
+
+void setMultipleScatteringUniforms(const ShaderProgram& program, const MultipleScattering& multiple)
+{
+    std::array<glm::vec3, kMultipleScatteringAltitudes> psi{};
+    for (std::size_t i = 0; i < psi.size(); ++i) {
+        psi[i] = glm::vec3(multiple.psi[i]);
+    }
+    glUniform3fv(program.uniform("uMultipleScattering"), kMultipleScatteringAltitudes, glm::value_ptr(psi[0]));
+    glUniform1f(program.uniform("uMultipleScatteringTop"), static_cast<float>(multiple.top));
 }
 
 void setSceneUniforms(const ShaderProgram& program, const Camera& camera, const SceneStyle& style,

@@ -8,7 +8,7 @@ namespace terrain::contract {
 
 std::vector<std::string> shaderContractDefines()
 {
-    auto define = [](const char* name, int value) { return std::string(name) + " " + std::to_string(value); };
+    auto define = [](const char* name, auto value) { return std::string(name) + " " + std::to_string(value); };
     return {
         define("GRID_LOCATION", kGridLocation),
         define("SKIRT_LOCATION", kSkirtLocation),
@@ -28,6 +28,8 @@ std::vector<std::string> shaderContractDefines()
         define("SKY_TABLE_AZIMUTHS", kSkyTableAzimuths),
         define("SKY_TABLE_ELEVATIONS", kSkyTableElevations),
         define("SKY_TABLE_SAMPLES", kSkySamples),
+        define("MULTIPLE_SCATTERING_ALTITUDES", kMultipleScatteringAltitudes),
+        define("GROUND_ALBEDO", kGroundAlbedo),
     };
 }
 

@@ -159,11 +159,15 @@ TEST(AtmosphereGLTest, TheShadersAirIsTheModels)
             camera.position = {0.0, 0.0, altitude};
             program->use();
             setAtmosphereUniforms(*program, camera, style);
+            const MultipleScattering multiple = multipleScattering(air, std::asin(sun.z));
+            setMultipleScatteringUniforms(*program, multiple);
             target.draw(*program, cases, sun);
             for (int k = 0; k < kCases; ++k) {
                 const glm::dvec3 relative(glm::vec3(cases[k]));  // what the shader was given
-                const AerialPerspective reference = aerialPerspective(air, altitude, relative, sun, kAerialSamples);
-                const glm::dvec3 sky = skyRadiance(air, altitude, glm::normalize(relative), sun, kSkySamples);
+                const AerialPerspective reference =
+                    aerialPerspective(air, altitude, relative, sun, kAerialSamples, &multiple);
+                const glm::dvec3 sky =
+                    skyRadiance(air, altitude, glm::normalize(relative), sun, kSkySamples, &multiple);
                 for (int c = 0; c < 3; ++c) {
                     const std::string where = "sun " + std::to_string(sunElevation) + ", altitude " +
                                               std::to_string(altitude) + ", case " + std::to_string(k) + ", channel " +
@@ -214,8 +218,9 @@ TEST(AtmosphereGLTest, TheRenderersTablesAreTheCppTables)
             setAtmosphereUniforms(*program, camera, style);
             const std::vector<glm::dvec3> cases = probeCases(altitude);
             target.draw(*program, cases, sun);
+            ASSERT_TRUE(textures->multipleScattering().has_value());
             const AtmosphereTables tables(air, altitude, glm::dvec3(glm::normalize(glm::vec3(sun))),
-                                          aerialTableRange(camera));
+                                          aerialTableRange(camera), &*textures->multipleScattering());
             for (int k = 0; k < kCases; ++k) {
                 const glm::dvec3 relative(glm::vec3(cases[k]));
                 const glm::dvec3 view = glm::normalize(relative);

@@ -148,6 +148,69 @@ TEST(AtmosphereTest, TheSkyIsBlueOverheadAndHazeBrightensAndWhitensWithDistance)
     EXPECT_EQ(skyIrradiance(air, 2500.0, -0.1), glm::dvec3(0.0)) << "no sun, no single-scattered skylight";
 }
 
+TEST(AtmosphereTest, MultipleScatteringConvergesWithDirectionsAndSamples)
+{
+    const AtmosphereModel air;
+    for (double degrees : {5.0, 35.0, 80.0}) {
+        const double elevation = degrees * kPi / 180.0;
+        const MultipleScattering used = multipleScattering(air, elevation);
+        const MultipleScattering many = multipleScattering(air, elevation, kGroundAlbedo, 1024, 256);
+        for (int i = 0; i < kMultipleScatteringAltitudes; ++i) {
+            for (int c = 0; c < 3; ++c) {
+                const double reference = many.psi[static_cast<std::size_t>(i)][c];
+                EXPECT_GT(reference, 0.0);
+                EXPECT_NEAR(used.psi[static_cast<std::size_t>(i)][c], reference, 0.02 * reference)
+                    << "sun " << degrees << ", altitude " << i << ", channel " << c;
+            }
+        }
+    }
+}
+
+TEST(AtmosphereTest, InThinAirMultipleScatteringIsTheGroundsReflectionOverHalfTheSphere)
+{
+    // With scattering a millionth of the Earth's, the light that reaches a point on the ground from around it is
+    // the sunlit ground's, seen over the lower half of the sphere: psi_ms = (1 / 2) albedo / pi sin(sun) there.
+    AtmosphereModel thin;
+    thin.rayleighScattering *= 1e-6;
+    thin.mieScattering *= 1e-6;
+    thin.mieExtinction *= 1e-6;
+    for (double albedo : {0.1, 0.3}) {
+        const double elevation = 35.0 * kPi / 180.0;
+        const glm::dvec3 psi = multipleScattering(thin, elevation, albedo).at(0.0);
+        const double expected = 0.5 * albedo / kPi * std::sin(elevation);
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(psi[c], expected, 1e-3 * expected) << albedo << ", channel " << c;
+        }
+    }
+}
+
+TEST(AtmosphereTest, MultipleScatteringBrightensTheSkyAndTheHaze)
+{
+    const AtmosphereModel air;
+    for (double degrees : {10.0, 35.0, 70.0}) {
+        const double elevation = degrees * kPi / 180.0;
+        const glm::dvec3 sun = direction(135.0, degrees);
+        const MultipleScattering multiple = multipleScattering(air, elevation);
+        for (const glm::dvec3& view : {glm::dvec3(0.0, 0.0, 1.0), direction(315.0, 5.0)}) {
+            const glm::dvec3 once = skyRadiance(air, 500.0, view, sun, kSkySamples);
+            const glm::dvec3 more = skyRadiance(air, 500.0, view, sun, kSkySamples, &multiple);
+            for (int c = 0; c < 3; ++c) {
+                // The higher orders add a few percent (red, towards a low sun) to about as much again (blue, away
+                // from a high sun) to the single-scattered sky.
+                EXPECT_GT(more[c] / once[c], 1.02) << degrees << ", channel " << c;
+                EXPECT_LT(more[c] / once[c], 2.5) << degrees << ", channel " << c;
+            }
+        }
+        const AerialPerspective once = aerialPerspective(air, 500.0, direction(315.0, -1.0) * 20000.0, sun);
+        const AerialPerspective more =
+            aerialPerspective(air, 500.0, direction(315.0, -1.0) * 20000.0, sun, kAerialSamples, &multiple);
+        EXPECT_EQ(more.transmittance, once.transmittance);
+        EXPECT_GT(more.inscattered.g, once.inscattered.g);
+        // A brighter ground bounces more light into the air.
+        EXPECT_GT(multipleScattering(air, elevation, 0.4).at(500.0).g, multiple.at(500.0).g);
+    }
+}
+
 TEST(AtmosphereTest, TheToneMapIsMonotoneFromBlackToWhite)
 {
     EXPECT_EQ(toneMap(glm::dvec3(0.0), 1.0), glm::dvec3(0.0));
