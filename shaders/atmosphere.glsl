@@ -173,19 +173,30 @@ uniform sampler3D uAerialTable;
 uniform sampler2D uSkyTable;
 uniform float uAerialRange;  // metres the aerial table spans
 
-// The light of a surface point `relative` metres from the camera, `radiance` where it is, as it reaches the
-// camera: times the air's transmittance, plus what the air scatters in (one fetch of the aerial table).
-vec3 aerialPerspective(vec3 radiance, vec3 relative, vec3 sun)
+// The aerial table's coordinates in [0, 1]^3 of a surface point `relative` metres from the camera (azimuth,
+// elevation, sqrt(distance / range)). Smooth enough over a triangle to be made per vertex and interpolated.
+vec3 aerialCoordinate(vec3 relative, vec3 sun)
 {
     float len = length(relative);
     if (len <= 0.0) {
-        return radiance;
+        return vec3(0.0);
     }
-    vec2 direction = tableCoordinate(relative / len, sun);
-    float w = sqrt(min(len / uAerialRange, 1.0));
+    return vec3(tableCoordinate(relative / len, sun), sqrt(min(len / uAerialRange, 1.0)));
+}
+
+// The light the air scatters in between the camera and the point at aerial coordinates `c` (one fetch).
+vec3 aerialInscattered(vec3 c)
+{
     vec3 cells = vec3(AERIAL_TABLE_AZIMUTHS, AERIAL_TABLE_ELEVATIONS, AERIAL_TABLE_DISTANCES);
-    vec3 inscattered = texture(uAerialTable, (vec3(direction, w) * (cells - 1.0) + 0.5) / cells).rgb * (w * w);
-    return radiance * airTransmittance(uCameraAltitude, relative.z, len) + inscattered;
+    return texture(uAerialTable, (c * (cells - 1.0) + 0.5) / cells).rgb * (c.z * c.z);
+}
+
+// The light of a surface point `relative` metres from the camera, `radiance` where it is, as it reaches the
+// camera: times the air's transmittance, plus what the air scatters in.
+vec3 aerialPerspective(vec3 radiance, vec3 relative, vec3 sun)
+{
+    return radiance * airTransmittance(uCameraAltitude, relative.z, length(relative)) +
+           aerialInscattered(aerialCoordinate(relative, sun));
 }
 
 // The sky's radiance in unit direction `view` (the sun's disc not included; one fetch of the sky table).

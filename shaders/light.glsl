@@ -1,5 +1,6 @@
 // The terrain's light and air. Shared by the quadtree's and the clipmap's fragment programs (terrain.frag,
-// clipmap.frag); the sky (sky.frag) takes the same sun. The renderers set these from SceneStyle.
+// clipmap.frag) and the quadtree's vertex programs (the air per vertex, surface.glsl); the sky (sky.frag) takes
+// the same sun. The renderers set these from SceneStyle.
 // With ATMOSPHERE (atmosphere = true): the node colours as reflectances lit by the sun through the air
 // (sunTransmittance), by the sky's irradiance and by the light the ground around bounces onto slopes, seen
 // through the air (aerialPerspective), tone mapped (atmosphere.glsl, included before this file). Without: the sun
@@ -13,24 +14,46 @@ uniform float uHazeDistance;  // metres at which haze reaches 63 %
 #ifdef ATMOSPHERE
 // The mean reflectance of the ground around a point, for the light it bounces onto slopes (light/Atmosphere.h).
 const float kGroundAlbedo = GROUND_ALBEDO;
-#endif
 
-// The surface colour `albedo` lit with unit normal n, seen through the air from `relative` metres away. `visibility`:
-// the share of the sun (x) and of the sky (y) that the terrain around does not hide (1, 1 in the open); the sky's
-// also scales the light the ground around bounces (what hides the sky hides the ground around too).
-vec3 litAndHazed(vec3 albedo, vec3 n, vec3 relative, vec2 visibility)
+// What the air does to a surface point `relative` metres from the camera: the sunlight that reaches it
+// (sunTransmittance), the transmittance of the view ray, and the aerial table's coordinates there. All three
+// change smoothly over a triangle: the terrain's vertex programs make them per vertex (surface.glsl), and the
+// fragments interpolate them, which saves a dozen exponentials and inverse trigonometric functions a pixel.
+struct Air {
+    vec3 sunlight;
+    vec3 transmittance;
+    vec3 aerial;
+};
+
+Air airAt(vec3 relative)
 {
-#ifdef ATMOSPHERE
+    return Air(sunTransmittance(uCameraAltitude + relative.z),
+               airTransmittance(uCameraAltitude, relative.z, length(relative)), aerialCoordinate(relative, uSunDirection));
+}
+
+// The surface colour `albedo` lit with unit normal n through `air`. `visibility`: the share of the sun (x) and of the
+// sky (y) that the terrain around does not hide (1, 1 in the open); the sky's also scales the light the ground
+// around bounces (what hides the sky hides the ground around too).
+vec3 litThroughAir(vec3 albedo, vec3 n, vec2 visibility, Air air)
+{
     vec3 reflectance = albedo * albedo;  // the display's gamma 2 (toneMap) undone
-    float altitude = uCameraAltitude + relative.z;
-    vec3 sunlight = sunTransmittance(altitude);
+    vec3 sunlight = air.sunlight;
     vec3 sky = skyIrradiance(sunlight, uSunDirection);
     // What the ground around receives, reflected back to a tilted surface from below its horizon: the
     // surroundings taken as a lit flat ground of reflectance kGroundAlbedo, seen over (1 - n.z) / 2 of the sphere.
     vec3 ground = kGroundAlbedo * (sunlight * max(uSunDirection.z, 0.0) + sky);
     vec3 irradiance = visibility.x * sunlight * max(dot(n, uSunDirection), 0.0) +
                       visibility.y * (sky * (0.5 + 0.5 * n.z) + ground * (0.5 - 0.5 * n.z));
-    return toneMap(aerialPerspective(reflectance / kPi * irradiance, relative, uSunDirection));
+    return toneMap(reflectance / kPi * irradiance * air.transmittance + aerialInscattered(air.aerial));
+}
+#endif
+
+// The surface colour `albedo` lit with unit normal n, seen through the air from `relative` metres away, with the
+// terrain's `visibility` (litThroughAir) or, without ATMOSPHERE, hazed.
+vec3 litAndHazed(vec3 albedo, vec3 n, vec3 relative, vec2 visibility)
+{
+#ifdef ATMOSPHERE
+    return litThroughAir(albedo, n, visibility, airAt(relative));
 #else
     vec3 light = visibility.y * uAmbient * (0.6 + 0.4 * n.z) + visibility.x * uSunColour * max(dot(n, uSunDirection), 0.0);
     vec3 colour = albedo * light;

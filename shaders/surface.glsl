@@ -5,7 +5,8 @@
 // surface is the node's own even samples (they are the parent's samples) along the template triangulation; its
 // normals at its samples are made with the node (lod/NodeTextures.h), and between parent samples the mean of the
 // two is taken (gpudata/NodeVertexData.h computes the same on the CPU). The includer declares the outputs written
-// here: vRelative, vNormal (without NORMAL_MAP), vNodeUv, vLocal, vMaterials, vMorph, vParentOffset, vSlots.
+// here: vRelative, vNormal (without NORMAL_MAP), vNodeUv, vLocal, vMaterials, vMorph, vParentOffset, vSlots, and
+// with ATMOSPHERE the air at the vertex (light.glsl, airAt): vSunlight, vAirTransmittance, vAerial.
 
 uniform mat4 uViewProjection;  // camera-relative world -> clip (rotation and projection only)
 uniform float uInverseCells;   // 1 / (N - 1)
@@ -62,4 +63,10 @@ void emitSurfaceVertex(ivec2 p, vec4 node0, vec4 node1, vec4 node2, float drop)
     vParentOffset = node2.xy;
     vSlots = ivec2(gSlot, int(node1.z));
     gl_Position = uViewProjection * vec4(vRelative, 1.0);
+#ifdef ATMOSPHERE
+    Air air = airAt(vRelative);
+    vSunlight = air.sunlight;
+    vAirTransmittance = air.transmittance;
+    vAerial = air.aerial;
+#endif
 }

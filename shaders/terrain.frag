@@ -19,6 +19,11 @@ in vec3 vNormal;
 in vec2 vNodeUv;
 in vec2 vLocal;
 in vec4 vMaterials;
+#ifdef ATMOSPHERE
+in vec3 vSunlight;  // the air at the fragment, interpolated between the vertices' (light.glsl, Air)
+in vec3 vAirTransmittance;
+in vec3 vAerial;
+#endif
 
 flat in float vMorph;
 flat in vec2 vParentOffset;  // the node's quadrant in the parent's square: (0 or 0.5, 0 or 0.5)
@@ -119,5 +124,9 @@ void main()
 #else
     vec3 n = normalize(vNormal);
 #endif
+#ifdef ATMOSPHERE
+    fragColour = vec4(litThroughAir(albedo, n, visibility(), Air(vSunlight, vAirTransmittance, vAerial)), 1.0);
+#else
     fragColour = vec4(litAndHazed(albedo, n, vRelative, visibility()), 1.0);
+#endif
 }

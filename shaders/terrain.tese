@@ -35,6 +35,14 @@ flat out vec2 vParentOffset;
 flat out ivec2 vSlots;
 precise gl_Position;
 
+#ifdef ATMOSPHERE
+out vec3 vSunlight;  // the air at the vertex (light.glsl, Air)
+out vec3 vAirTransmittance;
+out vec3 vAerial;
+#endif
+
+#include "atmosphere.glsl"
+#include "light.glsl"
 #include "surface.glsl"
 
 int snapToLattice(int c, int level) { int g = 1 << level; return (c + g / 2) / g * g; }

@@ -39,6 +39,14 @@ flat out int vInstance;
 flat out vec4 vLayerOrigin[LAYER_COUNT];
 #endif
 
+#ifdef ATMOSPHERE
+out vec3 vSunlight;  // the air at the vertex (light.glsl, Air)
+out vec3 vAirTransmittance;
+out vec3 vAerial;
+#endif
+
+#include "atmosphere.glsl"
+#include "light.glsl"
 #include "surface.glsl"
 
 void main()
