@@ -138,7 +138,9 @@ glm::dvec3 skyRadiance(const AtmosphereModel& air, double altitude, const glm::d
 
 glm::dvec3 MultipleScattering::at(double altitude) const
 {
-    const double x = std::sqrt(std::clamp(altitude / top, 0.0, 1.0)) * (kMultipleScatteringAltitudes - 1);
+    // NaN reads the ground's (a NaN index would be undefined).
+    const double share = altitude / top;
+    const double x = std::sqrt(share >= 0.0 ? std::min(share, 1.0) : 0.0) * (kMultipleScatteringAltitudes - 1);
     const int i = std::min(static_cast<int>(x), kMultipleScatteringAltitudes - 2);
     const double f = x - i;
     return psi[static_cast<std::size_t>(i)] * (1.0 - f) + psi[static_cast<std::size_t>(i + 1)] * f;

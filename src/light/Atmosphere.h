@@ -78,7 +78,8 @@ inline constexpr int kMultipleScatteringAltitudes = 16;
 struct MultipleScattering {
     std::array<glm::dvec3, kMultipleScatteringAltitudes> psi{};
     double top = 1.0;  ///< the highest altitude, metres (AtmosphereModel::topScaleHeights Rayleigh scale heights)
-    /// psi_ms at `altitude` metres, linear between the altitudes held (the ground's below 0, the top's above).
+    /// psi_ms at `altitude` metres, linear between the altitudes held (the ground's below 0 and for NaN, the top's
+    /// above).
     glm::dvec3 at(double altitude) const;
     bool operator==(const MultipleScattering&) const = default;
 };

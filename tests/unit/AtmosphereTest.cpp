@@ -10,6 +10,7 @@
 #include <glm/glm.hpp>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace terrain {
@@ -206,6 +207,9 @@ TEST(AtmosphereTest, MultipleScatteringBrightensTheSkyAndTheHaze)
             aerialPerspective(air, 500.0, direction(315.0, -1.0) * 20000.0, sun, kAerialSamples, &multiple);
         EXPECT_EQ(more.transmittance, once.transmittance);
         EXPECT_GT(more.inscattered.g, once.inscattered.g);
+        EXPECT_EQ(multiple.at(-5.0), multiple.psi[0]);
+        EXPECT_EQ(multiple.at(std::numeric_limits<double>::quiet_NaN()), multiple.psi[0]);
+        EXPECT_EQ(multiple.at(std::numeric_limits<double>::infinity()), multiple.psi.back());
         // A brighter ground bounces more light into the air.
         EXPECT_GT(multipleScattering(air, elevation, 0.4).at(500.0).g, multiple.at(500.0).g);
     }
