@@ -86,8 +86,9 @@ vec3 multipleScatteringAt(float altitude)
     if (!(uMultipleScatteringTop > 0.0)) {
         return vec3(0.0);  // not set: single scattering
     }
-    float x = sqrt(clamp(altitude / uMultipleScatteringTop, 0.0, 1.0)) * float(n - 1);
-    int i = min(int(x), n - 2);
+    float share = altitude / uMultipleScatteringTop;
+    float x = sqrt(share >= 0.0 ? min(share, 1.0) : 0.0) * float(n - 1);  // NaN reads the ground's
+    int i = clamp(int(x), 0, n - 2);
     return mix(uMultipleScattering[i], uMultipleScattering[i + 1], x - float(i));
 }
 

@@ -1,4 +1,4 @@
-// Single scattering in an exponential atmosphere over a flat ground (Atmosphere.h).
+// Single and multiple scattering in an exponential atmosphere over a flat ground (Atmosphere.h).
 #include "light/Atmosphere.h"
 
 #include "core/Check.h"

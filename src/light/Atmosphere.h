@@ -1,4 +1,4 @@
-// The air between the viewer, the terrain and the sun: single scattering by molecules (Rayleigh) and aerosols
+// The air between the viewer, the terrain and the sun: scattering by molecules (Rayleigh) and aerosols
 // (Mie) in an atmosphere whose densities fall exponentially with height, over a flat ground (Bruneton & Neyret
 // 2008's scattering coefficients and phase functions as in Bruneton's 2017 reference implementation; Hillaire
 // 2020's sky and aerial perspective as a model of what to compute). The view ray's transmittance is in closed

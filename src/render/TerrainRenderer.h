@@ -44,8 +44,9 @@ struct RenderStats {
     std::uint64_t triangles = 0;
     std::size_t uploads = 0;   ///< nodes copied into their slots this frame
     std::size_t gpuNodes = 0;  ///< slots that have held a node (filled when first drawn, kept until reused)
-    /// Draw calls for the terrain (the sky not counted): one per program and pair of pool arrays (the nodes',
-    /// their parents') that has nodes in view; 1 when the pools fit one array and no detail layers split it.
+    /// Draw calls for the terrain (the sky not counted): in chunks mode one per program and pair of pool arrays
+    /// (the nodes', their parents') that has nodes in view (1 when the pools fit one array and no detail layers
+    /// split it); in tessellation mode each of those is runs of nodes times ranges of patches (drawPatchRanges).
     std::size_t drawCalls = 0;
     std::size_t blocks = 0;                ///< tessellation mode: blocks drawn (not culled)
     std::size_t culledBlocks = 0;          ///< tessellation mode: blocks of drawn nodes outside the frustum

@@ -18,6 +18,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -219,6 +220,10 @@ TEST(AtmosphereGLTest, TheRenderersTablesAreTheCppTables)
             const std::vector<glm::dvec3> cases = probeCases(altitude);
             target.draw(*program, cases, sun);
             ASSERT_TRUE(textures->multipleScattering().has_value());
+            // The renderer's psi_ms is the model's for the style's sun and air.
+            EXPECT_EQ(
+                *textures->multipleScattering(),
+                multipleScattering(air, std::asin(std::clamp(double{glm::normalize(glm::vec3(sun)).z}, -1.0, 1.0))));
             const AtmosphereTables tables(air, altitude, glm::dvec3(glm::normalize(glm::vec3(sun))),
                                           aerialTableRange(camera), &*textures->multipleScattering());
             for (int k = 0; k < kCases; ++k) {
