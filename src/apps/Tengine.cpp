@@ -204,11 +204,13 @@ private:
 /// coarsest, behind the previous frame's depth. error_max_px, error_p99_px: with video_measure_error_every, the
 /// measured screen-space error of what the frame shows (empty in frames not measured). cache_short: groups of
 /// children the selection wanted that the node cache had no room for (FrameStats::deferred; memory_budget).
+/// advance_ms: of milliseconds, the time the session took to advance (selection, and in video mode the wait for
+/// the loads and synthesis the frame needs); the rest is drawing.
 constexpr const char* kCsvHeader =
     "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
     "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,resident_bytes,"
     "deepest_level,draw_calls,nodes_hidden,requests_skipped_hidden,nodes_revealing,dynamic_groups_made,blocks_occluded,"
-    "error_max_px,error_p99_px,cache_short";
+    "error_max_px,error_p99_px,cache_short,advance_ms";
 
 /// Everything the viewer draws with, opened from the options in dependency order. Not movable: the renderers
 /// refer to the window's context.
@@ -229,6 +231,7 @@ GlCapabilities glCapabilities()
 {
     GlCapabilities gl;
     gl.tessellation = TerrainRenderer::tessellationSupported();
+    gl.multiDrawIndirect = TerrainRenderer::multiDrawIndirectSupported();
     gl.pixelCounts = TerrainRenderer::pixelCountsSupported();
     gl.s3tc = epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
     gl.softwareRasterizer = TerrainRenderer::softwareRasterizer();
@@ -261,7 +264,8 @@ Status openRenderer(Scene& scene, const TengineOptions& o, const std::filesystem
         TerrainRenderer::create(shaders, header, o.vertexCacheSize,
                                 PoolOptions{session.cache().nodes, o.nodeTextureCompression, session.tessellation(),
                                             o.dynamicTextureSize > 0 ? normalMapTexels(o.dynamicTextureSize) : 0,
-                                            session.compressedNormalMaps(), session.countsPixels(), session.shadows()},
+                                            session.compressedNormalMaps(), session.countsPixels(), session.shadows(),
+                                            0, session.blockIndices()},
                                 session.materials(), lighting);
     TERRAIN_TRY(renderer);
     scene.renderer = std::move(renderer).value();
@@ -485,6 +489,7 @@ VideoRecorderOptions recorderOptions(const TengineOptions& o, std::size_t frames
 struct DrawnFrame {
     FrameStats selection;
     RenderStats render;
+    double advanceMilliseconds = 0.0;  ///< the session's advance: selection, loads and synthesis waited for
 };
 
 /// Advances the session for `camera` and draws what it selected.
@@ -493,7 +498,10 @@ DrawnFrame advanceAndDraw(Scene& scene, const Camera& camera, const FrameTime& t
 {
     DrawnFrame drawn;
     ViewerSession& session = *scene.session;
+    const auto start = std::chrono::steady_clock::now();
     drawn.selection = session.advance(camera, time.clock, speed, settle, scene.renderer.get());
+    drawn.advanceMilliseconds =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (scene.clipmapRenderer) {
         const ClipmapStats rings = scene.clipmapRenderer->draw(*session.clipmapLayout(), *session.clipmap(),
                                                                session.clipmapFirstRing(), camera, style);
@@ -580,7 +588,8 @@ public:
         }
         return mRecorder->add(frame, std::move(pixels),
                               mCounters.row(frame, time, milliseconds, drawn.render, drawn.selection, scene) +
-                                  measured + "," + std::to_string(drawn.selection.deferred));
+                                  measured + "," + std::to_string(drawn.selection.deferred) + "," +
+                                  std::to_string(drawn.advanceMilliseconds));
     }
     Status finish(bool interrupted) { return mRecorder->finish(interrupted); }
     std::string errorSummary() { return mShown.summary(mO.lodError); }

@@ -77,7 +77,8 @@ struct TengineOptions {
     /// in software (Auto: llvmpipe draws RG8 faster; a GPU decodes RGTC2 for free).
     enum class Compression { Auto, On, Off };
     Compression normalMapCompression = Compression::Auto;
-    bool tessellation = true;                 ///< render_mode: true tessellation, false chunks
+    bool tessellation = true;                 ///< render_mode: true tessellation or blocks, false chunks
+    bool blockIndices = true;                 ///< render_mode = blocks: the blocks drawn from index lists
     bool clipmap = false;                     ///< lod_mode: false quadtree, true clipmap (seed 002)
     int clipmapSamples = 255;                 ///< clipmap_samples: n = 2^k - 1 in [15, 1023]
     double clipmapFinestSpacing = 1.0;        ///< clipmap_finest_spacing: metres, > 0

@@ -134,7 +134,15 @@ Status ViewerSession::startStreaming(const GlCapabilities& gl)
     const bool view = mUse == SessionUse::View;
     const bool clipmap = o.clipmap && view;
     mTessellation = o.tessellation && !clipmap;
-    if (mTessellation && !gl.tessellation) {
+    mBlockIndices = mTessellation && o.blockIndices;
+    if (mBlockIndices && !gl.multiDrawIndirect) {
+        mLog(std::string("warning: render_mode = blocks needs OpenGL 4.3 (indirect draws with base instances), which "
+                         "this GL lacks: ") +
+             (gl.tessellation ? "drawing the blocks by tessellation shaders" : "drawing chunks"));
+        mBlockIndices = false;
+        mTessellation = gl.tessellation;
+    }
+    if (mTessellation && !mBlockIndices && !gl.tessellation) {
         mLog(
             "warning: render_mode = tessellation needs OpenGL 4.0 tessellation shaders, which this GL lacks: "
             "drawing chunks");

@@ -32,6 +32,7 @@ namespace terrain {
 /// rasterizer of OpenGL 4.5 with no context to ask, what tools that draw nothing take.
 struct GlCapabilities {
     bool tessellation = true;                     ///< tessellation shaders (OpenGL 4.0)
+    bool multiDrawIndirect = true;                ///< indirect draws with base instances (OpenGL 4.3): blocks
     bool pixelCounts = false;                     ///< counting the pixels each node shows (visibility_lod)
     bool s3tc = true;                             ///< DXT1 colour in the node pools
     bool softwareRasterizer = true;               ///< normal_map_compression = auto keeps RG8 normal maps
@@ -76,6 +77,8 @@ public:
     const CacheChoice& cache() const { return mCache; }
     /// render_mode = tessellation, and the GL has it.
     bool tessellation() const { return mTessellation; }
+    /// render_mode = blocks (tessellation() too), and the GL draws indirect commands with base instances.
+    bool blockIndices() const { return mBlockIndices; }
     /// visibility_lod, and the GL counts pixels.
     bool countsPixels() const { return mCountPixels; }
     /// Normal maps as RGTC2 blocks.
@@ -141,6 +144,7 @@ private:
     const MapFile* mMap = nullptr;
     std::unique_ptr<const DetailSynthesizer> mSynthesizer;
     bool mTessellation = false;
+    bool mBlockIndices = false;
     bool mCountPixels = false;
     bool mRgtc2 = false;
     bool mShadows = false;

@@ -43,7 +43,7 @@ struct NodeInstance {
     float quadrantX = 0.0f;  ///< the node's quadrant in its parent's square: 0 or 0.5
     float quadrantY = 0.0f;
     float heightRange = 0.0f;  ///< metres the slot's codes span
-    float unused = 0.0f;
+    float index = 0.0f;        ///< the node's place in the frame's drawing order (terrain.vert's pixel counts)
 };
 /// vec4 attributes a NodeInstance takes.
 inline constexpr int kNodeInstanceVec4s = 3;

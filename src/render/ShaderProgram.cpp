@@ -108,13 +108,16 @@ Expected<ShaderProgram> ShaderProgram::fromSource(const std::string& name, const
 }
 
 Expected<ShaderProgram> ShaderProgram::load(const std::filesystem::path& directory, const std::string& name,
-                                            const std::vector<std::string>& defines)
+                                            const std::vector<std::string>& defines,
+                                            const std::vector<std::string>& feedback)
 {
     auto vertex = readShaderFile(directory / (name + ".vert"));
     TERRAIN_TRY(vertex);
     auto fragment = readShaderFile(directory / (name + ".frag"));
     TERRAIN_TRY(fragment);
-    return fromSource((directory / name).string(), *vertex, *fragment, defines);
+    const std::string path = (directory / name).string();
+    return link(path, {{GL_VERTEX_SHADER, path + ".vert", *vertex}, {GL_FRAGMENT_SHADER, path + ".frag", *fragment}},
+                defines, feedback);
 }
 
 Expected<ShaderProgram> ShaderProgram::loadTessellation(const std::filesystem::path& directory,

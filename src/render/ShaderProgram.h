@@ -16,9 +16,11 @@ namespace terrain {
 class ShaderProgram {
 public:
     /// Compiles `<directory>/<name>.vert` and `.frag` with `defines` ("NAME" or "NAME VALUE") inserted after
-    /// the #version line, and links them. Errors name the file and carry the driver's log.
+    /// the #version line, and links them. Errors name the file and carry the driver's log. With `feedback`, those
+    /// outputs of the vertex program are captured by transform feedback (interleaved), as loadTessellation's.
     static Expected<ShaderProgram> load(const std::filesystem::path& directory, const std::string& name,
-                                        const std::vector<std::string>& defines = {});
+                                        const std::vector<std::string>& defines = {},
+                                        const std::vector<std::string>& feedback = {});
     /// Same from source text; `name` is used in messages.
     static Expected<ShaderProgram> fromSource(const std::string& name, const std::string& vertex,
                                               const std::string& fragment,

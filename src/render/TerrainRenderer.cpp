@@ -104,6 +104,16 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
                         "tessellation blocks must tile the node");
         r->mBlocks = static_cast<int>(header.chunkSize - 1) / kTessellationBlockQuads;
     }
+    TERRAIN_EXPECTS(!pools.blockIndices || pools.tessellation, "block indices draw the tessellation mode's blocks");
+    r->mBlockIndices = pools.blockIndices;
+    if (r->mBlockIndices) {
+        if (!multiDrawIndirectSupported()) {
+            return makeError(
+                "render_mode = blocks needs OpenGL 4.3 (indirect draws with base instances); this GL has "
+                "none");
+        }
+        r->mBlockTriangles.emplace(static_cast<int>(header.chunkSize), kTessellationBlockQuads);
+    }
     if (lighting.atmosphere) {
         defines.emplace_back("ATMOSPHERE");
     }
@@ -113,8 +123,11 @@ Expected<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(const std::fi
     }
     TERRAIN_TRY(r->createPrograms(shaderDirectory, std::move(defines), lighting));
     r->createTemplateMesh(vertexCacheSize);
-    if (r->mTessellation) {
+    if (r->mTessellation && !r->mBlockIndices) {
         r->createPatches();
+    }
+    if (r->mBlockIndices) {
+        r->mCommandsBuffer = gl::Buffer::create();
     }
     TERRAIN_TRY(r->createPools(pools));
     return r;
@@ -124,9 +137,11 @@ Status TerrainRenderer::createPrograms(const std::filesystem::path& shaderDirect
                                        const LightingModel& lighting)
 {
     auto loadProgram = [&](const std::vector<std::string>& with) {
-        return mTessellation
-                   ? ShaderProgram::loadTessellation(shaderDirectory, "terrain_tess", "terrain", with, {"vRelative"})
-                   : ShaderProgram::load(shaderDirectory, "terrain", with);
+        if (mTessellation && !mBlockIndices) {
+            return ShaderProgram::loadTessellation(shaderDirectory, "terrain_tess", "terrain", with, {"vRelative"});
+        }
+        return ShaderProgram::load(shaderDirectory, "terrain", with,
+                                   mBlockIndices ? std::vector<std::string>{"vRelative"} : std::vector<std::string>{});
     };
     auto terrain = loadProgram(defines);
     TERRAIN_TRY(terrain);
@@ -413,6 +428,14 @@ bool TerrainRenderer::tessellationSupported()
     return major >= 4;
 }
 
+bool TerrainRenderer::multiDrawIndirectSupported()
+{
+    GLint major = 0, minor = 0;
+    glGetIntegerv(GL_MAJOR_VERSION, &major);
+    glGetIntegerv(GL_MINOR_VERSION, &minor);
+    return major > 4 || (major == 4 && minor >= 3);
+}
+
 bool TerrainRenderer::pixelCountsSupported()
 {
     GLint major = 0, minor = 0;
@@ -477,7 +500,10 @@ RenderStats TerrainRenderer::draw(const DrawList& frame, const SceneStyle& style
         endSceneFrame(camera, style, mSky, mSkyOrder);
         return stats;
     }
-    uploadFrameNodes(frame, style);
+    const std::uint64_t indexed = uploadFrameNodes(frame, style);
+    if (mBlockIndices) {
+        stats.triangles = indexed;
+    }
     setFrameUniforms(camera, style);
     if (mCounter) {
         mCounter->bindCounters();
@@ -534,12 +560,14 @@ void TerrainRenderer::orderFrameNodes(const DrawList& frame, RenderStats& stats)
     }
 }
 
-void TerrainRenderer::uploadFrameNodes(const DrawList& frame, const SceneStyle& style)
+std::uint64_t TerrainRenderer::uploadFrameNodes(const DrawList& frame, const SceneStyle& style)
 {
     const auto texels = static_cast<std::size_t>(mNodeTexels);
     const bool split = mPrograms.size() > 1;
     mConstants.assign(mFrameNodes.size() * texels * 4, 0.0f);
     mCodes.clear();
+    mFrameIndices.clear();
+    mCommands.clear();
     for (std::size_t k = 0; k < mFrameNodes.size(); ++k) {
         const FrameNode& f = mFrameNodes[k];
         const DrawnNode& drawn = *f.drawn;
@@ -560,6 +588,7 @@ void TerrainRenderer::uploadFrameNodes(const DrawList& frame, const SceneStyle& 
         instance.heightRange = mSlotHeights[static_cast<std::size_t>(drawn.slot)][1];
         instance.quadrantX = (selected.id.x & 1) ? 0.5f : 0.0f;
         instance.quadrantY = (selected.id.y & 1) ? 0.5f : 0.0f;
+        instance.index = static_cast<float>(k);
         std::memcpy(c, &instance, sizeof instance);
         if (split && f.program == static_cast<int>(kNear)) {
             // The node's corner in each layer's repeats and lattice coordinates, reduced (DetailLayers::origin).
@@ -571,7 +600,11 @@ void TerrainRenderer::uploadFrameNodes(const DrawList& frame, const SceneStyle& 
                 }
             }
         }
-        if (mTessellation) {
+        if (mBlockIndices) {
+            DrawCommand command{0, 1, static_cast<GLuint>(mFrameIndices.size()), 0, static_cast<GLuint>(k)};
+            command.count = static_cast<GLuint>(3 * mBlockTriangles->append(drawn.levels, mFrameIndices));
+            mCommands.push_back(command);
+        } else if (mTessellation) {
             const BlockLevels& levels = drawn.levels;
             const int b = levels.blocksPerSide;
             for (int block = 0; block < b * b; ++block) {
@@ -583,6 +616,26 @@ void TerrainRenderer::uploadFrameNodes(const DrawList& frame, const SceneStyle& 
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(mConstants.size() * sizeof(float)), mConstants.data(),
                  GL_STREAM_DRAW);
     glBindBuffer(GL_ARRAY_BUFFER, 0);
+    if (mBlockIndices) {
+        // The template's vertex array draws the frame's lists (its element buffer), narrowed where the template's
+        // vertices fit 16 bits (mIndexType).
+        glBindVertexArray(mTemplateVao.name());
+        if (mIndexType == GL_UNSIGNED_SHORT) {
+            mFrameShortIndices.assign(mFrameIndices.begin(), mFrameIndices.end());
+            glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                         static_cast<GLsizeiptr>(mFrameShortIndices.size() * sizeof(std::uint16_t)),
+                         mFrameShortIndices.data(), GL_STREAM_DRAW);
+        } else {
+            glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(mFrameIndices.size() * sizeof(std::uint32_t)),
+                         mFrameIndices.data(), GL_STREAM_DRAW);
+        }
+        glBindVertexArray(0);
+        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, mCommandsBuffer.name());
+        glBufferData(GL_DRAW_INDIRECT_BUFFER, static_cast<GLsizeiptr>(mCommands.size() * sizeof(DrawCommand)),
+                     mCommands.data(), GL_STREAM_DRAW);
+        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
+        return mFrameIndices.size() / 3;
+    }
     if (mTessellation) {
         glBindBuffer(GL_TEXTURE_BUFFER, mLevelsBuffer.name());
         glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(mCodes.size() * sizeof(std::uint16_t)), mCodes.data(),
@@ -593,6 +646,7 @@ void TerrainRenderer::uploadFrameNodes(const DrawList& frame, const SceneStyle& 
         glActiveTexture(GL_TEXTURE0);
         glPatchParameteri(GL_PATCH_VERTICES, 1);
     }
+    return 0;
 }
 
 void TerrainRenderer::setFrameUniforms(const Camera& camera, const SceneStyle& style)
@@ -619,7 +673,10 @@ void TerrainRenderer::drawGroups(RenderStats& stats, TriangleFeedback* feedback)
         return std::array<int, 3>{f.program, arrayOf(f.drawn->slot), arrayOf(f.drawn->parentSlot)};
     };
     const std::size_t count = mFrameNodes.size();
-    glBindVertexArray(mTessellation ? mPatchVao.name() : mTemplateVao.name());
+    glBindVertexArray(mTessellation && !mBlockIndices ? mPatchVao.name() : mTemplateVao.name());
+    if (mBlockIndices) {
+        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, mCommandsBuffer.name());
+    }
     const auto patches = static_cast<GLsizei>(mBlocks * mBlocks + 4 * mBlocks);
     for (std::size_t first = 0; first < count;) {
         // A draw: the consecutive nodes of one program and pair of arrays.
@@ -651,7 +708,19 @@ void TerrainRenderer::drawGroups(RenderStats& stats, TriangleFeedback* feedback)
         pointNodeConstants(mConstantsBuffer, mNodeTexels, first);
         glUniform1i(program.uniform("uFirstInstance"), static_cast<GLint>(first));
         const auto instances = static_cast<GLsizei>(last - first);
-        if (mTessellation && feedback) {
+        if (mBlockIndices) {
+            // A command a node, its constants at its base instance (the attributes count from node 0).
+            pointNodeConstants(mConstantsBuffer, mNodeTexels, 0);
+            const auto* commands = reinterpret_cast<const void*>(first * sizeof(DrawCommand));
+            if (feedback) {
+                feedback->beginDraw();
+            }
+            glMultiDrawElementsIndirect(GL_TRIANGLES, mIndexType, commands, instances, 0);
+            if (feedback) {
+                feedback->endDraw(stats.generatedTriangles);
+            }
+            ++stats.drawCalls;
+        } else if (mTessellation && feedback) {
             // Every patch of every node in one draw: the captured triangles come node by node, in the list's order.
             glUniform1i(program.uniform("uFirstPatch"), 0);
             feedback->beginDraw();
@@ -666,6 +735,7 @@ void TerrainRenderer::drawGroups(RenderStats& stats, TriangleFeedback* feedback)
         }
         first = last;
     }
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
     glBindVertexArray(0);
 }
 

@@ -9,6 +9,7 @@
 
 #include "core/Camera.h"
 #include "core/Expected.h"
+#include "gpudata/BlockTriangles.h"
 #include "gpudata/TemplateMesh.h"
 #include "lod/DrawList.h"
 #include "lod/NodeData.h"
@@ -81,6 +82,10 @@ struct PoolOptions {
     /// Layers of each texture array (0: GL_MAX_ARRAY_TEXTURE_LAYERS): more slots take more arrays per pool.
     /// Tests set a few to draw with several arrays.
     std::size_t layersPerArray = 0;
+    /// render_mode = blocks (with `tessellation`): the same blocks at the same levels drawn by the chunk programs from
+    /// index lists of the template mesh made each frame (gpudata/BlockTriangles.h), one multi-draw a group, instead
+    /// of by tessellation shaders; needs OpenGL 4.3 (multiDrawIndirectSupported()).
+    bool blockIndices = false;
 };
 
 class TerrainRenderer : public PixelCountSource {
@@ -102,11 +107,14 @@ public:
     /// each node in its cache slot, copied there when the slot held another node. In tessellation mode the
     /// blocks are drawn at the list's levels. With `feedback` (tessellation mode, for tests), the camera-relative
     /// corners of every triangle the tessellator made are read back by transform feedback, three a triangle, in
-    /// drawing order (node by node as drawn, patch by patch: blocks, then skirts).
+    /// drawing order (node by node as drawn, patch by patch: blocks, then skirts; with block indices, block by block,
+    /// each block's skirts after its surface: BlockTriangles::append).
     RenderStats draw(const DrawList& frame, const SceneStyle& style, std::vector<glm::vec3>* feedback = nullptr);
 
     /// Whether this context runs tessellation shaders (OpenGL 4.0).
     static bool tessellationSupported();
+    /// Whether this context draws from indirect commands with base instances (OpenGL 4.3): render_mode = blocks.
+    static bool multiDrawIndirectSupported();
     /// Whether this context can count visible pixels per node (PoolOptions::pixelCounts): OpenGL 4.3, or
     /// GL_ARB_shader_storage_buffer_object and GL_ARB_shader_image_load_store.
     static bool pixelCountsSupported();
@@ -159,7 +167,8 @@ private:
     /// draw()'s parts: the frame's nodes in drawing order (filling their slots), their per-instance constants
     /// (and block codes) uploaded, the programs' uniforms, and the instanced draws.
     void orderFrameNodes(const DrawList& frame, RenderStats& stats);
-    void uploadFrameNodes(const DrawList& frame, const SceneStyle& style);
+    /// Returns the triangles of the frame's block index lists (render_mode = blocks), else 0.
+    std::uint64_t uploadFrameNodes(const DrawList& frame, const SceneStyle& style);
     void setFrameUniforms(const Camera& camera, const SceneStyle& style);
     void drawGroups(RenderStats& stats, TriangleFeedback* feedback);
     /// The tessellation mode's draws of frame nodes [first, last) (one group), `patches` a node: returns the draws.
@@ -218,6 +227,21 @@ private:
     gl::Buffer mLevelsBuffer;
     gl::Texture mLevelsTexture;  ///< GL_TEXTURE_BUFFER over mLevelsBuffer, R16UI
     std::vector<std::uint16_t> mCodes;
+    // render_mode = blocks: the frame's index lists (in mTemplateIndices, bound to the template's vertex array) and
+    // one indirect draw command a node.
+    bool mBlockIndices = false;
+    std::optional<BlockTriangles> mBlockTriangles;
+    std::vector<std::uint32_t> mFrameIndices;
+    std::vector<std::uint16_t> mFrameShortIndices;
+    gl::Buffer mCommandsBuffer;
+    struct DrawCommand {  // DrawElementsIndirectCommand
+        GLuint count;
+        GLuint instances;
+        GLuint firstIndex;
+        GLint baseVertex;
+        GLuint baseInstance;
+    };
+    std::vector<DrawCommand> mCommands;
     // The frame's nodes in drawing order: the draw list's, near ones first, grouped by program and arrays.
     struct FrameNode {
         const DrawnNode* drawn;

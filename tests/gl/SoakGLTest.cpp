@@ -389,7 +389,7 @@ TEST_F(SoakGLTest, SaveEveryWritesEveryNthFrameAndTheCsvHasTheSoakColumns)
               "frame,time_s,milliseconds,triangles,nodes_static,nodes_dynamic,cache_nodes,cache_hits,cache_misses,"
               "requests_made,requests_completed,requests_pending,requests_failed,requests_pending_peak,"
               "resident_bytes,deepest_level,draw_calls,nodes_hidden,requests_skipped_hidden,nodes_revealing,"
-              "dynamic_groups_made,blocks_occluded,error_max_px,error_p99_px,cache_short");
+              "dynamic_groups_made,blocks_occluded,error_max_px,error_p99_px,cache_short,advance_ms");
     const auto rows = readCsv(out.path() / "frames.csv");
     ASSERT_EQ(rows.size(), 5u);
     for (const auto& row : rows) {
@@ -397,6 +397,8 @@ TEST_F(SoakGLTest, SaveEveryWritesEveryNthFrameAndTheCsvHasTheSoakColumns)
         EXPECT_GT(row.at("resident_bytes"), 16.0 * 1024 * 1024) << "a GL viewer is bigger than 16 MiB";
         EXPECT_LE(row.at("requests_pending_peak"), 8) << "request_queue_size 8 by default, frames drained";
         EXPECT_GE(row.at("deepest_level"), 1);
+        EXPECT_GE(row.at("advance_ms"), 0.0);
+        EXPECT_LE(row.at("advance_ms"), row.at("milliseconds")) << "the advance is part of the frame";
     }
     EXPECT_GT(rows.back().at("requests_pending_peak"), 0) << "the first frame loads from the root";
 }

@@ -223,7 +223,7 @@ TEST_F(TengineGLTest, TessellationHasNoHolesRunsOfDrawsAndFewerTriangles)
 {
     expectNoHolesAlongTheFlight({"render_mode=tessellation"});
     test::ScratchDir a, b, chunks;
-    const std::vector<std::string> settings = {"frames_per_second=2", "render_mode=tessellation",  // the default
+    const std::vector<std::string> settings = {"frames_per_second=2", "render_mode=tessellation",
                                                "quad_cache_size=2048"};
     auto run = video(a.path(), settings);
     ASSERT_EQ(run.exitCode, 0) << run.output;
@@ -253,6 +253,44 @@ TEST_F(TengineGLTest, TessellationHasNoHolesRunsOfDrawsAndFewerTriangles)
                 sumTessellated / static_cast<double>(tessellated.size()),
                 sumChunked / static_cast<double>(chunked.size()), sumChunked / sumTessellated);
     EXPECT_LT(2.0 * sumTessellated, sumChunked);
+}
+
+/// render_mode = blocks (the default): the tessellation mode's blocks from index lists, no holes along the flight,
+/// identical frames run to run, one draw a program (the pools fit one array), and fewer triangles than the
+/// tessellator makes for the same blocks (no collapsed cells, two triangles a skirt cell).
+TEST_F(TengineGLTest, BlocksHaveNoHolesOneDrawAProgramAndFewerTrianglesThanTessellation)
+{
+    expectNoHolesAlongTheFlight({"render_mode=blocks"});
+    test::ScratchDir a, b, tessellation;
+    const std::vector<std::string> settings = {"frames_per_second=2", "quad_cache_size=2048"};  // the default mode
+    auto run = video(a.path(), settings);
+    ASSERT_EQ(run.exitCode, 0) << run.output;
+    ASSERT_EQ(video(b.path(), settings).exitCode, 0);
+    ASSERT_EQ(video(tessellation.path(), {"frames_per_second=2", "render_mode=tessellation", "quad_cache_size=2048"})
+                  .exitCode,
+              0);
+    for (int f = 0; f <= 16; ++f) {
+        Image first = frame(a.path(), f), second = frame(b.path(), f);
+        ASSERT_EQ(first.pixels.size(), second.pixels.size());
+        EXPECT_TRUE(first.pixels == second.pixels) << "frame " << f << " differs";
+    }
+    const auto blocks = readCsv(a.path() / "frames.csv"), tessellated = readCsv(tessellation.path() / "frames.csv");
+    ASSERT_EQ(blocks.size(), tessellated.size());
+    double sumBlocks = 0.0, sumTessellated = 0.0;
+    for (std::size_t f = 0; f < blocks.size(); ++f) {
+        EXPECT_GE(blocks[f].at("draw_calls"), 1.0) << "frame " << f;
+        EXPECT_LE(blocks[f].at("draw_calls"), 2.0) << "frame " << f << ": one or two programs, one array";
+        EXPECT_EQ(blocks[f].at("nodes_static") + blocks[f].at("nodes_dynamic"),
+                  tessellated[f].at("nodes_static") + tessellated[f].at("nodes_dynamic"))
+            << "frame " << f << ": the same selection";
+        sumBlocks += blocks[f].at("triangles");
+        sumTessellated += tessellated[f].at("triangles");
+    }
+    std::printf("triangles per frame: blocks %.0f, tessellation %.0f (%.2fx fewer)\n",
+                sumBlocks / static_cast<double>(blocks.size()),
+                sumTessellated / static_cast<double>(tessellated.size()), sumTessellated / sumBlocks);
+    EXPECT_LT(sumBlocks, sumTessellated);
+    EXPECT_GT(sumBlocks, 0.5 * sumTessellated) << "the same blocks";
 }
 
 /// Hardware without tessellation shaders (here: Mesa told to offer OpenGL 3.3 only) draws chunks instead of
@@ -386,6 +424,33 @@ TEST_F(TengineGLTest, ClipmapModeDrawsTheMaterialsDetailTexturesAndNormalMaps)
     std::printf("clipmap near-ground grain without detail textures: %.3f with normal maps, %.3f without\n",
                 withoutGrain, flatGrain);
     EXPECT_GT(withoutGrain, 1.2 * flatGrain) << "the normal maps must shade the near ground finer";
+}
+
+/// Without OpenGL 4.3 (here: Mesa told to offer 4.1) render_mode = blocks tessellates the same blocks, and says so;
+/// without 4.0 it draws chunks.
+TEST_F(TengineGLTest, WithoutIndirectDrawsBlocksAreTessellated)
+{
+    for (const auto& [version, fallback] :
+         {std::pair{"4.1", "drawing the blocks by tessellation shaders"}, std::pair{"3.3", "drawing chunks"}}) {
+        test::ScratchDir frames;
+        ::setenv("MESA_GL_VERSION_OVERRIDE", version, 1);  // inherited by the viewer this test starts
+        auto run = video(frames.path(), {"frames_per_second=1", "render_mode=blocks"});
+        ::unsetenv("MESA_GL_VERSION_OVERRIDE");
+        ASSERT_EQ(run.exitCode, 0) << run.output;
+        EXPECT_NE(run.output.find(std::string("render_mode = blocks needs OpenGL 4.3 (indirect draws with base "
+                                              "instances), which this GL lacks: ") +
+                                  fallback),
+                  std::string::npos)
+            << run.output;
+        EXPECT_EQ(run.output.find("render_mode = tessellation needs"), std::string::npos) << "one line";
+        const auto rows = readCsv(frames.path() / "frames.csv");
+        ASSERT_FALSE(rows.empty());
+        for (const auto& row : rows) {
+            const double perChunk = static_cast<double>(trianglesPerChunk(65));
+            EXPECT_EQ(std::fmod(row.at("triangles"), perChunk) == 0.0, std::string(version) == "3.3")
+                << version << ": whole chunks only without tessellation";
+        }
+    }
 }
 
 TEST_F(TengineGLTest, WithoutTessellationShadersTheTessellationModeFallsBackToChunks)

@@ -8,6 +8,8 @@
 #include "TestSupport.h"
 
 #include "core/Camera.h"
+#include "gpudata/BlockTriangles.h"
+#include "gpudata/TemplateMesh.h"
 #include "lod/NodeTextures.h"
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
@@ -22,7 +24,10 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <functional>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <set>
 
@@ -44,25 +49,61 @@ long doubleArea(const Triangle& t)
                      static_cast<long>(t[1].second - t[0].second) * (t[2].first - t[0].first));
 }
 
-TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVerticesBitForBit)
+/// A frame of the bundled terrain low over a valley, looking along it (near blocks fine, far ones coarse, sides
+/// snapped between them), drawn by a tessellation mode renderer (`blockIndices`: render_mode = blocks) with its
+/// triangles read back.
+struct ValleyFrame {
+    std::unique_ptr<test::DemoScene> scene;
+    std::unique_ptr<TerrainNodeSource> source;
+    std::unique_ptr<TerrainStreamer> streamer;
+    Camera camera;
+    static constexpr double kBlockPixels = 1.0;
+    RenderStats stats;
+    std::vector<glm::vec3> feedback;
+    int holes = 0, mustHit = 0;  ///< pixels of the clear colour where the terrain must be, of those checked
+
+    const MapHeader& header() const { return scene->map->header(); }
+    /// The heights of `node` as the pools hold them (16-bit codes over the node's range), blended at `morph` as the
+    /// shaders blend: at sample (i, j).
+    static std::function<double(int, int)> drawnHeights(const NodeData& node, int n, float morph)
+    {
+        std::vector<float> surface(node.heights.base.size());
+        node.heights.surface(surface);
+        auto quantized = std::make_shared<QuantizedHeights>(quantizeHeightsR16(surface, n));
+        return [quantized, n, morph](int i, int j) {
+            auto h = [&](int a, int c) -> double {
+                return quantized->lo +
+                       quantized->range *
+                           (quantized->codes[static_cast<std::size_t>(c + 1) * (n + 2) + a + 1] / 65535.0);
+            };
+            const int dx = i & 1, dy = j & 1;
+            return morph * h(i, j) + (1.0 - morph) * 0.5 * (h(i - dx, j - dy) + h(i + dx, j + dy));
+        };
+    }
+};
+
+void drawValleyFrame(ValleyFrame& f, bool blockIndices)
 {
     auto scene = test::openDemoScene(640, 360);
     ASSERT_TRUE(scene.ok()) << scene.error().message;
-    ASSERT_TRUE(TerrainRenderer::tessellationSupported()) << (*scene)->window->description();
-    MapFile& map = *(*scene)->map;
+    f.scene = std::move(scene).value();
+    ASSERT_TRUE(TerrainRenderer::tessellationSupported()) << f.scene->window->description();
+    ASSERT_TRUE(!blockIndices || TerrainRenderer::multiDrawIndirectSupported()) << f.scene->window->description();
+    MapFile& map = *f.scene->map;
     const MapHeader& header = map.header();
-    const int n = static_cast<int>(header.chunkSize);
-    TerrainNodeSource source(map, {nullptr, 0.0, kTessellationBlockQuads});
+    f.source = std::make_unique<TerrainNodeSource>(map, DetailPolicy{nullptr, 0.0, kTessellationBlockQuads});
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = 2048;
     streamerOptions.workers = 2;
-    auto streamer = TerrainStreamer::create(source, extentOf(header), streamerOptions);
+    auto streamer = TerrainStreamer::create(*f.source, extentOf(header), streamerOptions);
     ASSERT_TRUE(streamer.ok());
-    auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, header, 16, {2048, false, true});
+    f.streamer = std::move(streamer).value();
+    PoolOptions pools{2048, false, true};
+    pools.blockIndices = blockIndices;
+    auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, header, 16, pools);
     ASSERT_TRUE(renderer.ok()) << renderer.error().message;
 
-    // Low over a valley, looking along it: near blocks fine, far ones coarse, sides snapped between them.
-    Camera camera;
+    Camera& camera = f.camera;
     camera.viewportWidth = 640;
     camera.viewportHeight = 360;
     camera.nearPlane = 1.0;
@@ -70,34 +111,61 @@ TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVertic
     camera.position = {15000.0, 12000.0, 2496.0};
     camera.yaw = 47.7 * std::numbers::pi / 180;
     camera.pitch = -8.0 * std::numbers::pi / 180;
-    const double nodePixels = 1.0, blockPixels = 1.0;
-    (*streamer)->settle(Settle::Complete, camera, nodePixels);
-    const TerrainStreamer& s = **streamer;
-    const LodSelection& selection = s.selection();
-    ASSERT_GT(selection.nodes.size(), 20u);
+    const double nodePixels = 1.0;
+    f.streamer->settle(Settle::Complete, camera, nodePixels);
+    ASSERT_GT(f.streamer->selection().nodes.size(), 20u);
     // The hole check's style: no sky, the clear colour where nothing is drawn.
     SceneStyle style;
     style.drawSky = false;
     style.clearColour = {1.0f, 0.0f, 1.0f};
     style.hazeDistance = 1e9f;
-    std::vector<glm::vec3> feedback;
-    const RenderStats stats = (*renderer)->draw(makeDrawList(selection, s, camera, blockPixels), style, &feedback);
+    f.stats = (*renderer)->draw(makeDrawList(f.streamer->selection(), *f.streamer, camera, ValleyFrame::kBlockPixels),
+                                style, &f.feedback);
     // No crack inside a node where blocks of different levels meet, nor between nodes: no pixel whose view ray
     // must hit the terrain shows the clear colour.
     glFinish();
     const Image image = captureFrame(camera.viewportWidth, camera.viewportHeight);
     const double zMin = header.heightOf(map.directory().front().minCode);
-    int holes = 0, mustHit = 0;
     for (int y = 0; y < image.height; ++y) {
         for (int x = 0; x < image.width; ++x) {
             if (test::mustHitTerrain(camera, header, zMin, x, y)) {
-                ++mustHit;
-                holes += test::isHole(image.pixel(x, y)) ? 1 : 0;
+                ++f.mustHit;
+                f.holes += test::isHole(image.pixel(x, y)) ? 1 : 0;
             }
         }
     }
-    EXPECT_EQ(holes, 0) << "pixels of the clear colour where the terrain must be";
-    EXPECT_GT(mustHit, image.width * image.height / 4);
+}
+
+/// Camera-relative corner `v` of a triangle of node `selected` (N samples a side) -> its node sample, checked to be
+/// one.
+glm::ivec2 sampleOf(const glm::vec3& v, const SelectedNode& selected, int n)
+{
+    const double spacing = selected.size / (n - 1);
+    const double x = (v.x - selected.cameraRelativeOrigin.x) / spacing;
+    const double y = (v.y - selected.cameraRelativeOrigin.y) / spacing;
+    const glm::ivec2 p{static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y))};
+    EXPECT_NEAR(x, p.x, 1e-3) << selected.id.toString();
+    EXPECT_NEAR(y, p.y, 1e-3) << selected.id.toString();
+    return p;
+}
+
+TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVerticesBitForBit)
+{
+    ValleyFrame frame;
+    drawValleyFrame(frame, false);
+    if (HasFatalFailure()) {
+        return;
+    }
+    const Camera& camera = frame.camera;
+    const MapHeader& header = frame.header();
+    const int n = static_cast<int>(header.chunkSize);
+    const double blockPixels = ValleyFrame::kBlockPixels;
+    const TerrainStreamer& s = *frame.streamer;
+    const LodSelection& selection = s.selection();
+    const RenderStats& stats = frame.stats;
+    const std::vector<glm::vec3>& feedback = frame.feedback;
+    EXPECT_EQ(frame.holes, 0) << "pixels of the clear colour where the terrain must be";
+    EXPECT_GT(frame.mustHit, 640 * 360 / 4);
     EXPECT_EQ(stats.generatedTriangles, stats.triangles) << "the renderer's count is what the GL made";
     ASSERT_EQ(feedback.size(), 3 * stats.triangles);
 
@@ -111,29 +179,8 @@ TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVertic
         ASSERT_TRUE(node && node->tessellation);
         const BlockLevels levels = chooseBlockLevels(
             *node->tessellation, extent.box(selected.id, node->zMin, node->zMax), camera, blockPixels);
-        const double spacing = selected.size / (n - 1);
-        const float morph = selected.id.isRoot() ? 1.0f : selected.morph;
-        // The heights as the pools hold them (16-bit codes over the node's range), blended as the shaders blend.
-        std::vector<float> surface(node->heights.base.size());
-        node->heights.surface(surface);
-        const QuantizedHeights quantized = quantizeHeightsR16(surface, n);
-        auto height = [&](int i, int j) -> double {
-            auto h = [&](int a, int c) -> double {
-                return quantized.lo +
-                       quantized.range * (quantized.codes[static_cast<std::size_t>(c + 1) * (n + 2) + a + 1] / 65535.0);
-            };
-            const int dx = i & 1, dy = j & 1;
-            return morph * h(i, j) + (1.0 - morph) * 0.5 * (h(i - dx, j - dy) + h(i + dx, j + dy));
-        };
-        // Camera-relative corner -> node sample; its position is then checked against the model.
-        auto sample = [&](const glm::vec3& v) {
-            const double x = (v.x - selected.cameraRelativeOrigin.x) / spacing;
-            const double y = (v.y - selected.cameraRelativeOrigin.y) / spacing;
-            const glm::ivec2 p{static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y))};
-            EXPECT_NEAR(x, p.x, 1e-3) << selected.id.toString();
-            EXPECT_NEAR(y, p.y, 1e-3) << selected.id.toString();
-            return p;
-        };
+        const auto height = ValleyFrame::drawnHeights(*node, n, selected.id.isRoot() ? 1.0f : selected.morph);
+        auto sample = [&](const glm::vec3& v) { return sampleOf(v, selected, n); };
         std::map<std::pair<int, int>, glm::vec3> surfaceVertex;  // first seen, per sample
         std::map<std::pair<int, int>, int> blockOf;
         for (int patch = 0; patch < b * b + 4 * b; ++patch) {
@@ -227,6 +274,62 @@ TEST(TessellationGLTest, GeneratedTrianglesAreTheModelsAndBlocksShareTheirVertic
     EXPECT_GT(snappedSides, 50u) << "the frame must have blocks of different levels side by side";
     EXPECT_GE(levelsSeen.size(), 3u);
     EXPECT_GT(skirtTops, 1000u);
+}
+
+/// render_mode = blocks: the GL draws each node's BlockTriangles lists (tested on their own against the error
+/// meter's surface) with that node's constants: every triangle read back is the list's, at the drawn heights, in
+/// the list's order node by node; the frame has no hole.
+TEST(TessellationGLTest, BlockIndicesDrawEachNodesListsWithItsConstants)
+{
+    ValleyFrame frame;
+    drawValleyFrame(frame, true);
+    if (HasFatalFailure()) {
+        return;
+    }
+    const MapHeader& header = frame.header();
+    const int n = static_cast<int>(header.chunkSize);
+    const TerrainStreamer& s = *frame.streamer;
+    EXPECT_EQ(frame.holes, 0) << "pixels of the clear colour where the terrain must be";
+    EXPECT_GT(frame.mustHit, 640 * 360 / 4);
+    EXPECT_EQ(frame.stats.generatedTriangles, frame.stats.triangles) << "the renderer's count is what the GL made";
+    ASSERT_EQ(frame.feedback.size(), 3 * frame.stats.triangles);
+    EXPECT_EQ(frame.stats.drawCalls, 1u) << "one multi-draw for the frame's one group";
+
+    const TemplateMesh mesh = buildTemplateMesh(n);
+    const BlockTriangles lists(n, kTessellationBlockQuads);
+    const QuadtreeExtent extent = extentOf(header);
+    const double heightBase = header.heightOffset - frame.camera.position.z;
+    std::size_t at = 0, skirtVertices = 0;
+    std::uint64_t fewer = 0;  // than the tessellator makes for the same blocks
+    for (const SelectedNode& selected : s.selection().nodes) {
+        const NodePtr node = s.node(selected.id);
+        ASSERT_TRUE(node && node->tessellation);
+        const BlockLevels levels =
+            chooseBlockLevels(*node->tessellation, extent.box(selected.id, node->zMin, node->zMax), frame.camera,
+                              ValleyFrame::kBlockPixels);
+        std::vector<std::uint32_t> indices;
+        lists.append(levels, indices);
+        fewer += levels.triangles() - indices.size() / 3;
+        const auto height = ValleyFrame::drawnHeights(*node, n, selected.id.isRoot() ? 1.0f : selected.morph);
+        ASSERT_LE(at + indices.size(), frame.feedback.size()) << selected.id.toString();
+        for (const std::uint32_t index : indices) {
+            const glm::vec3& v = frame.feedback[at++];
+            const TemplateVertex& expected = mesh.vertices[index];
+            const glm::ivec2 p = sampleOf(v, selected, n);
+            ASSERT_EQ(p, glm::ivec2(expected.i, expected.j)) << selected.id.toString() << ": another vertex";
+            if (expected.skirt) {
+                ++skirtVertices;
+                EXPECT_LT(v.z, heightBase + height(p.x, p.y)) << "skirts hang below the border";
+            } else {
+                EXPECT_NEAR(v.z, heightBase + height(p.x, p.y), 2e-3 * std::max(1.0, std::abs(double{v.z})));
+            }
+        }
+    }
+    EXPECT_EQ(at, frame.feedback.size());
+    EXPECT_GT(skirtVertices, 1000u);
+    std::printf("%zu triangles, %llu fewer than the tessellator makes for the same blocks\n", at / 3,
+                static_cast<unsigned long long>(fewer));
+    EXPECT_GT(fewer, 0u) << "collapsed cells and the skirts' extra rows are left out";
 }
 
 }  // namespace

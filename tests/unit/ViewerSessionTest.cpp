@@ -293,6 +293,7 @@ TEST_F(ViewerSessionTest, WithoutTessellationInTheGlTheSelectionGetsAllOfTauAndT
 {
     TengineOptions o = options();
     o.tessellation = true;
+    o.blockIndices = false;
     auto session = ViewerSession::open(o, TERRAIN_MATERIALS_DIR, SessionUse::View,
                                        [this](const std::string& m) { said.push_back(m); });
     ASSERT_TRUE(session.ok());
@@ -304,6 +305,39 @@ TEST_F(ViewerSessionTest, WithoutTessellationInTheGlTheSelectionGetsAllOfTauAndT
     EXPECT_DOUBLE_EQ((*session)->blockPixels(), 0.0);
     ASSERT_EQ(said.size(), 1u);
     EXPECT_NE(said[0].find("render_mode = tessellation needs OpenGL 4.0"), std::string::npos) << said[0];
+}
+
+/// render_mode = blocks needs indirect draws (OpenGL 4.3), not tessellation shaders: without them the blocks are
+/// tessellated, and without those too the selection gets all of tau; one line says which.
+TEST_F(ViewerSessionTest, WithoutIndirectDrawsBlocksAreTessellatedOrChunksDrawn)
+{
+    for (const bool tessellation : {true, false}) {
+        for (const bool indirect : {true, false}) {
+            said.clear();
+            TengineOptions o = options();
+            o.tessellation = true;
+            o.blockIndices = true;
+            auto session = ViewerSession::open(o, TERRAIN_MATERIALS_DIR, SessionUse::View,
+                                               [this](const std::string& m) { said.push_back(m); });
+            ASSERT_TRUE(session.ok());
+            GlCapabilities gl;
+            gl.tessellation = tessellation;
+            gl.multiDrawIndirect = indirect;
+            ASSERT_TRUE((*session)->startStreaming(gl).ok());
+            EXPECT_EQ((*session)->blockIndices(), indirect);
+            EXPECT_EQ((*session)->tessellation(), indirect || tessellation);
+            EXPECT_DOUBLE_EQ((*session)->nodePixels(), indirect || tessellation ? 0.5 * o.lodError : o.lodError);
+            if (indirect) {
+                EXPECT_TRUE(said.empty());
+                continue;
+            }
+            ASSERT_EQ(said.size(), 1u);
+            EXPECT_NE(said[0].find("render_mode = blocks needs OpenGL 4.3"), std::string::npos) << said[0];
+            EXPECT_NE(said[0].find(tessellation ? "drawing the blocks by tessellation shaders" : "drawing chunks"),
+                      std::string::npos)
+                << said[0];
+        }
+    }
 }
 
 TEST_F(ViewerSessionTest, TheDrawnSurfaceIsTheMapsWhereTheFinestStaticLevelIsDrawn)
