@@ -16,19 +16,22 @@ uniform float uHazeDistance;  // metres at which haze reaches 63 %
 const float kGroundAlbedo = GROUND_ALBEDO;
 
 // What the air does to a surface point `relative` metres from the camera: the sunlight that reaches it
-// (sunTransmittance), the transmittance of the view ray, and the aerial table's coordinates there. All three
-// change smoothly over a triangle: the terrain's vertex programs make them per vertex (surface.glsl), and the
-// fragments interpolate them, which saves a dozen exponentials and inverse trigonometric functions a pixel.
+// (sunTransmittance), the transmittance of the view ray, and the light the air scatters in along it (one fetch of
+// the aerial table). All three change smoothly over a triangle: the terrain's vertex programs make them per vertex
+// (surface.glsl), and the fragments interpolate them, which saves a dozen exponentials and inverse trigonometric
+// functions and a fetch of a 3D table a pixel. (The table's coordinates would not interpolate: their azimuth
+// folds at the sun's.)
 struct Air {
     vec3 sunlight;
     vec3 transmittance;
-    vec3 aerial;
+    vec3 inscattered;
 };
 
 Air airAt(vec3 relative)
 {
     return Air(sunTransmittance(uCameraAltitude + relative.z),
-               airTransmittance(uCameraAltitude, relative.z, length(relative)), aerialCoordinate(relative, uSunDirection));
+               airTransmittance(uCameraAltitude, relative.z, length(relative)),
+               aerialInscattered(aerialCoordinate(relative, uSunDirection)));
 }
 
 // The surface colour `albedo` lit with unit normal n through `air`. `visibility`: the share of the sun (x) and of the
@@ -44,7 +47,7 @@ vec3 litThroughAir(vec3 albedo, vec3 n, vec2 visibility, Air air)
     vec3 ground = kGroundAlbedo * (sunlight * max(uSunDirection.z, 0.0) + sky);
     vec3 irradiance = visibility.x * sunlight * max(dot(n, uSunDirection), 0.0) +
                       visibility.y * (sky * (0.5 + 0.5 * n.z) + ground * (0.5 - 0.5 * n.z));
-    return toneMap(reflectance / kPi * irradiance * air.transmittance + aerialInscattered(air.aerial));
+    return toneMap(reflectance / kPi * irradiance * air.transmittance + air.inscattered);
 }
 #endif
 

@@ -67,6 +67,6 @@ void emitSurfaceVertex(ivec2 p, vec4 node0, vec4 node1, vec4 node2, float drop)
     Air air = airAt(vRelative);
     vSunlight = air.sunlight;
     vAirTransmittance = air.transmittance;
-    vAerial = air.aerial;
+    vAerial = air.inscattered;
 #endif
 }
