@@ -67,6 +67,17 @@ double aerialTableRange(const Camera& camera)
     return camera.farPlane * std::sqrt(1.0 + up * up + right * right);
 }
 
+TableAltitudes tableAltitudes(double altitude, const AtmosphereModel& air)
+{
+    const double step = kTableAltitudeShare * std::min(air.rayleighHeight, air.mieHeight);
+    if (!std::isfinite(altitude) || !(step > 0.0) || !std::isfinite(step)) {
+        return {altitude, altitude, 0.0};
+    }
+    const double lower = std::floor(altitude / step) * step;
+    const double weight = std::clamp((altitude - lower) / step, 0.0, 1.0);
+    return {lower, lower + step, weight};
+}
+
 AtmosphereTables::AtmosphereTables(const AtmosphereModel& air, double altitude, const glm::dvec3& sun, double range,
                                    const MultipleScattering* multiple)
     : mSun(sun), mRange(range)

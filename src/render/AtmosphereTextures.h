@@ -1,7 +1,10 @@
 // The frame's air tables on the GPU (light/AtmosphereTables.h gives their layout and is their reference): the
 // aerial table, a 3D texture the terrain's fragment programs read their in-scattered light from, and the sky
-// table, a 2D texture the sky reads. Filled by shaders/atmosphere_table.frag, one draw per slice, whenever the
-// viewer's altitude, the sun, the air or the table's range changed since the last fill. The light scattered
+// table, a 2D texture the sky reads. The tables are filled by shaders/atmosphere_table.frag (one draw per slice) at
+// the two altitudes of a lattice around the viewer (tableAltitudes), whenever the viewer leaves their interval or
+// the sun, the air or the table's range change, and kept; the frame's tables are their linear interpolation at the
+// viewer's altitude (the same program with BLEND_TABLES, a fetch from each), made when the altitude changes: a
+// flight integrates a table when it crosses an altitude step, not every frame. The light scattered
 // more than once (light/Atmosphere.h, multipleScattering) is made on the CPU whenever the sun's elevation or the
 // air changed, and handed to the filling programs as uniforms.
 #pragma once
@@ -41,19 +44,32 @@ public:
     const std::optional<MultipleScattering>& multipleScattering() const { return mMultiple; }
 
 private:
-    /// What the tables were filled for.
+    /// What tables were filled for.
     struct Filled {
-        float altitude = 0.0f;
+        double altitude = 0.0;
         glm::vec3 sun{0.0f};
         float range = 0.0f;
         AtmosphereModel air;
         bool operator==(const Filled&) const = default;
     };
+    /// A pair of tables (aerial 3D, sky 2D) of the tables' sizes and format.
+    struct Tables {
+        gl::Texture aerial;
+        gl::Texture sky;
+        std::optional<Filled> filled;
+    };
+    static Tables createTables();
+    /// Sums the air into `tables` for `filled` (its altitude as the viewer's). Expects the filling state set.
+    void integrate(Tables& tables, const Camera& camera, const SceneStyle& style, const Filled& filled);
+    /// The frame's tables, `weight` of the way from `lower` to `upper`.
+    void blend(const Tables& lower, const Tables& upper, float weight);
 
     ShaderProgram mAerialProgram;
     ShaderProgram mSkyProgram;
-    gl::Texture mAerial;
-    gl::Texture mSky;
+    ShaderProgram mAerialBlend;
+    ShaderProgram mSkyBlend;
+    Tables mFrame;       ///< what the frame reads
+    Tables mLattice[2];  ///< tables at lattice altitudes, kept while the viewer stays between them
     gl::Framebuffer mFramebuffer;
     gl::VertexArray mEmptyVao;
     std::optional<Filled> mFilled;

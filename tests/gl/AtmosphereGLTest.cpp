@@ -204,7 +204,9 @@ TEST(AtmosphereGLTest, TheRenderersTablesAreTheCppTables)
     double worst = 0.0;
     for (double sunElevation : {4.0, 35.0}) {
         const glm::dvec3 sun = direction(135.0, sunElevation);
-        for (double altitude : {300.0, 4200.0}) {
+        // On the fills' altitude lattice (tableAltitudes: multiples of 60 m), and between two of its altitudes, where
+        // the frame's tables are interpolated between the lattice's (render/AtmosphereTextures.h).
+        for (double altitude : {300.0, 4200.0, 1234.5, 1221.0}) {
             SceneStyle style;
             style.sunDirection = glm::vec3(sun);
             Camera camera;
@@ -244,7 +246,7 @@ TEST(AtmosphereGLTest, TheRenderersTablesAreTheCppTables)
             }
         }
     }
-    EXPECT_EQ(compared, 4u * kCases * 3);
+    EXPECT_EQ(compared, 8u * kCases * 3);
     std::printf("largest difference between the GL and C++ tables: %.4f\n", worst);
 }
 

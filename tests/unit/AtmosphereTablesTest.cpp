@@ -115,5 +115,50 @@ TEST(AtmosphereTablesTest, LookupsAreTheModelWithinAFewPercent)
     EXPECT_LT(worst.sky, 0.01);
 }
 
+/// The renderer's tables between fills: the linear interpolation of the tables at the two altitudes around the
+/// viewer (tableAltitudes) against the tables at the viewer's own, over directions, distances, suns and altitudes
+/// (the lowest just above the ground's haze, where the light changes with altitude fastest), and a thin haze whose
+/// scale height makes the step small.
+TEST(AtmosphereTablesTest, TablesInterpolatedBetweenAltitudeStepsAreTheViewersOwn)
+{
+    SplitMix64 random(11);
+    double worst = 0.0;
+    for (const double mieHeight : {1200.0, 300.0}) {
+        AtmosphereModel air;
+        air.mieHeight = mieHeight;
+        for (const double altitude : {7.0, 1830.0, 4321.0}) {
+            const TableAltitudes at = tableAltitudes(altitude, air);
+            ASSERT_LE(at.lower, altitude);
+            ASSERT_GE(at.upper, altitude);
+            EXPECT_NEAR(at.upper - at.lower, kTableAltitudeShare * mieHeight, 1e-9);
+            EXPECT_NEAR(at.lower + at.weight * (at.upper - at.lower), altitude, 1e-9);
+            const glm::dvec3 sun = direction(25.0, 15.0 + altitude / 1000.0);
+            const double range = 200000.0;
+            const AtmosphereTables own(air, altitude, sun, range), lower(air, at.lower, sun, range),
+                upper(air, at.upper, sun, range);
+            auto relative = [](const glm::dvec3& mixed, const glm::dvec3& exact) {
+                const glm::dvec3 d = glm::abs(mixed - exact);
+                return std::max({d.x, d.y, d.z}) / std::max({exact.x, exact.y, exact.z, 1e-12});
+            };
+            for (int k = 0; k < 400; ++k) {
+                const glm::dvec3 view = direction(360.0 * uniform(random), (uniform(random) - 0.3) * 90.0);
+                const double distance = range * uniform(random) * uniform(random);
+                const glm::dvec3 mixedAerial =
+                    glm::mix(lower.inscattered(view, distance), upper.inscattered(view, distance), at.weight);
+                const glm::dvec3 mixedSky = glm::mix(lower.sky(view), upper.sky(view), at.weight);
+                worst = std::max(
+                    {worst, relative(mixedAerial, own.inscattered(view, distance)), relative(mixedSky, own.sky(view))});
+            }
+        }
+    }
+    std::printf("largest relative difference of the interpolated tables: %.5f\n", worst);
+    EXPECT_LT(worst, 0.002);
+    const TableAltitudes nan = tableAltitudes(std::nan(""), AtmosphereModel{});
+    EXPECT_EQ(nan.weight, 0.0);
+    const TableAltitudes below = tableAltitudes(-250.0, AtmosphereModel{});
+    EXPECT_LE(below.lower, -250.0);
+    EXPECT_GT(below.upper, -250.0);
+}
+
 }  // namespace
 }  // namespace terrain

@@ -47,8 +47,8 @@ BlockLevels randomLevels(int n, int q, std::mt19937& random, double culledShare)
             const auto k = static_cast<std::size_t>(by * b + bx);
             for (int side = 0; side < 4; ++side) {
                 const int nx = bx + kDx[side], ny = by + kDy[side];
-                const bool drawn = nx >= 0 && ny >= 0 && nx < b && ny < b &&
-                                   !levels.culled[static_cast<std::size_t>(ny * b + nx)];
+                const bool drawn =
+                    nx >= 0 && ny >= 0 && nx < b && ny < b && !levels.culled[static_cast<std::size_t>(ny * b + nx)];
                 levels.snap[4 * k + static_cast<std::size_t>(side)] =
                     drawn ? std::max(levels.level[k], levels.level[static_cast<std::size_t>(ny * b + nx)])
                           : levels.level[k];
@@ -69,7 +69,10 @@ Point positionOf(const TemplateMesh& mesh, std::uint32_t index)
     return {static_cast<double>(v.i), static_cast<double>(v.j)};
 }
 
-bool isSkirt(const TemplateMesh& mesh, std::uint32_t index) { return mesh.vertices.at(index).skirt != 0; }
+bool isSkirt(const TemplateMesh& mesh, std::uint32_t index)
+{
+    return mesh.vertices.at(index).skirt != 0;
+}
 
 class BlockTrianglesTest : public ::testing::TestWithParam<std::pair<int, int>> {};
 
@@ -215,7 +218,8 @@ TEST_P(BlockTrianglesTest, CulledBlocksGiveNothing)
             if (isSkirt(mesh, all[k]) || isSkirt(mesh, all[k + 1]) || isSkirt(mesh, all[k + 2])) {
                 continue;
             }
-            const Point a = positionOf(mesh, all[k]), b = positionOf(mesh, all[k + 1]), c = positionOf(mesh, all[k + 2]);
+            const Point a = positionOf(mesh, all[k]), b = positionOf(mesh, all[k + 1]),
+                        c = positionOf(mesh, all[k + 2]);
             area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
         }
         const auto drawn = static_cast<double>(std::count(levels.culled.begin(), levels.culled.end(), 0));
