@@ -175,7 +175,8 @@ uniform sampler2D uSkyTable;
 uniform float uAerialRange;  // metres the aerial table spans
 
 // The aerial table's coordinates in [0, 1]^3 of a surface point `relative` metres from the camera (azimuth,
-// elevation, sqrt(distance / range)). Smooth enough over a triangle to be made per vertex and interpolated.
+// elevation, sqrt(distance / range)). Its azimuth folds at the sun's: what a vertex reads from the table
+// interpolates over a triangle (light.glsl, Air), the coordinates would not.
 vec3 aerialCoordinate(vec3 relative, vec3 sun)
 {
     float len = length(relative);

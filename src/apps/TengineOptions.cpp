@@ -575,10 +575,11 @@ void addDisplayOptions(std::vector<OptionSpec>& t)
                            "the coarser level, its heights, colours and normals morph in over this long instead of "
                            "popping (0: at once). Video mode loads before drawing, so recordings rarely show it.",
                            &O::clipmapMorphSeconds, atLeast(0), "seconds"));
-    t.push_back(realOption("tessellation_error_share", kGroupDisplay,
-                           "With render_mode = tessellation: the part of lod_error the blocks inside a node may spend; "
-                           "the nodes are selected for the rest, so the drawn surface stays within lod_error.",
-                           &O::tessellationShare, openInterval(0, 1), ""));
+    t.push_back(realOption(
+        "tessellation_error_share", kGroupDisplay,
+        "With render_mode = tessellation or blocks: the part of lod_error the blocks inside a node may spend; "
+        "the nodes are selected for the rest, so the drawn surface stays within lod_error.",
+        &O::tessellationShare, openInterval(0, 1), ""));
 }
 
 /// The sun, the air and the shadows; the shader and log files.

@@ -75,7 +75,7 @@ public:
     const MaterialSet* materials() const;
     /// The node cache's capacity and how it was chosen (one log line).
     const CacheChoice& cache() const { return mCache; }
-    /// render_mode = tessellation, and the GL has it.
+    /// render_mode = tessellation or blocks (the blocks' levels are chosen), and the GL draws them.
     bool tessellation() const { return mTessellation; }
     /// render_mode = blocks (tessellation() too), and the GL draws indirect commands with base instances.
     bool blockIndices() const { return mBlockIndices; }

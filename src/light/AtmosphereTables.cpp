@@ -73,9 +73,11 @@ TableAltitudes tableAltitudes(double altitude, const AtmosphereModel& air)
     if (!std::isfinite(altitude) || !(step > 0.0) || !std::isfinite(step)) {
         return {altitude, altitude, 0.0};
     }
-    const double lower = std::floor(altitude / step) * step;
-    const double weight = std::clamp((altitude - lower) / step, 0.0, 1.0);
-    return {lower, lower + step, weight};
+    const double lower = std::floor(altitude / step) * step, upper = lower + step;
+    if (!std::isfinite(lower) || !(upper > lower) || !(lower <= altitude && altitude <= upper)) {
+        return {altitude, altitude, 0.0};  // beyond what a double tells apart at that step
+    }
+    return {lower, upper, std::clamp((altitude - lower) / (upper - lower), 0.0, 1.0)};
 }
 
 AtmosphereTables::AtmosphereTables(const AtmosphereModel& air, double altitude, const glm::dvec3& sun, double range,

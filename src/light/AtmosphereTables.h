@@ -56,14 +56,15 @@ double aerialTableRange(const Camera& camera);
 /// linearly between the two around the viewer (render/AtmosphereTextures.h): a flight fills a table when it
 /// crosses a step, not every frame. The light depends on the viewer's altitude h through densities exp(-h / H), so
 /// the interpolation is off by a share of it that grows with (step / H)^2: the step is kTableAltitudeShare of the
-/// smaller scale height (60 m for the default haze's 1.2 km), which AtmosphereTablesTest measures within 0.2%.
+/// smaller scale height (60 m for the default haze's 1.2 km): AtmosphereTablesTest measures 0.05% (its limit 0.2%).
 inline constexpr double kTableAltitudeShare = 0.05;
 struct TableAltitudes {
     double lower = 0.0;   ///< metres, a multiple of the step
     double upper = 0.0;   ///< lower + the step
     double weight = 0.0;  ///< of the upper table, in [0, 1]
 };
-/// The two altitudes around `altitude` for `air`; an altitude not finite is its own (weight 0).
+/// The two altitudes around `altitude` for `air`. An altitude not finite, or too large for its step, is its own:
+/// lower = upper = altitude, weight 0.
 TableAltitudes tableAltitudes(double altitude, const AtmosphereModel& air);
 
 /// The tables for one viewer altitude and sun, made on the CPU as the shaders make them, looked up with

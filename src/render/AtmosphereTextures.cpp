@@ -112,22 +112,29 @@ void AtmosphereTextures::update(const Camera& camera, const SceneStyle& style)
         mMultipleAir = style.air;
     }
     const TableAltitudes at = tableAltitudes(wanted.altitude, style.air);
-    if (at.weight == 0.0 && at.lower == wanted.altitude) {
-        integrate(mFrame, camera, style, wanted);  // on a lattice altitude, or an altitude not finite
+    std::array<Filled, 2> ends{wanted, wanted};
+    ends[0].altitude = at.lower;
+    ends[1].altitude = at.upper;
+    auto holding = [this](const Filled& f) -> Tables* {
+        for (Tables& t : mLattice) {
+            if (t.filled && *t.filled == f) {
+                return &t;
+            }
+        }
+        return nullptr;
+    };
+    std::array<Tables*, 2> tables{holding(ends[0]), holding(ends[1])};
+    Filled key = wanted;  // what the tables are for but the altitude
+    key.altitude = 0.0;
+    const bool moving = mLastKey && !(*mLastKey == key);
+    mLastKey = key;
+    if (at.upper == at.lower || (!tables[0] && !tables[1] && moving)) {
+        // The viewer's own tables: where there is no lattice (an altitude not finite or too large), and while the
+        // sun, the air or the range change from one update to the next, where the lattice's would be new every
+        // frame: two sums a frame instead of one.
+        integrate(mFrame, camera, style, wanted);
     } else {
         // The lattice tables at the two altitudes, made where neither holds one (a step up or down keeps the other).
-        std::array<Filled, 2> ends{wanted, wanted};
-        ends[0].altitude = at.lower;
-        ends[1].altitude = at.upper;
-        auto holding = [this](const Filled& f) -> Tables* {
-            for (Tables& t : mLattice) {
-                if (t.filled && *t.filled == f) {
-                    return &t;
-                }
-            }
-            return nullptr;
-        };
-        std::array<Tables*, 2> tables{holding(ends[0]), holding(ends[1])};
         for (int k = 0; k < 2; ++k) {
             if (!tables[static_cast<std::size_t>(k)]) {
                 Tables* free = &mLattice[0] == tables[static_cast<std::size_t>(1 - k)] ? &mLattice[1] : &mLattice[0];

@@ -1,10 +1,11 @@
 // The frame's air tables on the GPU (light/AtmosphereTables.h gives their layout and is their reference): the
-// aerial table, a 3D texture the terrain's fragment programs read their in-scattered light from, and the sky
+// aerial table, a 3D texture the terrain's vertex programs read their in-scattered light from, and the sky
 // table, a 2D texture the sky reads. The tables are filled by shaders/atmosphere_table.frag (one draw per slice) at
 // the two altitudes of a lattice around the viewer (tableAltitudes), whenever the viewer leaves their interval or
 // the sun, the air or the table's range change, and kept; the frame's tables are their linear interpolation at the
 // viewer's altitude (the same program with BLEND_TABLES, a fetch from each), made when the altitude changes: a
-// flight integrates a table when it crosses an altitude step, not every frame. The light scattered
+// flight integrates a table when it crosses an altitude step, not every frame. While the sun, the air or the range
+// change from one update to the next, the frame's tables are summed directly. The light scattered
 // more than once (light/Atmosphere.h, multipleScattering) is made on the CPU whenever the sun's elevation or the
 // air changed, and handed to the filling programs as uniforms.
 #pragma once
@@ -72,7 +73,7 @@ private:
     Tables mLattice[2];  ///< tables at lattice altitudes, kept while the viewer stays between them
     gl::Framebuffer mFramebuffer;
     gl::VertexArray mEmptyVao;
-    std::optional<Filled> mFilled;
+    std::optional<Filled> mLastKey;  ///< the last update's sun, range and air (altitude 0)
     /// psi_ms, and the sun's elevation (radians) and the air it was made for.
     std::optional<MultipleScattering> mMultiple;
     double mMultipleElevation = 0.0;

@@ -705,9 +705,12 @@ void TerrainRenderer::drawGroups(RenderStats& stats, TriangleFeedback* feedback)
         glActiveTexture(GL_TEXTURE0);
         ShaderProgram& program = mPrograms[static_cast<std::size_t>(group[0])];
         program.use();
-        pointNodeConstants(mConstantsBuffer, mNodeTexels, first);
-        glUniform1i(program.uniform("uFirstInstance"), static_cast<GLint>(first));
         const auto instances = static_cast<GLsizei>(last - first);
+        if (!mBlockIndices) {
+            // Instances count from the group's first node (the control shader's block codes too).
+            pointNodeConstants(mConstantsBuffer, mNodeTexels, first);
+            glUniform1i(program.uniform("uFirstInstance"), static_cast<GLint>(first));
+        }
         if (mBlockIndices) {
             // A command a node, its constants at its base instance (the attributes count from node 0).
             pointNodeConstants(mConstantsBuffer, mNodeTexels, 0);
@@ -735,7 +738,9 @@ void TerrainRenderer::drawGroups(RenderStats& stats, TriangleFeedback* feedback)
         }
         first = last;
     }
-    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
+    if (mBlockIndices) {
+        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
+    }
     glBindVertexArray(0);
 }
 

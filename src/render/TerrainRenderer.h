@@ -47,11 +47,12 @@ struct RenderStats {
     std::size_t gpuNodes = 0;  ///< slots that have held a node (filled when first drawn, kept until reused)
     /// Draw calls for the terrain (the sky not counted): in chunks mode one per program and pair of pool arrays
     /// (the nodes', their parents') that has nodes in view (1 when the pools fit one array and no detail layers
-    /// split it); in tessellation mode each of those is runs of nodes times ranges of patches (drawPatchRanges).
+    /// split it); in tessellation mode each of those is runs of nodes times ranges of patches (drawPatchRanges); in
+    /// blocks mode each is one multi-draw.
     std::size_t drawCalls = 0;
-    std::size_t blocks = 0;                ///< tessellation mode: blocks drawn (not culled)
-    std::size_t culledBlocks = 0;          ///< tessellation mode: blocks of drawn nodes outside the frustum
-    std::size_t occludedBlocks = 0;        ///< tessellation mode: blocks drawn at their coarsest, hidden (`occluded`)
+    std::size_t blocks = 0;                ///< tessellation and blocks modes: blocks drawn (not culled)
+    std::size_t culledBlocks = 0;          ///< ...: blocks of drawn nodes outside the frustum
+    std::size_t occludedBlocks = 0;        ///< ...: blocks drawn at their coarsest, hidden (`occluded`)
     std::uint64_t generatedTriangles = 0;  ///< with transform feedback: the triangles the GL says it made
 };
 
@@ -60,9 +61,9 @@ struct PoolOptions {
     /// Nodes: the cache's capacity (memory_budget or quad_cache_size), a layer per cache slot.
     std::size_t slots = 512;
     bool compressColour = false;  ///< DXT1 colour layers (node_texture_compression), where the GL has S3TC
-    /// render_mode = tessellation: blocks of kTessellationBlockQuads quads tessellated at the levels
-    /// chooseBlockLevels picks (lod/TessellationLevels.h); needs GL 4.0 (tessellationSupported()) and nodes
-    /// with tessellation errors.
+    /// render_mode = tessellation (or blocks, with blockIndices): blocks of kTessellationBlockQuads quads drawn at
+    /// the levels chooseBlockLevels picks (lod/TessellationLevels.h); needs GL 4.0 (tessellationSupported()) without
+    /// blockIndices, and nodes with tessellation errors.
     bool tessellation = false;
     /// > 0: nodes carry normal maps of this many texels a side (NodeData::normalMap, synthesis/NormalMap.h;
     /// dynamic_texture_size), and the fragment program lights by them, morphed between the node's and its
@@ -105,8 +106,8 @@ public:
     /// Clears, draws the sky and every node of `frame` (made for its camera) in one instanced draw (two with
     /// detail layers: nodes beyond every layer's fade go in a second one, drawn by a program without the layers),
     /// each node in its cache slot, copied there when the slot held another node. In tessellation mode the
-    /// blocks are drawn at the list's levels. With `feedback` (tessellation mode, for tests), the camera-relative
-    /// corners of every triangle the tessellator made are read back by transform feedback, three a triangle, in
+    /// blocks are drawn at the list's levels. With `feedback` (tessellation and blocks modes, for tests), the
+    /// camera-relative corners of every triangle drawn are read back by transform feedback, three a triangle, in
     /// drawing order (node by node as drawn, patch by patch: blocks, then skirts; with block indices, block by block,
     /// each block's skirts after its surface: BlockTriangles::append).
     RenderStats draw(const DrawList& frame, const SceneStyle& style, std::vector<glm::vec3>* feedback = nullptr);

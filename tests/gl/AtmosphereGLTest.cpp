@@ -205,8 +205,9 @@ TEST(AtmosphereGLTest, TheRenderersTablesAreTheCppTables)
     for (double sunElevation : {4.0, 35.0}) {
         const glm::dvec3 sun = direction(135.0, sunElevation);
         // On the fills' altitude lattice (tableAltitudes: multiples of 60 m), and between two of its altitudes, where
-        // the frame's tables are interpolated between the lattice's (render/AtmosphereTextures.h).
-        for (double altitude : {300.0, 4200.0, 1234.5, 1221.0}) {
+        // the frame's tables are interpolated between the lattice's (render/AtmosphereTextures.h): both new, both
+        // held, one held (a step up), neither held; the first altitude of the second sun is summed directly.
+        for (double altitude : {300.0, 4200.0, 1234.5, 1221.0, 1275.0, 1190.0}) {
             SceneStyle style;
             style.sunDirection = glm::vec3(sun);
             Camera camera;
@@ -246,7 +247,7 @@ TEST(AtmosphereGLTest, TheRenderersTablesAreTheCppTables)
             }
         }
     }
-    EXPECT_EQ(compared, 8u * kCases * 3);
+    EXPECT_EQ(compared, 12u * kCases * 3);
     std::printf("largest difference between the GL and C++ tables: %.4f\n", worst);
 }
 

@@ -27,11 +27,14 @@
 namespace terrain {
 namespace {
 
-class PoolArraysGLTest : public ::testing::TestWithParam<bool> {};
+enum class Mode { Chunks, Tessellation, Blocks };
+
+class PoolArraysGLTest : public ::testing::TestWithParam<Mode> {};
 
 TEST_P(PoolArraysGLTest, ManySmallArraysDrawTheFrameOneArrayDraws)
 {
-    const bool tessellation = GetParam();
+    const bool blockIndices = GetParam() == Mode::Blocks;
+    const bool tessellation = GetParam() == Mode::Tessellation;  // by tessellation shaders
     auto scene = test::openDemoScene(640, 360);
     ASSERT_TRUE(scene.ok()) << scene.error().message;
     if (tessellation) {
@@ -40,7 +43,7 @@ TEST_P(PoolArraysGLTest, ManySmallArraysDrawTheFrameOneArrayDraws)
     MapFile& map = *(*scene)->map;
     const MapHeader& header = map.header();
     DetailPolicy policy;
-    policy.tessellationBlockQuads = tessellation ? kTessellationBlockQuads : 0;
+    policy.tessellationBlockQuads = tessellation || blockIndices ? kTessellationBlockQuads : 0;
     policy.normalMapSize = 64;
     TerrainNodeSource source(map, policy);
     constexpr std::size_t kSlots = 400;
@@ -79,7 +82,7 @@ TEST_P(PoolArraysGLTest, ManySmallArraysDrawTheFrameOneArrayDraws)
     // in depth resolve alike; in tessellation mode the runs of draws differ between one group and many, and the
     // frames agree only because skirts lose every tie (terrain.tese). Either way they must be the same, pixel for
     // pixel.
-    DrawList frame = makeDrawList(selection, s, camera, tessellation ? pixels : 0.0);
+    DrawList frame = makeDrawList(selection, s, camera, tessellation || blockIndices ? pixels : 0.0);
     std::stable_sort(frame.nodes.begin(), frame.nodes.end(), [](const DrawnNode& a, const DrawnNode& b) {
         return std::pair(a.slot / kLayers, a.parentSlot / kLayers) <
                std::pair(b.slot / kLayers, b.parentSlot / kLayers);
@@ -87,7 +90,8 @@ TEST_P(PoolArraysGLTest, ManySmallArraysDrawTheFrameOneArrayDraws)
     auto drawWith = [&](std::size_t layersPerArray, RenderStats& stats) {
         PoolOptions pools;
         pools.slots = kSlots;
-        pools.tessellation = tessellation;
+        pools.tessellation = tessellation || blockIndices;
+        pools.blockIndices = blockIndices;
         pools.normalMapTexels = normalMapTexels(policy.normalMapSize);
         pools.layersPerArray = layersPerArray;
         auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, header, 16, pools);
@@ -104,7 +108,7 @@ TEST_P(PoolArraysGLTest, ManySmallArraysDrawTheFrameOneArrayDraws)
     const Image split = drawWith(kLayers, many);
     ASSERT_EQ(reference.width, split.width);
     ASSERT_EQ(reference.height, split.height);
-    // One array: one group, drawn at once (chunks) or in runs of nodes and ranges of patches (tessellation).
+    // One array: one group, drawn at once (chunks, blocks) or in runs of nodes and ranges of patches (tessellation).
     const auto blocks = static_cast<std::size_t>((header.chunkSize - 1) / kTessellationBlockQuads);
     const std::size_t patches = blocks * (blocks + 4);
     const std::size_t runs = (one.nodes + TerrainRenderer::kNodesPerRun - 1) / TerrainRenderer::kNodesPerRun;
@@ -126,9 +130,12 @@ TEST_P(PoolArraysGLTest, ManySmallArraysDrawTheFrameOneArrayDraws)
     EXPECT_EQ(differing, 0u) << "pixels differ between the frame of one array and that of many";
 }
 
-INSTANTIATE_TEST_SUITE_P(RenderModes, PoolArraysGLTest, ::testing::Values(false, true),
-                         [](const ::testing::TestParamInfo<bool>& mode) {
-                             return mode.param ? std::string("Tessellation") : std::string("Chunks");
+INSTANTIATE_TEST_SUITE_P(RenderModes, PoolArraysGLTest,
+                         ::testing::Values(Mode::Chunks, Mode::Tessellation, Mode::Blocks),
+                         [](const ::testing::TestParamInfo<Mode>& mode) {
+                             return mode.param == Mode::Chunks         ? std::string("Chunks")
+                                    : mode.param == Mode::Tessellation ? std::string("Tessellation")
+                                                                       : std::string("Blocks");
                          });
 
 }  // namespace

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace terrain {
@@ -155,6 +156,13 @@ TEST(AtmosphereTablesTest, TablesInterpolatedBetweenAltitudeStepsAreTheViewersOw
     EXPECT_LT(worst, 0.002);
     const TableAltitudes nan = tableAltitudes(std::nan(""), AtmosphereModel{});
     EXPECT_EQ(nan.weight, 0.0);
+    EXPECT_TRUE(std::isnan(nan.lower) && std::isnan(nan.upper));
+    for (const double huge : {1e300, -1e300, std::numeric_limits<double>::infinity()}) {
+        const TableAltitudes own = tableAltitudes(huge, AtmosphereModel{});
+        EXPECT_EQ(own.lower, huge);
+        EXPECT_EQ(own.upper, huge);
+        EXPECT_EQ(own.weight, 0.0);
+    }
     const TableAltitudes below = tableAltitudes(-250.0, AtmosphereModel{});
     EXPECT_LE(below.lower, -250.0);
     EXPECT_GT(below.upper, -250.0);
