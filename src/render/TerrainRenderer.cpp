@@ -546,9 +546,6 @@ void TerrainRenderer::orderFrameNodes(const DrawList& frame, RenderStats& stats)
             fill(drawn.slot, drawn.node, stats);
             mFrameNodes.push_back({&drawn, pass});
             (drawn.node->isStatic ? stats.staticNodes : stats.dynamicNodes) += 1;
-            if (mCounter) {
-                mCounter->add(drawn.selected.id);
-            }
         }
     }
     if (mArrays.size() > 1) {
@@ -557,6 +554,12 @@ void TerrainRenderer::orderFrameNodes(const DrawList& frame, RenderStats& stats)
         };
         std::stable_sort(mFrameNodes.begin(), mFrameNodes.end(),
                          [&](const FrameNode& a, const FrameNode& b) { return group(a) < group(b); });
+    }
+    if (mCounter) {
+        // In drawing order, the order the shaders count in (each node's place: NodeInstance::index).
+        for (const FrameNode& f : mFrameNodes) {
+            mCounter->add(f.drawn->selected.id);
+        }
     }
 }
 
