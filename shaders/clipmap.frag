@@ -32,10 +32,8 @@ uniform sampler2DArray uPreviousNormals;
 in vec2 vLocal;
 uniform sampler2DArray uMaterials;  // per ring: n x n RGBA8 material weights, toroidal
 uniform sampler2DArray uPreviousMaterials;
-#ifndef DETAIL_TINT_ONLY
 uniform vec4 uLayerOrigin[LAYER_COUNT];  // the window origin in repeats (xy) and lattice coordinates (zw), reduced
 #define LAYER_ORIGIN(k) uLayerOrigin[k]
-#endif
 #include "detail.glsl"
 #endif
 #include "atmosphere.glsl"

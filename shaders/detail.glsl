@@ -1,7 +1,9 @@
 // Included by shaders/terrain.frag and shaders/clipmap.frag inside #ifdef DETAIL (render/DetailLayers.h): the
 // materials' detail textures (3.4.5), so the ground up close is not a blur: gray layers of one texture array,
-// multiplied over the terrain's colour, weighted by the material weights. The includer defines LAYER_ORIGIN(k),
-// layer k's coordinates at the point `local` counts from (DetailLayers::origin), unless DETAIL_TINT_ONLY.
+// multiplied over the terrain's colour (which carries the materials' ground colours already: synthesis
+// coverTexture), weighted by the material weights. The includer defines LAYER_ORIGIN(k), layer k's coordinates at
+// the point `local` counts from (DetailLayers::origin). Ground beyond every layer's fade is drawn by a program
+// without DETAIL.
 //
 // No tile: each layer is sampled by tiling and blending with histogram preservation (Heitz & Neyret 2018). The
 // plane is cut into a lattice of triangles a layer's repeat wide; each lattice vertex shows the texture at its
@@ -12,8 +14,7 @@
 // layers of the fragment's dominant material are sampled (three fetches a layer); the others count as flat.
 const int kMaxLayers = 8;
 const float kDetailContrast = 0.6;
-// LAYER_COUNT (1..kMaxLayers) is defined by the renderer: a loop of constant length, unrolled. With
-// DETAIL_TINT_ONLY (ground beyond every layer's fade) the layers are left out and only the tint applies.
+// LAYER_COUNT (1..kMaxLayers) is defined by the renderer: a loop of constant length, unrolled.
 uniform sampler2DArray uDetail;
 uniform vec4 uLayerMaterialMask[kMaxLayers];  // which material a layer belongs to, as a one-hot vec4
 uniform float uLayerScale[kMaxLayers];        // 1 / metres per repeat
@@ -21,10 +22,7 @@ uniform float uLayerMean[kMaxLayers];         // the layer's mean gray
 // Repeats to lattice coordinates (DetailLayers.cpp, kLatticeFromRepeats): the triangle lattice's vertices are the
 // integer points, and each cell of the unit square holds two of its triangles.
 uniform mat2 uLatticeFromRepeats;
-uniform vec4 uMaterialTintColumns[3];    // r, g, b of the 4 materials' tints, brightness-preserving and applied at
-                                         // kTintStrength (DetailLayers.cpp): the map's colours stay the base
 
-#ifndef DETAIL_TINT_ONLY
 // A lattice vertex's offset in [0, 1)^2 (Jarzynski & Olano 2020's pcg2d). Vertices count modulo 4096 (as
 // DetailLayers::origin reduces them), so neighbouring nodes agree on every vertex.
 vec2 latticeOffset(ivec2 vertex)
@@ -61,17 +59,13 @@ float tiledDetail(int k, vec2 uv, vec2 lattice)
                 w.z * textureLod(uDetail, vec3(uv + latticeOffset(c), float(k)), lod).r;
     return (sum - uLayerMean[k]) * inversesqrt(dot(w, w));
 }
-#endif
 
 // The factor over the colour at `local` metres from the layers' origin, with material weights `materials`,
 // `distance` metres from the viewer.
-vec3 detailFactor(vec2 local, vec4 materials, float distance)
+float detailFactor(vec2 local, vec4 materials, float distance)
 {
     // Per material: the product of its layers (1 where faded out, and for every material but the dominant one).
-    // Ground wholly beyond the fade uses the DETAIL_TINT_ONLY variant. The tint applies at every distance, so
-    // the switch leaves no seam.
     vec4 layers = vec4(1.0);
-#ifndef DETAIL_TINT_ONLY
     // The dominant material, one-hot (of equal weights the first).
     vec4 dominant = vec4(1.0, 0.0, 0.0, 0.0);
     float top = materials.x;
@@ -100,10 +94,6 @@ vec3 detailFactor(vec2 local, vec4 materials, float distance)
             layers *= vec4(1.0) + uLayerMaterialMask[k] * (amount * g);
         }
     }
-#endif
     float total = dot(materials, vec4(1.0));
-    vec4 weighted = materials * layers;
-    vec3 sum = vec3(dot(weighted, uMaterialTintColumns[0]), dot(weighted, uMaterialTintColumns[1]),
-                    dot(weighted, uMaterialTintColumns[2]));
-    return total > 0.0 ? sum / total : vec3(1.0);
+    return total > 0.0 ? dot(materials, layers) / total : 1.0;
 }

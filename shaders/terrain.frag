@@ -57,10 +57,8 @@ uniform vec4 uValidRect;          // camera-relative x0, y0, x1, y1 of the input
 uniform int uWireframe;
 #ifdef DETAIL
 // The materials' detail textures (render/DetailLayers.h), with the node's corner in each layer's repeats.
-#ifndef DETAIL_TINT_ONLY
 flat in vec4 vLayerOrigin[LAYER_COUNT];  // the node's corner in repeats (xy) and lattice coordinates (zw), reduced
 #define LAYER_ORIGIN(k) vLayerOrigin[k]
-#endif
 #include "detail.glsl"
 #endif
 #include "atmosphere.glsl"

@@ -12,7 +12,7 @@ in float cInstance[];
 in vec4 cNode0[];
 in vec4 cNode1[];
 in vec4 cNode2[];
-#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+#ifdef DETAIL
 in vec4 cLayer0[];
 in vec4 cLayer1[];
 in vec4 cLayer2[];
@@ -65,7 +65,7 @@ void main()
     eNode0 = cNode0[0];
     eNode1 = cNode1[0];
     eNode2 = cNode2[0];
-#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+#ifdef DETAIL
     eLayerOrigin[0] = cLayer0[0];
     eLayerOrigin[1] = cLayer1[0];
     eLayerOrigin[2] = cLayer2[0];

@@ -16,7 +16,7 @@ patch in ivec4 eSnap;   // lattices of the south, east, north, west sides
 patch in int eInstance;
 flat out int vInstance;
 #endif
-#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+#ifdef DETAIL
 patch in vec4 eLayerOrigin[8];
 flat out vec4 vLayerOrigin[LAYER_COUNT];
 #endif
@@ -89,7 +89,7 @@ void main()
         // steps grow with the square of the distance), far less than what lies behind a crack a skirt fills.
         gl_Position.z += gl_Position.w * (1.0 / 4194304.0);
     }
-#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+#ifdef DETAIL
     for (int k = 0; k < LAYER_COUNT; ++k) {
         vLayerOrigin[k] = eLayerOrigin[k];
     }

@@ -17,7 +17,7 @@ layout(location = SKIRT_LOCATION) in int aSkirt;  // 1: skirt vertex hanging bel
 layout(location = NODE0_LOCATION) in vec4 aNode0;
 layout(location = NODE1_LOCATION) in vec4 aNode1;
 layout(location = NODE2_LOCATION) in vec4 aNode2;
-#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+#ifdef DETAIL
 // The node's corner in repeats of each detail layer, fractional part (xy), and in the layer's tiling lattice,
 // modulo its period (zw: detail.glsl, DetailLayers::origin), an attribute a layer.
 layout(location = LAYER_ORIGIN_LOCATION) in vec4 aLayerOrigin[LAYER_COUNT];
@@ -36,7 +36,7 @@ flat out ivec2 vSlots;  // layers: own (in its pool array), parent's (in its)
 #ifdef PIXEL_COUNTS
 flat out int vInstance;
 #endif
-#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+#ifdef DETAIL
 flat out vec4 vLayerOrigin[LAYER_COUNT];
 #endif
 
@@ -53,7 +53,7 @@ out vec3 vAerial;
 void main()
 {
     emitSurfaceVertex(aGrid, aNode0, aNode1, aNode2, float(aSkirt));
-#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+#ifdef DETAIL
     for (int k = 0; k < LAYER_COUNT; ++k) {
         vLayerOrigin[k] = aLayerOrigin[k];
     }

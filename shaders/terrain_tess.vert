@@ -8,7 +8,7 @@ layout(location = PATCH_LOCATION) in float aPatch;  // 0 .. B^2 - 1: block by * 
 layout(location = NODE0_LOCATION) in vec4 aNode0;
 layout(location = NODE1_LOCATION) in vec4 aNode1;
 layout(location = NODE2_LOCATION) in vec4 aNode2;
-#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+#ifdef DETAIL
 layout(location = LAYER_ORIGIN_LOCATION) in vec4 aLayerOrigin[LAYER_COUNT];
 // Up to 8 (kMaxLayers): arrays of arrays (one per patch vertex) need GLSL 4.30.
 out vec4 cLayer0;
@@ -36,7 +36,7 @@ void main()
     cNode0 = aNode0;
     cNode1 = aNode1;
     cNode2 = aNode2;
-#if defined(DETAIL) && !defined(DETAIL_TINT_ONLY)
+#ifdef DETAIL
     vec4 layers[8] = vec4[8](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
     for (int k = 0; k < LAYER_COUNT; ++k) {
         layers[k] = aLayerOrigin[k];

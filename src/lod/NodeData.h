@@ -29,7 +29,11 @@ struct NodeData {
                                                 ///< are predicted from; empty for dynamic nodes
     DualHeightMap heights;                      ///< base + displacement, (N + 4)^2, metres above the map's offset
     std::vector<std::uint8_t> materialWeights;  ///< N x N x 4 material weights (DetailSynthesizer), or empty
-    std::vector<std::uint8_t> texture;          ///< T x T RGB, rows south to north
+    std::vector<std::uint8_t> texture;          ///< T x T RGB, rows south to north: the ground colours drawn
+    /// The map's colours under `texture` before the materials' cover (synthesis coverTexture): what a dynamic
+    /// child's colours are upsampled from; empty where there is no cover (texture is then the map's).
+    std::vector<std::uint8_t> mapTexture;
+    const std::vector<std::uint8_t>& uncoveredTexture() const { return mapTexture.empty() ? texture : mapTexture; }
     /// The normal map of the surface below the node (synthesis/NormalMap.h): normalMapTexels^2 pairs (x, y)
     /// as GL_RG8_SNORM, rows south to north; empty when normal maps are off (DetailPolicy::normalMapSize 0).
     std::vector<std::int8_t> normalMap;

@@ -22,8 +22,9 @@ std::size_t residentBytes(const NodeData& node)
 {
     std::size_t bytes = sizeof(NodeData) + heapBytes(node.codes) + heapBytes(node.heights.base) +
                         heapBytes(node.heights.displacement) + heapBytes(node.heights.slope) +
-                        heapBytes(node.materialWeights) + heapBytes(node.texture) + heapBytes(node.normalMap) +
-                        heapBytes(node.normalMapBlocks) + heapBytes(node.horizons.codes) +
+                        heapBytes(node.heights.curvature) + heapBytes(node.heights.weights) +
+                        heapBytes(node.materialWeights) + heapBytes(node.texture) + heapBytes(node.mapTexture) +
+                        heapBytes(node.normalMap) + heapBytes(node.normalMapBlocks) + heapBytes(node.horizons.codes) +
                         heapBytes(node.parentHorizons.codes);
     if (node.tessellation) {
         const TessellationErrors& t = *node.tessellation;

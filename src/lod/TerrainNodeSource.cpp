@@ -97,13 +97,25 @@ Expected<NodePtr> TerrainNodeSource::loadStatic(const NodeId& id, const NodeData
         const WindowPlacement where = placement(id);
         // Static nodes measure their own placement (DetailSynthesizer::displace): every sample is evaluated.
         mPolicy.synthesizer->displace(where, nullptr, 0, map);
-        data->materialWeights = mPolicy.synthesizer->materialWeights(map, where);
+        data->materialWeights = mPolicy.synthesizer->materialWeights(map);
     }
     data->texture = std::move(node->texture);
+    addCover(*data);
     addTessellationErrors(*data);
     addNormalMap(*data, placement(id));
     addHorizons(*data, placement(id), parent);
     return NodePtr(std::move(data));
+}
+
+void TerrainNodeSource::addCover(NodeData& data) const
+{
+    if (!mPolicy.synthesizer || !mPolicy.synthesizer->settings().materials || data.materialWeights.empty()) {
+        return;
+    }
+    const MapHeader& h = mMap.header();
+    data.mapTexture = std::move(data.texture);
+    data.texture = coverTexture(*mPolicy.synthesizer->settings().materials, data.mapTexture,
+                                static_cast<int>(h.textureSize), data.materialWeights, static_cast<int>(h.chunkSize));
 }
 
 void TerrainNodeSource::addHorizons(NodeData& data, const WindowPlacement& where, const NodeData* parent) const
@@ -180,7 +192,7 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     data->hasChildren = childrenAllowed(id, false);
     data->spacing = where.spacing;
     data->heights = synthesizer.synthesizeChild(parent.heights, quadrant, where);
-    data->materialWeights = synthesizer.materialWeights(data->heights, where);
+    data->materialWeights = synthesizer.materialWeights(data->heights);
     // The node's children, made here once: its error is measured on them (DetailErrorModel::boundFromChildren,
     // instead of 3.4.1's "half the error of their parent") and its normal map shades with them. At most the
     // parent's / kErrorNesting, so errors nest with a geomorph range.
@@ -195,7 +207,8 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     if (mPolicy.bounds) {
         data->deltaC = std::min(data->deltaC, static_cast<float>(bound));
     }
-    data->texture = upsampleTexture(parent.texture, static_cast<int>(h.textureSize), quadrant);
+    data->texture = upsampleTexture(parent.uncoveredTexture(), static_cast<int>(h.textureSize), quadrant);
+    addCover(*data);
     // The box, kept inside the parent's so boxes stay nested (3.2.12). With the bound: the node's surface
     // samples (its triangles lie between them) widened by it, since every finer surface lies within the bound
     // of the node's triangles and the finer levels' triangles interpolate such points. Without: the base

@@ -66,6 +66,8 @@ private:
     NodePtr synthesize(const NodeData& parent, int quadrant) const;
     bool childrenAllowed(const NodeId& id, bool hasStaticChildren) const;
     void addTessellationErrors(NodeData& data) const;
+    /// The materials' cover over data.texture (synthesis coverTexture), the map's colours kept in mapTexture.
+    void addCover(NodeData& data) const;
     void addNormalMap(NodeData& data, const WindowPlacement& where) const;
     /// NodeData::horizons of `data` at `where` and its parent's over its square (DetailPolicy::horizonGrid).
     void addHorizons(NodeData& data, const WindowPlacement& where, const NodeData* parent) const;

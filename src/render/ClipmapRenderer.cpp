@@ -73,8 +73,9 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
     TERRAIN_TRY(near);
     r->mPrograms.push_back(std::move(near.value()));
     if (!r->mDetail.empty()) {
-        // Pieces beyond every layer's fade are drawn without the layers' loop (as TerrainRenderer does).
-        defines.emplace_back("DETAIL_TINT_ONLY");
+        // Pieces beyond every layer's fade are drawn without the layers (as TerrainRenderer does).
+        const std::vector<std::string> detail = r->mDetail.defines();
+        std::erase_if(defines, [&](const std::string& d) { return std::ranges::find(detail, d) != detail.end(); });
         auto far = ShaderProgram::load(shaderDirectory, "clipmap", defines);
         TERRAIN_TRY(far);
         r->mPrograms.push_back(std::move(far.value()));

@@ -53,22 +53,6 @@ Expected<DetailLayers> DetailLayers::create(const MaterialSet& materials)
             size /= 4.0;
         }
     }
-    for (glm::vec4& column : d.mTintColumns) {
-        column = glm::vec4(1.0f);
-    }
-    for (std::size_t m = 0; m < materials.materials().size(); ++m) {
-        const auto& t = materials.materials()[m].tint;
-        glm::vec3 tint(t[0], t[1], t[2]);
-        const float luminance = glm::dot(tint, glm::vec3(0.2126f, 0.7152f, 0.0722f));
-        tint = luminance > 0.0f ? tint / luminance : glm::vec3(1.0f);
-        // A third of the tint: the map's colours (from -t or prep's height colouring) stay the base and
-        // the material only shifts them, so a grass tint does not paint a dry valley green.
-        constexpr float kTintStrength = 0.35f;
-        tint = glm::mix(glm::vec3(1.0f), tint, kTintStrength);
-        for (int c = 0; c < 3; ++c) {
-            d.mTintColumns[c][static_cast<int>(m)] = tint[c];
-        }
-    }
     if (images.empty()) {
         return d;
     }
@@ -115,7 +99,6 @@ void DetailLayers::setUniforms(const ShaderProgram& program, int unit) const
         glUniform1f(program.uniform(("uLayerScale" + index).c_str()), static_cast<float>(1.0 / mSizes[k]));
         glUniform1f(program.uniform(("uLayerMean" + index).c_str()), static_cast<float>(mMeans[k]));
     }
-    glUniform4fv(program.uniform("uMaterialTintColumns"), 3, glm::value_ptr(mTintColumns[0]));
     const glm::mat2 lattice(kLatticeFromRepeats);
     glUniformMatrix2fv(program.uniform("uLatticeFromRepeats"), 1, GL_FALSE, glm::value_ptr(lattice));
 }

@@ -33,12 +33,12 @@ public:
     int count() const { return static_cast<int>(mSizes.size()); }
     /// Metres per repeat of each layer.
     const std::vector<double>& sizes() const { return mSizes; }
-    /// Metres from the viewer beyond which every layer has faded out (only the tint applies).
+    /// Metres from the viewer beyond which every layer has faded out (drawn without the layers).
     double fadeDistance() const;
     /// The shader defines of a program drawing the layers: DETAIL and LAYER_COUNT (none when empty()).
     std::vector<std::string> defines() const;
 
-    /// Sets `program`'s uniforms for the layers (uDetail on texture unit `unit`, masks, scales, tints, turn).
+    /// Sets `program`'s uniforms for the layers (uDetail on texture unit `unit`, masks, scales, means, lattice).
     void setUniforms(const ShaderProgram& program, int unit) const;
     /// Binds the texture array to texture unit `unit`.
     void bind(int unit) const;
@@ -51,9 +51,8 @@ public:
 private:
     gl::Texture mTexture;
     std::vector<double> mSizes;
-    std::vector<int> mMaterial;      ///< the material each layer belongs to
-    std::vector<double> mMeans;      ///< each layer's mean gray, in [0, 1]
-    glm::vec4 mTintColumns[3] = {};  ///< r, g, b of the materials' tints (brightness-preserving, kTintStrength)
+    std::vector<int> mMaterial;  ///< the material each layer belongs to
+    std::vector<double> mMeans;  ///< each layer's mean gray, in [0, 1]
 };
 
 }  // namespace terrain

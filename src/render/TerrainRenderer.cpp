@@ -147,10 +147,12 @@ Status TerrainRenderer::createPrograms(const std::filesystem::path& shaderDirect
     TERRAIN_TRY(terrain);
     mPrograms.push_back(std::move(terrain.value()));
     if (!mDetail.empty()) {
-        // Nodes beyond every layer's fade are drawn by the variant without the detail texture loop: llvmpipe
-        // runs a loop or branch for every fragment even where no fragment needs it (measured on the demo at
-        // 1280 x 720: about 40 ms a frame with one program and a per-node branch).
-        defines.emplace_back("DETAIL_TINT_ONLY");
+        // Nodes beyond every layer's fade are drawn by the program without the detail layers (their ground colours
+        // are in the node's colours): llvmpipe runs a loop or branch for every fragment even where no fragment
+        // needs it (measured on the demo at 1280 x 720: about 40 ms a frame with one program and a per-node
+        // branch).
+        const std::vector<std::string> detail = mDetail.defines();
+        std::erase_if(defines, [&](const std::string& d) { return std::ranges::find(detail, d) != detail.end(); });
         auto far = loadProgram(defines);
         TERRAIN_TRY(far);
         mPrograms.push_back(std::move(far.value()));

@@ -276,7 +276,7 @@ void DetailErrorModel::descendantCellBounds(const DualHeightMap& node, const Dua
     std::vector<float> changes;
     nextSubdivisionChanges(descendant, changes);
     const std::vector<double> displacement = sampleDisplacementErrors(
-        mSynthesizer.materialWeights(descendant, at), descendantLevel, mSynthesizer.nodeMaterialScales(at));
+        mSynthesizer.displacementWeights(descendant, at), descendantLevel, mSynthesizer.nodeMaterialScales(at));
     std::vector<float> roughness(static_cast<std::size_t>(n - 1) * (n - 1));
     mSynthesizer.roughnessTails(at, 0, roughness);
     out.resize(static_cast<std::size_t>(n - 1) * (n - 1));

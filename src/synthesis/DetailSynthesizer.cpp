@@ -176,6 +176,8 @@ void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightM
     if (!addsDisplacement()) {
         map.displacement.clear();
         map.slope.clear();
+        map.curvature.clear();
+        map.weights.clear();
         return;
     }
     const std::size_t count = static_cast<std::size_t>(w) * w;
@@ -200,6 +202,8 @@ void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightM
         displaceByMaterials(where, parent, px0, py0, mask, map);
     } else {
         map.slope.clear();
+        map.curvature.clear();
+        map.weights.clear();
     }
     if (mSettings.roughness) {
         mSettings.roughness->add(where.gx0, where.gy0, w, w, mSettings.roughness->levelsBelow(where.spacing),
@@ -226,38 +230,65 @@ void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const 
 {
     const int w = windowSize();
     const std::size_t count = static_cast<std::size_t>(w) * w;
+    const MaterialSet& set = *mSettings.materials;
     // One material covers everything: its weight is 1 whatever the slope and height.
-    const bool placed = mSettings.materials->materials().size() > 1;
+    const bool placed = set.materials().size() > 1;
+    const bool curved = placed && set.usesCurvature();
     if (parent) {
         TERRAIN_EXPECTS(!placed || parent->slope.size() == count, "the parent has no placement slopes");
+        TERRAIN_EXPECTS(!curved || parent->curvature.size() == count, "the parent has no placement curvatures");
+        TERRAIN_EXPECTS(!placed || parent->weights.size() == count * kMaxDetailMaterials,
+                        "the parent has no material weights");
     }
     std::vector<float> height;
+    map.curvature.clear();
+    map.weights.clear();
     if (placed) {
-        // The placement slope: a node without a parent measures its own base (central differences); a child
-        // interpolates its parent's slopes linearly (even samples copy them, odd ones average the two or four
-        // around them), so below a static node the placement, and hence every sample's displacement, is the
-        // same at every depth: the slope field of the deepest static level, continued smoothly.
+        // The placement fields (slope, curvature): a node without a parent measures its own base; a child
+        // interpolates its parent's linearly (even samples copy them, odd ones average the two or four around
+        // them), so below a static node the placement, and hence every sample's displacement and weights, is
+        // the same at every depth: the fields of the deepest static level, continued smoothly.
         map.slope.assign(count, 0.0f);
+        if (curved) {
+            map.curvature.assign(count, 0.0f);
+        }
         height.resize(count);
+        auto interpolated = [&](const std::vector<float>& field, int i, int j) {
+            auto at = [&](int pi, int pj) { return field[static_cast<std::size_t>(pj) * w + pi]; };
+            // Window index c is parent window index p0 + c / 2 (even c) or between that and the next.
+            const int pi = px0 + i / 2, pj = py0 + j / 2;
+            if (i % 2 == 0 && j % 2 == 0) {
+                return at(pi, pj);
+            }
+            if (j % 2 == 0) {
+                return 0.5f * (at(pi, pj) + at(pi + 1, pj));
+            }
+            if (i % 2 == 0) {
+                return 0.5f * (at(pi, pj) + at(pi, pj + 1));
+            }
+            return 0.25f * ((at(pi, pj) + at(pi + 1, pj)) + (at(pi, pj + 1) + at(pi + 1, pj + 1)));
+        };
         for (int j = 0; j < w; ++j) {
             for (int i = 0; i < w; ++i) {
                 const std::size_t k = static_cast<std::size_t>(j) * w + i;
                 height[k] = static_cast<float>(where.heightOffset + map.base[k]);
-                if (!parent) {
-                    map.slope[k] = static_cast<float>(slopeDegrees(map, i, j, where.spacing));
+                if (parent) {
+                    map.slope[k] = interpolated(parent->slope, i, j);
+                    if (curved) {
+                        map.curvature[k] = interpolated(parent->curvature, i, j);
+                    }
                     continue;
                 }
-                // Window index c is parent window index p0 + c / 2 (even c) or between that and the next.
-                auto at = [&](int pi, int pj) { return parent->slope[static_cast<std::size_t>(pj) * w + pi]; };
-                const int pi = px0 + i / 2, pj = py0 + j / 2;
-                if (i % 2 == 0 && j % 2 == 0) {
-                    map.slope[k] = at(pi, pj);
-                } else if (j % 2 == 0) {
-                    map.slope[k] = 0.5f * (at(pi, pj) + at(pi + 1, pj));
-                } else if (i % 2 == 0) {
-                    map.slope[k] = 0.5f * (at(pi, pj) + at(pi, pj + 1));
-                } else {
-                    map.slope[k] = 0.25f * ((at(pi, pj) + at(pi + 1, pj)) + (at(pi, pj + 1) + at(pi + 1, pj + 1)));
+                map.slope[k] = static_cast<float>(slopeDegrees(map, i, j, where.spacing));
+                if (curved) {
+                    // The window's edge takes its neighbour's (the field is only read inside it).
+                    const int ci = std::clamp(i, 1, w - 2), cj = std::clamp(j, 1, w - 2);
+                    auto base = [&](int x, int y) {
+                        return static_cast<double>(map.base[static_cast<std::size_t>(y) * w + x]);
+                    };
+                    map.curvature[k] =
+                        static_cast<float>(placementCurvature(base(ci - 1, cj), base(ci + 1, cj), base(ci, cj - 1),
+                                                              base(ci, cj + 1), base(ci, cj), where.spacing));
                 }
             }
         }
@@ -269,9 +300,31 @@ void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const 
     if (!placed) {
         noSlope.assign(count, 0.0f);
     }
+    const std::size_t n = set.materials().size();
+    std::vector<std::uint8_t> weights;
+    if (placed) {
+        weights.assign(count * n, 0);
+    }
     const std::vector<std::vector<float>> scales = materialScales(where.gx0, where.gy0, w, w, where.spacing);
-    mSettings.materials->displacementGrid(where.grid(w), placed ? std::span<const float>(map.slope) : noSlope, height,
-                                          map.displacement, mask, scales);
+    set.displacementGrid(where.grid(w), placed ? std::span<const float>(map.slope) : noSlope, height, map.displacement,
+                         mask, scales, map.curvature, weights);
+    if (!placed) {
+        return;
+    }
+    // Four bytes a sample; even samples of a child copy the parent's, as their displacement does.
+    map.weights.assign(count * kMaxDetailMaterials, 0);
+    for (int j = 0; j < w; ++j) {
+        for (int i = 0; i < w; ++i) {
+            const std::size_t k = static_cast<std::size_t>(j) * w + i;
+            std::uint8_t* to = map.weights.data() + k * kMaxDetailMaterials;
+            if (parent && i % 2 == 0 && j % 2 == 0) {
+                const std::size_t p = static_cast<std::size_t>(py0 + j / 2) * w + static_cast<std::size_t>(px0 + i / 2);
+                std::copy_n(parent->weights.data() + p * kMaxDetailMaterials, kMaxDetailMaterials, to);
+            } else {
+                std::copy_n(weights.data() + k * n, n, to);
+            }
+        }
+    }
 }
 
 DualHeightMap DetailSynthesizer::synthesizeChild(const DualHeightMap& parent, int quadrant,
@@ -298,8 +351,32 @@ std::array<DualHeightMap, 4> DetailSynthesizer::synthesizeChildren(const DualHei
     return children;
 }
 
-std::vector<std::uint8_t> DetailSynthesizer::materialWeights(const DualHeightMap& map,
-                                                             const WindowPlacement& where) const
+std::vector<std::uint8_t> DetailSynthesizer::materialWeights(const DualHeightMap& map) const
+{
+    if (!addsMaterials()) {
+        return {};
+    }
+    const int n = chunkSize();
+    const int w = windowSize();
+    std::vector<std::uint8_t> out(static_cast<std::size_t>(n) * n * 4, 0);
+    if (mSettings.materials->materials().size() == 1) {
+        for (std::size_t k = 0; k < out.size(); k += 4) {
+            out[k] = 255;
+        }
+        return out;
+    }
+    TERRAIN_EXPECTS(map.weights.size() == static_cast<std::size_t>(w) * w * 4,
+                    "the map was not displaced with its materials (DetailSynthesizer::displace)");
+    for (int j = 0; j < n; ++j) {
+        const std::size_t from = (static_cast<std::size_t>(j + kBorder) * w + kBorder) * 4;
+        std::copy_n(map.weights.data() + from, static_cast<std::size_t>(n) * 4,
+                    out.data() + static_cast<std::size_t>(j) * n * 4);
+    }
+    return out;
+}
+
+std::vector<std::uint8_t> DetailSynthesizer::displacementWeights(const DualHeightMap& map,
+                                                                 const WindowPlacement& where) const
 {
     if (!addsMaterials()) {
         return {};
@@ -314,13 +391,16 @@ std::vector<std::uint8_t> DetailSynthesizer::materialWeights(const DualHeightMap
         }
         return out;
     }
+    const SampleGrid grid = where.grid(w);
     double weights[kMaxDetailMaterials] = {};
     for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) {
             const int wi = i + kBorder, wj = j + kBorder;
             const std::size_t k = static_cast<std::size_t>(wj) * w + wi;
-            const double height = where.heightOffset + map.base[k];
-            set.weights(map.slope.empty() ? slopeDegrees(map, wi, wj, where.spacing) : map.slope[k], height, weights);
+            const PlacementSample sample{map.slope.empty() ? slopeDegrees(map, wi, wj, where.spacing) : map.slope[k],
+                                         where.heightOffset + map.base[k],
+                                         map.curvature.empty() ? 0.0 : map.curvature[k], grid.x(wi), grid.y(wj)};
+            set.weights(sample, {}, weights);
             std::uint8_t* px = out.data() + (static_cast<std::size_t>(j) * n + i) * 4;
             for (std::size_t m = 0; m < set.materials().size(); ++m) {
                 px[m] = static_cast<std::uint8_t>(std::lround(std::clamp(weights[m], 0.0, 1.0) * 255.0));
@@ -347,6 +427,49 @@ std::vector<std::uint8_t> upsampleTexture(std::span<const std::uint8_t> parent, 
             for (int c = 0; c < 3; ++c) {
                 const int sum = texel(x0, y0)[c] + texel(x1, y0)[c] + texel(x0, y1)[c] + texel(x1, y1)[c];
                 o[c] = static_cast<std::uint8_t>((sum + 2) / 4);
+            }
+        }
+    }
+    return out;
+}
+
+std::vector<std::uint8_t> coverTexture(const MaterialSet& materials, std::span<const std::uint8_t> rgb, int textureSize,
+                                       std::span<const std::uint8_t> weights, int chunkSize)
+{
+    const int t = textureSize, n = chunkSize;
+    TERRAIN_EXPECTS(t >= 2 && n >= 2, "texture and chunk sizes must be >= 2");
+    TERRAIN_EXPECTS(rgb.size() >= static_cast<std::size_t>(t) * t * 3, "the texture holds T * T RGB texels");
+    TERRAIN_EXPECTS(weights.size() >= static_cast<std::size_t>(n) * n * 4, "the weights hold N * N * 4 bytes");
+    const std::size_t count = materials.materials().size();
+    TERRAIN_EXPECTS(count <= kMaxDetailMaterials, "at most kMaxDetailMaterials materials");
+    std::vector<std::uint8_t> out(static_cast<std::size_t>(t) * t * 3);
+    const double scale = static_cast<double>(n - 1) / static_cast<double>(t - 1);
+    auto weightAt = [&](int i, int j, std::size_t m) {
+        return static_cast<double>(weights[(static_cast<std::size_t>(j) * n + i) * 4 + m]);
+    };
+    for (int j = 0; j < t; ++j) {
+        const double y = j * scale;
+        const int y0 = std::min(static_cast<int>(y), n - 2);
+        const double fy = y - y0;
+        for (int i = 0; i < t; ++i) {
+            const double x = i * scale;
+            const int x0 = std::min(static_cast<int>(x), n - 2);
+            const double fx = x - x0;
+            std::array<double, kMaxDetailMaterials> w = {};
+            double total = 0.0;
+            for (std::size_t m = 0; m < count; ++m) {
+                w[m] = (1.0 - fy) * ((1.0 - fx) * weightAt(x0, y0, m) + fx * weightAt(x0 + 1, y0, m)) +
+                       fy * ((1.0 - fx) * weightAt(x0, y0 + 1, m) + fx * weightAt(x0 + 1, y0 + 1, m));
+                total += w[m];
+            }
+            for (std::size_t m = 0; m < count; ++m) {
+                w[m] = total > 0.0 ? w[m] / total : (m == 0 ? 1.0 : 0.0);  // rounding to bytes: the sum near 1
+            }
+            const std::size_t k = (static_cast<std::size_t>(j) * t + i) * 3;
+            const std::array<float, 3> c = materials.cover({rgb[k] / 255.0f, rgb[k + 1] / 255.0f, rgb[k + 2] / 255.0f},
+                                                           std::span<const double>(w.data(), count));
+            for (std::size_t ch = 0; ch < 3; ++ch) {
+                out[k + ch] = static_cast<std::uint8_t>(std::lround(c[ch] * 255.0f));
             }
         }
     }

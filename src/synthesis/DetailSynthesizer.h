@@ -4,7 +4,7 @@
 // dynamic children below it nest exactly.
 //
 // Nesting and seams. A sample's displacement is the materials' fractals at its world position (SampleGrid),
-// weighted by placement (slope and height, Material.h). The placement slope of a static node (displaced
+// weighted by placement (slope, height, curvature, Material.h). The placement slope of a static node (displaced
 // without a parent) is measured on its own base; a dynamic child interpolates its parent's slopes, so
 // below the static leaves every sample keeps one placement at every depth and the synthesized surface
 // converges to one continuous function (no sample carries weights from a coarser slope than its
@@ -115,11 +115,11 @@ public:
     /// out holds ((N - 1) 2^levelsDown)^2 values, rows south to north; zeros without roughness. metres.
     void roughnessTails(const WindowPlacement& where, int levelsDown, std::span<float> out) const;
 
-    /// Sets map.displacement (and with several materials map.slope) from map.base (W x W): with `parent`
-    /// (a dynamic child: the parent's map, this node its child `quadrant`), the placement slopes are the
-    /// parent's interpolated and samples at even window positions copy the parent's displacement, the others
-    /// are evaluated; without (a static node), slopes come from map.base and every sample is evaluated.
-    /// Clears both when no materials are set.
+    /// Sets map.displacement (and with several materials map.slope, map.weights and, where a material is placed
+    /// by curvature, map.curvature) from map.base (W x W): with `parent` (a dynamic child: the parent's map, this
+    /// node its child `quadrant`), the placement fields are the parent's interpolated and samples at even window
+    /// positions copy the parent's displacement and weights, the others are evaluated; without (a static node),
+    /// the fields come from map.base and every sample is evaluated. Clears them when no materials are set.
     void displace(const WindowPlacement& where, const DualHeightMap* parent, int quadrant, DualHeightMap& map) const;
 
     /// Child `quadrant`'s base heights from its parent's (W x W each): the subdivision step alone.
@@ -135,8 +135,13 @@ public:
     std::array<DualHeightMap, 4> synthesizeChildren(const DualHeightMap& parent, const WindowPlacement& where) const;
 
     /// The material weights of the node's N x N samples (border excluded), rows south to north, 4 bytes per
-    /// sample: round(255 * weight of material m) for m < materials; empty when no materials are set.
-    std::vector<std::uint8_t> materialWeights(const DualHeightMap& map, const WindowPlacement& where) const;
+    /// sample: round(255 * weight of material m) for m < materials, as displace() blended them (map.weights);
+    /// empty when no materials are set. Precondition: `map` was displaced.
+    std::vector<std::uint8_t> materialWeights(const DualHeightMap& map) const;
+    /// The weights the displacement blends the materials with at the node's N x N samples, as materialWeights
+    /// lays them out: from the placement fields alone (no height blending), so they are smooth where the
+    /// fields are (what DetailErrorModel bounds finer levels' displacement with).
+    std::vector<std::uint8_t> displacementWeights(const DualHeightMap& map, const WindowPlacement& where) const;
 
     /// Slope in degrees (0 flat) of the base at window sample (i, j): central differences, one-sided on
     /// the window's edge; within 0.001 degrees of the exact value (a polynomial arctangent).
@@ -160,5 +165,13 @@ private:
 /// texel i lies at parent texel qx (T - 1) / 2 + i / 2 and neighbours share their edge texels.
 /// Preconditions: T = 2^k + 1 >= 3, parent holds T * T * 3 bytes.
 std::vector<std::uint8_t> upsampleTexture(std::span<const std::uint8_t> parent, int textureSize, int quadrant);
+
+/// A node's ground colours: its map colours `rgb` (T x T RGB, corner texels on the node's corners) under the
+/// materials (MaterialSet::cover) with the node's N x N `weights` (materialWeights: 4 bytes a sample),
+/// interpolated bilinearly to each texel. Made when the node is made, so the fragments pay nothing for the
+/// cover; the map colours stay apart (NodeData::mapTexture), since a child's come from its parent's and a cover
+/// taken twice would compound. Preconditions: T >= 2, N >= 2, the sizes as stated.
+std::vector<std::uint8_t> coverTexture(const MaterialSet& materials, std::span<const std::uint8_t> rgb, int textureSize,
+                                       std::span<const std::uint8_t> weights, int chunkSize);
 
 }  // namespace terrain

@@ -7,6 +7,7 @@
 #include "core/Check.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -19,6 +20,12 @@ struct DualHeightMap {
     /// W x W placement slopes in degrees, where several materials blend by slope (DetailSynthesizer::displace),
     /// else empty.
     std::vector<float> slope;
+    /// W x W placement curvatures in degrees (placementCurvature), nested like the slopes, where a material
+    /// is placed by curvature, else empty (0 everywhere).
+    std::vector<float> curvature;
+    /// W x W x 4 material weights (round(255 w), material m at byte m) of the samples as the displacement
+    /// blended them, where several materials are placed, else empty.
+    std::vector<std::uint8_t> weights;
 
     bool hasDisplacement() const { return !displacement.empty(); }
     /// The surface height of window sample k = j * W + i: base + displacement (3.3.1).

@@ -1,4 +1,5 @@
-// Materials (paper 3.4.5) and their placement by slope and height with smooth, seam-free blending.
+// Materials (paper 3.4.5) and their placement by slope, height, curvature and a macro variation with smooth,
+// seam-free blending, and the ground colour they give.
 #include "synthesis/Material.h"
 
 #include "core/Check.h"
@@ -10,6 +11,7 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <numbers>
 
 namespace terrain {
 
@@ -21,11 +23,21 @@ double smoothstep(double t)
     return t * t * (3.0 - 2.0 * t);
 }
 
-/// 1 inside [lo, hi], smoothstep down to 0 over `blend` outside.
-double ramp(double value, double lo, double hi, double blend)
+/// 1 inside [lo, hi], smoothstep down to 0 over `blend` outside. `shift` blend widths move the edges outwards
+/// (inwards where negative): the ramp then reads the signed distance into the range, so ground deeper inside than
+/// the shift stays covered. An edge at the end of the value's domain (`first`, `last`: slope 0 and 90) is none.
+double ramp(double value, double lo, double hi, double blend, double shift = 0.0,
+            double first = -std::numeric_limits<double>::infinity(),
+            double last = std::numeric_limits<double>::infinity())
 {
-    double outside = value < lo ? lo - value : (value > hi ? value - hi : 0.0);
-    return smoothstep(1.0 - outside / blend);
+    if (shift == 0.0) {
+        const double outside = value < lo ? lo - value : (value > hi ? value - hi : 0.0);
+        return smoothstep(1.0 - outside / blend);
+    }
+    const double fromLo = lo <= first ? std::numeric_limits<double>::infinity() : value - lo;
+    const double fromHi = hi >= last ? std::numeric_limits<double>::infinity() : hi - value;
+    const double inside = std::min(fromLo, fromHi);  // < 0 outside
+    return smoothstep(1.0 + std::min(inside / blend, 4.0) + shift);
 }
 
 /// Splits "a, b, c" at commas and parses each as a number.
@@ -53,6 +65,20 @@ Expected<std::vector<double>> parseList(std::string_view text)
         }
         start = comma + 1;
     }
+}
+
+/// Parses "a, b, c" into three numbers in [0, 1].
+Status readRgb(const ConfigEntry& entry, std::array<float, 3>& out, const std::function<Error(std::string)>& fail)
+{
+    auto list = parseList(entry.value);
+    if (!list || list->size() != 3 ||
+        std::any_of(list->begin(), list->end(), [](double c) { return !(c >= 0.0 && c <= 1.0); })) {
+        return fail("expected 'r, g, b', each in [0, 1]");
+    }
+    for (int i = 0; i < 3; ++i) {
+        out[static_cast<std::size_t>(i)] = static_cast<float>((*list)[static_cast<std::size_t>(i)]);
+    }
+    return {};
 }
 
 struct Reader {
@@ -201,15 +227,41 @@ const std::map<std::string, Setter, std::less<>>& setters()
          }},
         {"detail_texture_size", [](const Reader& r) { return assign(r.positive(), r.material.detailTextureSize); }},
         {"tint",
+         [](const Reader& r) {
+             return readRgb(r.entry, r.material.tint, [&](const std::string& what) { return r.fail(what); });
+         }},
+        {"colour",
+         [](const Reader& r) {
+             return readRgb(r.entry, r.material.colour, [&](const std::string& what) { return r.fail(what); });
+         }},
+        {"colour_cover", [](const Reader& r) { return assign(r.number(0.0, 1.0, "[0, 1]"), r.material.colourCover); }},
+        {"blend_height",
+         [](const Reader& r) { return assign(r.number(0.0, 1e4, "[0, 10000] metres"), r.material.blendHeight); }},
+        {"curvature",
+         [](const Reader& r) -> Status {
+             auto range = r.range(-90.0, 90.0, "degrees in [-90, 90]");
+             if (!range) {
+                 return range.error();
+             }
+             r.material.placement.curvatureMin = (*range)[0];
+             r.material.placement.curvatureMax = (*range)[1];
+             return {};
+         }},
+        {"curvature_blend",
+         [](const Reader& r) {
+             return assign(r.number(1e-3, 90.0, "[0.001, 90] degrees"), r.material.placement.curvatureBlend);
+         }},
+        {"variation",
          [](const Reader& r) -> Status {
              auto list = parseList(r.entry.value);
-             if (!list || list->size() != 3 ||
-                 std::any_of(list->begin(), list->end(), [](double c) { return c < 0.0 || c > 1.0; })) {
-                 return r.fail("expected 'r, g, b', each in [0, 1]");
+             if (!list || list->size() != 2 || !((*list)[0] >= 0.0 && (*list)[0] <= 4.0) ||
+                 !((*list)[1] >= 1.0 && (*list)[1] <= 1e6)) {
+                 return r.fail(
+                     "expected 'amount, wavelength': amount in [0, 4] blend widths, wavelength in [1, "
+                     "1000000] metres");
              }
-             for (int i = 0; i < 3; ++i) {
-                 r.material.tint[i] = static_cast<float>((*list)[i]);
-             }
+             r.material.placement.variationAmount = (*list)[0];
+             r.material.placement.variationWavelength = (*list)[1];
              return {};
          }},
         {"slope",
@@ -246,9 +298,31 @@ const std::map<std::string, Setter, std::less<>>& setters()
 
 }  // namespace
 
-double MaterialPlacement::coverage(double slopeDegrees, double height) const
+double placementCurvature(double west, double east, double south, double north, double centre, double spacing)
 {
-    return ramp(slopeDegrees, slopeMin, slopeMax, slopeBlend) * ramp(height, heightMin, heightMax, heightBlend);
+    const double bend = ((west + east) + (south + north) - 4.0 * centre) / (2.0 * spacing);
+    return std::atan(bend) * (180.0 / std::numbers::pi);
+}
+
+double MaterialPlacement::variation(double x, double y) const
+{
+    if (variationAmount <= 0.0) {
+        return 0.0;
+    }
+    // Three octaves, each turned and offset so their lattices do not line up; their sum's deviation is about
+    // 0.30 * sqrt(1 + 1/4 + 1/16) (PerlinNoise's 0.30 an octave).
+    const double u = x / variationWavelength, v = y / variationWavelength;
+    const double n = variationNoise(u, v) + 0.5 * variationNoise(1.6 * u - 1.2 * v + 17.3, 1.2 * u + 1.6 * v - 41.9) +
+                     0.25 * variationNoise(-1.92 * u - 3.44 * v - 73.1, 3.44 * u - 1.92 * v + 29.7);
+    return std::clamp(n / (0.30 * std::sqrt(1.3125)), -3.0, 3.0);
+}
+
+double MaterialPlacement::coverage(const PlacementSample& s) const
+{
+    const double shift = variationAmount > 0.0 ? variationAmount * variation(s.x, s.y) : 0.0;
+    return ramp(s.slopeDegrees, slopeMin, slopeMax, slopeBlend, shift, 0.0, 90.0) *
+           ramp(s.height, heightMin, heightMax, heightBlend, shift) *
+           ramp(s.curvature, curvatureMin, curvatureMax, curvatureBlend, shift, -90.0, 90.0);
 }
 
 Expected<Material> parseMaterial(const ConfigFile& config, std::vector<std::string>& warnings)
@@ -268,6 +342,8 @@ Expected<Material> parseMaterial(const ConfigFile& config, std::vector<std::stri
         }
         TERRAIN_TRY(it->second(Reader{entry, material, config.directory()}));
     }
+    // The variation's own noise, apart from the displacement's (the same seed would line their lattices up).
+    material.placement.variationNoise = PerlinNoise(material.fractal.seed ^ 0x5bd1e9955bd1e995ull);
     DisplacementKind kind = material.kind;
     bool bitmap = kind == DisplacementKind::BitmapFbm || kind == DisplacementKind::BitmapRidged;
     material.fractal.type = kind == DisplacementKind::Ridged || kind == DisplacementKind::BitmapRidged
@@ -404,67 +480,151 @@ bool MaterialSet::hasRelative() const
                        [](const Material& m) { return m.relativeAmplitude > 0.0 && m.displacement; });
 }
 
-void MaterialSet::weights(double slopeDegrees, double height, std::span<double> out) const
+bool MaterialSet::blendsByHeight() const
 {
-    TERRAIN_EXPECTS(out.size() >= mMaterials.size(), "out must hold one weight per material");
+    return std::any_of(mMaterials.begin() + 1, mMaterials.end(), [](const Material& m) { return m.blendHeight > 0.0; });
+}
+
+bool MaterialSet::usesCurvature() const
+{
+    return std::any_of(mMaterials.begin() + 1, mMaterials.end(), [](const Material& m) {
+        return m.placement.curvatureMin > -90.0 || m.placement.curvatureMax < 90.0;
+    });
+}
+
+namespace {
+
+/// Coverages c[0 .. n) at `sample` (c[0] = 1: the ground).
+void coverages(const std::vector<Material>& materials, const PlacementSample& sample, std::span<double> c)
+{
+    c[0] = 1.0;
+    for (std::size_t m = 1; m < materials.size(); ++m) {
+        c[m] = materials[m].placement.coverage(sample);
+    }
+}
+
+/// Weights from coverages `c` (overwritten by the height-blended ones), with each material's displacement `d`
+/// where height blending applies (d empty: none).
+void weightsFromCoverages(const std::vector<Material>& materials, std::span<double> c, std::span<const double> d,
+                          std::span<double> out)
+{
+    const std::size_t n = materials.size();
+    if (!d.empty()) {
+        // Bottom up: `below` is the displacement of the layers under material m as they are blended.
+        double below = d[0];
+        for (std::size_t m = 1; m < n; ++m) {
+            const double b = materials[m].blendHeight;
+            if (b > 0.0 && c[m] > 0.0 && c[m] < 1.0) {
+                c[m] = std::clamp(c[m] + 4.0 * c[m] * (1.0 - c[m]) * (d[m] - below) / b, 0.0, 1.0);
+            }
+            below += c[m] * (d[m] - below);
+        }
+    }
     // Painter's order from the top: the last material keeps its coverage, each one below keeps what the
     // ones above leave uncovered; material 0 takes the rest, so the sum is 1 by construction.
     double uncovered = 1.0;
-    for (std::size_t m = mMaterials.size(); m-- > 1;) {
-        double c = mMaterials[m].placement.coverage(slopeDegrees, height);
-        out[m] = c * uncovered;
-        uncovered *= 1.0 - c;
+    for (std::size_t m = n; m-- > 1;) {
+        out[m] = c[m] * uncovered;
+        uncovered *= 1.0 - c[m];
     }
     out[0] = uncovered;
 }
 
-float MaterialSet::displacement(double x, double y, double slopeDegrees, double height) const
+}  // namespace
+
+void MaterialSet::weights(const PlacementSample& sample, std::span<const double> displacements,
+                          std::span<double> out) const
 {
-    constexpr std::size_t kInline = 16;
-    double stack[kInline];
-    std::vector<double> heap;
-    std::span<double> w(stack, kInline);
-    if (mMaterials.size() > kInline) {
-        heap.resize(mMaterials.size());
-        w = heap;
-    }
-    weights(slopeDegrees, height, w);
+    const std::size_t n = mMaterials.size();
+    TERRAIN_EXPECTS(out.size() >= n, "out must hold one weight per material");
+    TERRAIN_EXPECTS(displacements.empty() || displacements.size() >= n, "one displacement per material (or none)");
+    std::vector<double> c(n);
+    coverages(mMaterials, sample, c);
+    weightsFromCoverages(mMaterials, c, blendsByHeight() ? displacements : std::span<const double>(), out);
+}
+
+float MaterialSet::displacement(const PlacementSample& sample) const
+{
+    const std::size_t n = mMaterials.size();
+    std::vector<double> c(n), w(n);
+    coverages(mMaterials, sample, c);
+    weightsFromCoverages(mMaterials, c, {}, w);
     double sum = 0.0;
-    for (std::size_t m = 0; m < mMaterials.size(); ++m) {
+    for (std::size_t m = 0; m < n; ++m) {
         if (w[m] != 0.0) {
-            sum += w[m] * static_cast<double>(static_cast<float>(mMaterials[m].displacementAt(x, y)));
+            sum += w[m] * static_cast<double>(static_cast<float>(mMaterials[m].displacementAt(sample.x, sample.y)));
         }
     }
     return static_cast<float>(sum);
 }
 
+std::array<float, 3> MaterialSet::cover(const std::array<float, 3>& rgb, std::span<const double> weights) const
+{
+    TERRAIN_EXPECTS(weights.size() >= mMaterials.size(), "one weight per material");
+    // A third of each tint, divided by the tint's brightness so that it shifts the hue, not the brightness.
+    constexpr double kTintStrength = 0.35;
+    std::array<double, 3> sum = {0.0, 0.0, 0.0};
+    for (std::size_t m = 0; m < mMaterials.size(); ++m) {
+        const Material& material = mMaterials[m];
+        if (weights[m] == 0.0) {
+            continue;
+        }
+        const auto& t = material.tint;
+        const double luminance = 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2];
+        for (std::size_t i = 0; i < 3; ++i) {
+            const double tint = luminance > 0.0 ? t[i] / luminance : 1.0;
+            const double tinted = rgb[i] * (1.0 + kTintStrength * (tint - 1.0));
+            sum[i] += weights[m] * (tinted + material.colourCover * (material.colour[i] - tinted));
+        }
+    }
+    return {static_cast<float>(std::clamp(sum[0], 0.0, 1.0)), static_cast<float>(std::clamp(sum[1], 0.0, 1.0)),
+            static_cast<float>(std::clamp(sum[2], 0.0, 1.0))};
+}
+
 void MaterialSet::displacementGrid(const SampleGrid& grid, std::span<const float> slopeDegrees,
                                    std::span<const float> heights, std::span<float> out,
-                                   std::span<const std::uint8_t> mask, std::span<const std::vector<float>> scales) const
+                                   std::span<const std::uint8_t> mask, std::span<const std::vector<float>> scales,
+                                   std::span<const float> curvature, std::span<std::uint8_t> weightsOut) const
 {
     TERRAIN_EXPECTS(scales.empty() || scales.size() == mMaterials.size(), "one scale grid (or none) per material");
     TERRAIN_EXPECTS(grid.width >= 0 && grid.height >= 0 && grid.spacing > 0.0, "grid size >= 0 and spacing > 0");
     const std::size_t count = grid.count();
     TERRAIN_EXPECTS(slopeDegrees.size() >= count && heights.size() >= count && out.size() >= count,
                     "slope, height and out must hold width * height samples");
+    TERRAIN_EXPECTS(curvature.empty() || curvature.size() >= count, "curvature must be empty or hold every sample");
     TERRAIN_EXPECTS(mask.empty() || mask.size() >= count, "the mask must hold width * height entries");
     const std::size_t n = mMaterials.size();
+    TERRAIN_EXPECTS(weightsOut.empty() || weightsOut.size() >= count * n, "weightsOut must hold n per sample");
+    // Coverages first. A material is evaluated where it has weight; where weights are asked for and materials
+    // blend by height, wherever it covers anything (the ground everywhere), since the blend reads it there.
+    const bool byHeight = !weightsOut.empty() && blendsByHeight();
+    std::vector<double> c(count * n);
     std::vector<double> w(count * n);
     std::vector<std::uint8_t> used(n * count, 0);  // per material: the samples it must be evaluated at
     std::vector<char> any(n, 0);
-    for (std::size_t k = 0; k < count; ++k) {
-        if (!mask.empty() && mask[k] == 0) {
-            continue;
-        }
-        weights(slopeDegrees[k], heights[k], std::span<double>(w.data() + k * n, n));
-        for (std::size_t m = 0; m < n; ++m) {
-            if (w[k * n + m] != 0.0) {
-                used[m * count + k] = 1;
-                any[m] = 1;
+    std::vector<double> unblended(n);
+    for (int j = 0; j < grid.height; ++j) {
+        for (int i = 0; i < grid.width; ++i) {
+            const std::size_t k =
+                static_cast<std::size_t>(j) * static_cast<std::size_t>(grid.width) + static_cast<std::size_t>(i);
+            if (!mask.empty() && mask[k] == 0) {
+                continue;
+            }
+            const PlacementSample sample{slopeDegrees[k], heights[k], curvature.empty() ? 0.0 : curvature[k], grid.x(i),
+                                         grid.y(j)};
+            const std::span<double> ck(c.data() + k * n, n);
+            coverages(mMaterials, sample, ck);
+            std::copy(ck.begin(), ck.end(), unblended.begin());
+            weightsFromCoverages(mMaterials, unblended, {}, std::span<double>(w.data() + k * n, n));
+            for (std::size_t m = 0; m < n; ++m) {
+                if (byHeight ? ck[m] != 0.0 : w[k * n + m] != 0.0) {
+                    used[m * count + k] = 1;
+                    any[m] = 1;
+                }
             }
         }
     }
-    std::vector<double> sum(count, 0.0);
+    std::vector<double> d(count * n, 0.0);
     std::vector<float> values(count);
     for (std::size_t m = 0; m < n; ++m) {
         if (!any[m] || !mMaterials[m].displacement) {
@@ -477,13 +637,33 @@ void MaterialSet::displacementGrid(const SampleGrid& grid, std::span<const float
         for (std::size_t k = 0; k < count; ++k) {
             if (used[m * count + k] != 0) {
                 const double value = static_cast<double>(values[k]);
-                sum[k] += w[k * n + m] * (scaled ? value * static_cast<double>(scales[m][k]) : value);
+                d[k * n + m] = scaled ? value * static_cast<double>(scales[m][k]) : value;
             }
         }
     }
+    std::vector<double> shown(n);
     for (std::size_t k = 0; k < count; ++k) {
-        if (mask.empty() || mask[k] != 0) {
-            out[k] = static_cast<float>(sum[k]);
+        if (!mask.empty() && mask[k] == 0) {
+            continue;
+        }
+        const std::span<const double> dk(d.data() + k * n, n);
+        double sum = 0.0;
+        for (std::size_t m = 0; m < n; ++m) {
+            if (w[k * n + m] != 0.0) {
+                sum += w[k * n + m] * dk[m];
+            }
+        }
+        out[k] = static_cast<float>(sum);
+        if (weightsOut.empty()) {
+            continue;
+        }
+        const double* wk = w.data() + k * n;
+        if (byHeight) {
+            weightsFromCoverages(mMaterials, std::span<double>(c.data() + k * n, n), dk, shown);
+            wk = shown.data();
+        }
+        for (std::size_t m = 0; m < n; ++m) {
+            weightsOut[k * n + m] = static_cast<std::uint8_t>(std::lround(std::clamp(wk[m], 0.0, 1.0) * 255.0));
         }
     }
 }

@@ -115,8 +115,12 @@ void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> mat
     for (auto _ : state) {
         const WindowPlacement where = childPlacement(leaf.where, quadrant, kChunk);
         DualHeightMap child = synthesizer->synthesizeChild(leaf.map, quadrant, where);
-        auto weights = synthesizer->materialWeights(child, where);
+        auto weights = synthesizer->materialWeights(child);
         auto texture = upsampleTexture(leaf.texture, kChunk, quadrant);
+        if (materials) {
+            // The node's ground colours, as TerrainNodeSource covers every node's map colours.
+            texture = coverTexture(*materials, texture, kChunk, weights, kChunk);
+        }
         if (withBound) {
             // As TerrainNodeSource makes a dynamic node: its children (which its normal map shades with too),
             // and the bound measured on them.
@@ -207,6 +211,34 @@ void tessellationErrors(benchmark::State& state)
 }
 
 BENCHMARK(tessellationErrors)->Unit(benchmark::kMicrosecond)->Repetitions(5)->ReportAggregatesOnly(true);
+
+/// What the ground's cover adds to every node on the loading threads, apart from the node (the material cases
+/// above include it): a dynamic child of the real leaf with the demo's grass, rock and snow, its shown weights
+/// and its map colours under them (coverTexture, 65 x 65 texels).
+void groundCover(benchmark::State& state)
+{
+    std::vector<std::string> warnings;
+    const std::filesystem::path dir = TERRAIN_MATERIALS_DIR;
+    auto set = MaterialSet::load({dir / "grass.mat", dir / "rock.mat", dir / "snow.mat"}, warnings);
+    if (!set.ok()) {
+        std::fprintf(stderr, "%s\n", set.error().message.c_str());
+        std::exit(1);
+    }
+    auto materials = std::make_shared<const MaterialSet>(std::move(set).value());
+    auto synthesizer = DetailSynthesizer::create(kChunk, {"kobbelt", 1.0, materials}).value();
+    const Leaf leaf = makeLeaf(*synthesizer);
+    const WindowPlacement where = childPlacement(leaf.where, 0, kChunk);
+    const DualHeightMap child = synthesizer->synthesizeChild(leaf.map, 0, where);
+    const auto weights = synthesizer->materialWeights(child);
+    const auto texture = upsampleTexture(leaf.texture, kChunk, 0);
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(coverTexture(*materials, texture, kChunk, weights, kChunk).data());
+    }
+    state.counters["nodes/s"] =
+        benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+BENCHMARK(groundCover)->Unit(benchmark::kMicrosecond)->Repetitions(5)->ReportAggregatesOnly(true);
 
 /// What the shadows add to a node on the loading threads (lod/NodeHorizons.h): the horizons of a dynamic child of
 /// the real leaf (grass, rock, roughness) over the whole demo terrain as the viewer's grid (1025 x 1025 samples at

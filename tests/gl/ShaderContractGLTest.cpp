@@ -127,7 +127,6 @@ const std::vector<std::vector<std::string>> kVariants = {
     {"CLIP_TO_VALID"},
     {"NORMAL_MAP"},
     {"DETAIL", "LAYER_COUNT 3"},
-    {"DETAIL", "LAYER_COUNT 3", "DETAIL_TINT_ONLY"},
     {"NORMAL_MAP", "DETAIL", "LAYER_COUNT 8", "CLIP_TO_VALID"},
     {"ATMOSPHERE"},
     {"NORMAL_MAP", "DETAIL", "LAYER_COUNT 3", "ATMOSPHERE"},

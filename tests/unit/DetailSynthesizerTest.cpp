@@ -249,13 +249,82 @@ TEST(DetailSynthesizer, DisplacementIsTheMaterialsAtEachNewSamplesWorldPosition)
     EXPECT_GT(checked, 50);
 }
 
+/// Grass and rock (rock blended by height) and a third material in hollows, whose edge wanders.
+std::shared_ptr<const MaterialSet> coverMaterials()
+{
+    std::vector<std::string> warnings;
+    auto set = MaterialSet::load({kMaterials / "grass.mat", kMaterials / "rock.mat"}, warnings);
+    EXPECT_TRUE(set.ok()) << set.error().message;
+    std::vector<Material> materials = set->materials();
+    auto config = ConfigFile::parse(
+        "name = scree\ndisplacement = fbm\namplitude = 0.5\nwavelength = 20\ncurvature = 0.5, 90\n"
+        "curvature_blend = 1\nvariation = 1, 300\nblend_height = 1\n",
+        "scree.mat");
+    EXPECT_TRUE(config.ok());
+    auto scree = parseMaterial(*config, warnings);
+    EXPECT_TRUE(scree.ok()) << scree.error().message;
+    materials.push_back(std::move(scree).value());
+    return std::make_shared<const MaterialSet>(std::move(materials));
+}
+
+TEST(DetailSynthesizer, CurvaturesAndShownWeightsNestLikeTheSlopes)
+{
+    auto materials = coverMaterials();
+    auto s = synthesizer(materials);
+    Tree tree(*s);
+    int differing = 0, hollows = 0;
+    for (int level = 1; level <= 3; ++level) {
+        const Node child{level, 5, 3};
+        const Node parent{level - 1, child.x >> 1, child.y >> 1};
+        const DualHeightMap& c = tree.node(child);
+        const DualHeightMap& p = tree.node(parent);
+        ASSERT_EQ(c.curvature.size(), c.base.size());
+        ASSERT_EQ(c.weights.size(), c.base.size() * 4);
+        const int px0 = 1 + static_cast<int>(child.x & 1) * (kN - 1) / 2;
+        const int py0 = 1 + static_cast<int>(child.y & 1) * (kN - 1) / 2;
+        auto parentCurvature = [&](int i, int j) { return p.curvature[static_cast<std::size_t>(j) * kW + i]; };
+        for (int j = 0; j + 1 < kW; ++j) {
+            for (int i = 0; i + 1 < kW; ++i) {
+                const std::size_t k = static_cast<std::size_t>(j) * kW + i;
+                const int pi = px0 + i / 2, pj = py0 + j / 2;
+                float expected = parentCurvature(pi, pj);
+                if (i % 2 == 1 && j % 2 == 0) {
+                    expected = 0.5f * (parentCurvature(pi, pj) + parentCurvature(pi + 1, pj));
+                } else if (i % 2 == 0 && j % 2 == 1) {
+                    expected = 0.5f * (parentCurvature(pi, pj) + parentCurvature(pi, pj + 1));
+                } else if (i % 2 == 1) {
+                    expected = 0.25f * ((parentCurvature(pi, pj) + parentCurvature(pi + 1, pj)) +
+                                        (parentCurvature(pi, pj + 1) + parentCurvature(pi + 1, pj + 1)));
+                }
+                EXPECT_TRUE(bitEqual(c.curvature[k], expected)) << level << ": " << i << ", " << j;
+                if (i % 2 == 0 && j % 2 == 0) {
+                    const std::size_t q = static_cast<std::size_t>(pj) * kW + pi;
+                    for (int m = 0; m < 4; ++m) {
+                        EXPECT_EQ(c.weights[4 * k + m], p.weights[4 * q + m]) << level << ": " << i << ", " << j;
+                    }
+                }
+                hollows += c.weights[4 * k + 2] > 0;
+            }
+        }
+        const auto shown = s->materialWeights(c);
+        const auto smooth = s->displacementWeights(c, placementOf(child));
+        ASSERT_EQ(shown.size(), smooth.size());
+        for (std::size_t k = 0; k < shown.size(); k += 4) {
+            EXPECT_NEAR(shown[k] + shown[k + 1] + shown[k + 2], 255, 2);
+            differing += shown[k] != smooth[k];
+        }
+    }
+    EXPECT_GT(hollows, 100);   // the third material is placed somewhere
+    EXPECT_GT(differing, 20);  // and height blending moves what the ground shows
+}
+
 TEST(DetailSynthesizer, SubdivisionOnlyHasNoDisplacementAndNoWeights)
 {
     auto s = synthesizer(nullptr);
     Tree tree(*s);
     const DualHeightMap& map = tree.node({2, 1, 1});
     EXPECT_FALSE(map.hasDisplacement());
-    EXPECT_TRUE(s->materialWeights(map, placementOf({2, 1, 1})).empty());
+    EXPECT_TRUE(s->materialWeights(map).empty());
 }
 
 TEST(DetailSynthesizer, MaterialWeightsCoverSteepAndGentleGroundAndSumToOne)
@@ -265,7 +334,7 @@ TEST(DetailSynthesizer, MaterialWeightsCoverSteepAndGentleGroundAndSumToOne)
     bool sawGrass = false, sawRock = false;
     for (std::int64_t x = 0; x < 4; ++x) {
         const Node n{2, x, 1};
-        const auto weights = s->materialWeights(tree.node(n), placementOf(n));
+        const auto weights = s->materialWeights(tree.node(n));
         ASSERT_EQ(weights.size(), static_cast<std::size_t>(kN) * kN * 4);
         for (std::size_t k = 0; k < weights.size(); k += 4) {
             EXPECT_NEAR(weights[k] + weights[k + 1], 255, 1);

@@ -8,6 +8,7 @@
 #include "lod/TerrainNodeSource.h"
 #include "lod/TerrainStreamer.h"
 #include "synthesis/DetailErrorModel.h"
+#include "synthesis/DetailSynthesizer.h"
 #include "synthesis/LeafErrorEstimator.h"
 
 #include <gtest/gtest.h>
@@ -200,6 +201,44 @@ TEST_F(DynamicNodesTest, AdjacentSelectedNodesAgreeBitForBitOnTheirSharedSamples
     EXPECT_GT(compared, 500);
     EXPECT_GT(comparedSurfaces, 300);
     EXPECT_EQ(mismatches, 0);
+}
+
+TEST_F(DynamicNodesTest, NodeColoursAreTheMapsUnderTheCoverTakenOnce)
+{
+    // Every resident node's colours are its map colours under its materials' cover; a dynamic node's map colours
+    // are its parent's map colours upsampled (not the parent's covered ones: the cover would compound level by
+    // level).
+    TerrainNodeSource source(*mMap, {mSynthesizer.get(), 0.05});
+    StreamerOptions options;
+    options.cacheSize = 2000;
+    options.workers = 2;
+    auto streamer = TerrainStreamer::create(source, extentOf(mMap->header()), options);
+    ASSERT_TRUE(streamer.ok());
+    settle(**streamer, lowCamera(15.0), 1.0);
+    const MapHeader& h = mMap->header();
+    const MaterialSet& materials = *mSynthesizer->settings().materials;
+    int dynamic = 0, changed = 0;
+    for (const auto& s : (*streamer)->selection().nodes) {
+        for (NodeId id = s.id; id.level > 0; id = id.parent()) {
+            NodePtr node = (*streamer)->node(id);
+            ASSERT_TRUE(node);
+            ASSERT_FALSE(node->mapTexture.empty()) << id.toString();
+            EXPECT_EQ(node->texture, coverTexture(materials, node->mapTexture, static_cast<int>(h.textureSize),
+                                                  node->materialWeights, static_cast<int>(h.chunkSize)))
+                << id.toString();
+            changed += node->texture != node->mapTexture;
+            if (!node->isStatic) {
+                NodePtr parent = (*streamer)->node(id.parent());
+                ASSERT_TRUE(parent);
+                EXPECT_EQ(node->mapTexture,
+                          upsampleTexture(parent->mapTexture, static_cast<int>(h.textureSize), id.quadrant()))
+                    << id.toString();
+                ++dynamic;
+            }
+        }
+    }
+    EXPECT_GT(dynamic, 20);
+    EXPECT_GT(changed, 20);
 }
 
 TEST_F(DynamicNodesTest, SynthesisIsTheSameWithAnyThreadsAndAnyOrder)
