@@ -31,7 +31,8 @@ struct NodeData {
     std::vector<std::uint8_t> materialWeights;  ///< N x N x 4 material weights (DetailSynthesizer), or empty
     std::vector<std::uint8_t> texture;          ///< T x T RGB, rows south to north: the ground colours drawn
     /// The map's colours under `texture` before the materials' cover (synthesis coverTexture): what a dynamic
-    /// child's colours are upsampled from; empty where there is no cover (texture is then the map's).
+    /// child's colours are upsampled from; kept only by nodes whose children are synthesized, and empty where
+    /// there is no cover (texture is then the map's).
     std::vector<std::uint8_t> mapTexture;
     const std::vector<std::uint8_t>& uncoveredTexture() const { return mapTexture.empty() ? texture : mapTexture; }
     /// The normal map of the surface below the node (synthesis/NormalMap.h): normalMapTexels^2 pairs (x, y)

@@ -116,6 +116,10 @@ void TerrainNodeSource::addCover(NodeData& data) const
     data.mapTexture = std::move(data.texture);
     data.texture = coverTexture(*mPolicy.synthesizer->settings().materials, data.mapTexture,
                                 static_cast<int>(h.textureSize), data.materialWeights, static_cast<int>(h.chunkSize));
+    // Only a node whose children are synthesized reads its map colours again.
+    if (!data.hasChildren || data.hasStaticChildren) {
+        data.mapTexture = {};
+    }
 }
 
 void TerrainNodeSource::addHorizons(NodeData& data, const WindowPlacement& where, const NodeData* parent) const
@@ -198,7 +202,7 @@ NodePtr TerrainNodeSource::synthesize(const NodeData& parent, int quadrant) cons
     // parent's / kErrorNesting, so errors nest with a geomorph range.
     std::array<DualHeightMap, 4> children;
     if (mPolicy.bounds || mPolicy.normalMapSize > 0) {
-        children = synthesizer.synthesizeChildren(data->heights, where);
+        children = synthesizer.synthesizeChildren(data->heights, where, ShownWeights::Skip);
     }
     // The bound, before the nesting cap: the box below needs what is true, the selection what nests.
     const double bound =

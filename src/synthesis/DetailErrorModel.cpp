@@ -335,7 +335,7 @@ float DetailErrorModel::boundFromChildren(const DualHeightMap& node, const std::
         const WindowPlacement childAt = childPlacement(where, worstQ, n);
         const WindowPlacement at = childPlacement(childAt, g, n);
         const DualHeightMap grandchild =
-            mSynthesizer.synthesizeChild(children[static_cast<std::size_t>(worstQ)], g, at);
+            mSynthesizer.synthesizeChild(children[static_cast<std::size_t>(worstQ)], g, at, ShownWeights::Skip);
         const double gx0 = (worstQ & 1) * half + (g & 1) * half * 0.5;
         const double gy0 = (worstQ >> 1) * half + (g >> 1) * half * 0.5;
         descendantCellBounds(node, grandchild, at, level + 2, gx0, gy0, 0.25, fine);
@@ -415,9 +415,10 @@ std::function<float(const MapHeader&, const NodeId&, std::span<const std::uint16
             leaf.base[k] = static_cast<float>(h.heightStep * codes[k]);  // as TerrainNodeSource::loadStatic makes it
         }
         const WindowPlacement where = windowPlacement(h, id);
-        s.displace(where, nullptr, 0, leaf);
+        s.displace(where, nullptr, 0, leaf, ShownWeights::Skip);
         // The leaf's children as the viewer synthesizes them below it, measured, plus the model's tail.
-        return forMap->model->boundFromChildren(leaf, s.synthesizeChildren(leaf, where), where, id.level);
+        return forMap->model->boundFromChildren(leaf, s.synthesizeChildren(leaf, where, ShownWeights::Skip), where,
+                                                id.level);
     };
 }
 

@@ -26,7 +26,7 @@
 //   never more than the fractal's range (measured on the probes, times the margin; at most 2 amplitude). It
 //   shrinks by the fractal's gain per level while octaves are finer than the spacing, then by 4 per level once
 //   the sampling resolves them all (fBm); a ridged fractal's creases keep it shrinking by about 2.
-// - w_m: material m's weight at a sample (placement, DetailSynthesizer::materialWeights): the displacement
+// - w_m: material m's weight at a sample (placement, DetailSynthesizer::displacementWeights): the displacement
 //   there is the weighted sum of the materials', so its error is the weighted sum of theirs.
 // - the roughness octaves (RoughnessNoise::cellTails, per child cell): those the children lack, up to the
 //   noise's measured peak each, and the interpolation error of those they hold between their samples
@@ -71,7 +71,7 @@ public:
     /// E_m at quadtree `level` (metres), material `m` in the synthesizer's order; 0 without materials.
     double displacementError(std::size_t m, int level) const;
 
-    /// max over samples of sum_m w_m E_m(level) for a node with `weights` (DetailSynthesizer::materialWeights:
+    /// max over samples of sum_m w_m E_m(level) for a node with `weights` (DetailSynthesizer::displacementWeights:
     /// N x N x 4 bytes; empty when there are no materials).
     /// With `scales` (DetailSynthesizer::nodeMaterialScales), material m's error at a sample is times
     /// scales[m] there where that is not empty (relative materials).

@@ -168,7 +168,7 @@ double DetailSynthesizer::slopeDegrees(const DualHeightMap& map, int i, int j, d
 }
 
 void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightMap* parent, int quadrant,
-                                 DualHeightMap& map) const
+                                 DualHeightMap& map, ShownWeights shown) const
 {
     const int w = windowSize();
     TERRAIN_EXPECTS(map.size == w && map.base.size() == static_cast<std::size_t>(w) * w,
@@ -199,7 +199,7 @@ void DetailSynthesizer::displace(const WindowPlacement& where, const DualHeightM
     const std::span<const std::uint8_t> mask =
         parent ? std::span<const std::uint8_t>(mNewSamples) : std::span<const std::uint8_t>();
     if (addsMaterials()) {
-        displaceByMaterials(where, parent, px0, py0, mask, map);
+        displaceByMaterials(where, parent, px0, py0, shown == ShownWeights::Keep, mask, map);
     } else {
         map.slope.clear();
         map.curvature.clear();
@@ -226,7 +226,8 @@ void DetailSynthesizer::roughnessTails(const WindowPlacement& where, int levelsD
 }
 
 void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const DualHeightMap* parent, int px0, int py0,
-                                            std::span<const std::uint8_t> mask, DualHeightMap& map) const
+                                            bool keepWeights, std::span<const std::uint8_t> mask,
+                                            DualHeightMap& map) const
 {
     const int w = windowSize();
     const std::size_t count = static_cast<std::size_t>(w) * w;
@@ -237,7 +238,7 @@ void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const 
     if (parent) {
         TERRAIN_EXPECTS(!placed || parent->slope.size() == count, "the parent has no placement slopes");
         TERRAIN_EXPECTS(!curved || parent->curvature.size() == count, "the parent has no placement curvatures");
-        TERRAIN_EXPECTS(!placed || parent->weights.size() == count * kMaxDetailMaterials,
+        TERRAIN_EXPECTS(!placed || !keepWeights || parent->weights.size() == count * kMaxDetailMaterials,
                         "the parent has no material weights");
     }
     std::vector<float> height;
@@ -302,13 +303,13 @@ void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const 
     }
     const std::size_t n = set.materials().size();
     std::vector<std::uint8_t> weights;
-    if (placed) {
+    if (placed && keepWeights) {
         weights.assign(count * n, 0);
     }
     const std::vector<std::vector<float>> scales = materialScales(where.gx0, where.gy0, w, w, where.spacing);
     set.displacementGrid(where.grid(w), placed ? std::span<const float>(map.slope) : noSlope, height, map.displacement,
                          mask, scales, map.curvature, weights);
-    if (!placed) {
+    if (weights.empty()) {
         return;
     }
     // Four bytes a sample; even samples of a child copy the parent's, as their displacement does.
@@ -328,7 +329,7 @@ void DetailSynthesizer::displaceByMaterials(const WindowPlacement& where, const 
 }
 
 DualHeightMap DetailSynthesizer::synthesizeChild(const DualHeightMap& parent, int quadrant,
-                                                 const WindowPlacement& where) const
+                                                 const WindowPlacement& where, ShownWeights shown) const
 {
     const int w = windowSize();
     TERRAIN_EXPECTS(parent.size == w && parent.base.size() == static_cast<std::size_t>(w) * w,
@@ -337,16 +338,18 @@ DualHeightMap DetailSynthesizer::synthesizeChild(const DualHeightMap& parent, in
     child.size = w;
     child.base.resize(static_cast<std::size_t>(w) * w);
     mSubdivider->subdivide(parent.base, quadrant, child.base);
-    displace(where, parent.hasDisplacement() ? &parent : nullptr, quadrant, child);
+    displace(where, parent.hasDisplacement() ? &parent : nullptr, quadrant, child, shown);
     return child;
 }
 
 std::array<DualHeightMap, 4> DetailSynthesizer::synthesizeChildren(const DualHeightMap& parent,
-                                                                   const WindowPlacement& where) const
+                                                                   const WindowPlacement& where,
+                                                                   ShownWeights shown) const
 {
     std::array<DualHeightMap, 4> children;
     for (int q = 0; q < 4; ++q) {
-        children[static_cast<std::size_t>(q)] = synthesizeChild(parent, q, childPlacement(where, q, chunkSize()));
+        children[static_cast<std::size_t>(q)] =
+            synthesizeChild(parent, q, childPlacement(where, q, chunkSize()), shown);
     }
     return children;
 }
@@ -443,6 +446,10 @@ std::vector<std::uint8_t> coverTexture(const MaterialSet& materials, std::span<c
     const std::size_t count = materials.materials().size();
     TERRAIN_EXPECTS(count <= kMaxDetailMaterials, "at most kMaxDetailMaterials materials");
     std::vector<std::uint8_t> out(static_cast<std::size_t>(t) * t * 3);
+    std::array<MaterialSet::CoverTerms, kMaxDetailMaterials> terms{};
+    for (std::size_t m = 0; m < count; ++m) {
+        terms[m] = materials.coverTerms(m);
+    }
     const double scale = static_cast<double>(n - 1) / static_cast<double>(t - 1);
     auto weightAt = [&](int i, int j, std::size_t m) {
         return static_cast<double>(weights[(static_cast<std::size_t>(j) * n + i) * 4 + m]);
@@ -462,14 +469,19 @@ std::vector<std::uint8_t> coverTexture(const MaterialSet& materials, std::span<c
                        fy * ((1.0 - fx) * weightAt(x0, y0 + 1, m) + fx * weightAt(x0 + 1, y0 + 1, m));
                 total += w[m];
             }
-            for (std::size_t m = 0; m < count; ++m) {
-                w[m] = total > 0.0 ? w[m] / total : (m == 0 ? 1.0 : 0.0);  // rounding to bytes: the sum near 1
+            // The weights' bytes sum to about 255; normalised, as MaterialSet::cover takes them.
+            const double inverse = total > 0.0 ? 1.0 / total : 0.0;
+            if (total <= 0.0) {
+                w[0] = 1.0;
             }
             const std::size_t k = (static_cast<std::size_t>(j) * t + i) * 3;
-            const std::array<float, 3> c = materials.cover({rgb[k] / 255.0f, rgb[k + 1] / 255.0f, rgb[k + 2] / 255.0f},
-                                                           std::span<const double>(w.data(), count));
             for (std::size_t ch = 0; ch < 3; ++ch) {
-                out[k + ch] = static_cast<std::uint8_t>(std::lround(c[ch] * 255.0f));
+                const double map = rgb[k + ch] / 255.0;
+                double sum = 0.0;
+                for (std::size_t m = 0; m < count; ++m) {
+                    sum += (total > 0.0 ? w[m] * inverse : w[m]) * (map * terms[m].scale[ch] + terms[m].offset[ch]);
+                }
+                out[k + ch] = static_cast<std::uint8_t>(std::lround(std::clamp(sum, 0.0, 1.0) * 255.0));
             }
         }
     }

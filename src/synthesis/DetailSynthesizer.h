@@ -53,6 +53,9 @@ struct DetailSettings {
 /// Most materials a set may hold: their weights travel to the GPU as one RGBA8 value per sample.
 inline constexpr std::size_t kMaxDetailMaterials = 4;
 
+/// Whether synthesis keeps the weights the ground shows (DualHeightMap::weights) with a map.
+enum class ShownWeights { Keep, Skip };
+
 /// Where a node's window lies. Window sample (i, j) is at world x = originX + (gx0 + i) * spacing (and y
 /// alike); its absolute height is heightOffset + base (the map's height offset: bases are stored relative
 /// to it so float keeps millimetres).
@@ -120,7 +123,11 @@ public:
     /// node its child `quadrant`), the placement fields are the parent's interpolated and samples at even window
     /// positions copy the parent's displacement and weights, the others are evaluated; without (a static node),
     /// the fields come from map.base and every sample is evaluated. Clears them when no materials are set.
-    void displace(const WindowPlacement& where, const DualHeightMap* parent, int quadrant, DualHeightMap& map) const;
+    /// With ShownWeights::Skip the map gets no weights (map.weights empty) and materials are evaluated only where
+    /// the displacement weighs them: for maps only measured and dropped (bounds, normal maps' surfaces below,
+    /// prep's estimates), whose descendants must skip them too.
+    void displace(const WindowPlacement& where, const DualHeightMap* parent, int quadrant, DualHeightMap& map,
+                  ShownWeights shown = ShownWeights::Keep) const;
 
     /// Child `quadrant`'s base heights from its parent's (W x W each): the subdivision step alone.
     void subdivideBase(std::span<const float> parent, int quadrant, std::span<float> child) const
@@ -129,13 +136,16 @@ public:
     }
 
     /// Dynamic child `quadrant` (0..3) of `parent`: base subdivided, then displace(). `where` places the child.
-    DualHeightMap synthesizeChild(const DualHeightMap& parent, int quadrant, const WindowPlacement& where) const;
+    DualHeightMap synthesizeChild(const DualHeightMap& parent, int quadrant, const WindowPlacement& where,
+                                  ShownWeights shown = ShownWeights::Keep) const;
     /// The four dynamic children of the node `parent` placed at `where` (synthesizeChild of quadrants 0..3,
     /// each placed by childPlacement).
-    std::array<DualHeightMap, 4> synthesizeChildren(const DualHeightMap& parent, const WindowPlacement& where) const;
+    std::array<DualHeightMap, 4> synthesizeChildren(const DualHeightMap& parent, const WindowPlacement& where,
+                                                    ShownWeights shown = ShownWeights::Keep) const;
 
     /// The material weights of the node's N x N samples (border excluded), rows south to north, 4 bytes per
-    /// sample: round(255 * weight of material m) for m < materials, as displace() blended them (map.weights);
+    /// sample: round(255 * weight of material m) for m < materials, the weights the ground shows (map.weights:
+    /// blended by the materials' heights, not the displacement's: displacementWeights);
     /// empty when no materials are set. Precondition: `map` was displaced.
     std::vector<std::uint8_t> materialWeights(const DualHeightMap& map) const;
     /// The weights the displacement blends the materials with at the node's N x N samples, as materialWeights
@@ -152,7 +162,7 @@ private:
     /// The materials' part of displace(): placement slopes and the new samples' (all without a parent)
     /// material displacement. px0, py0: the parent window's sample under the child's (0, 0).
     void displaceByMaterials(const WindowPlacement& where, const DualHeightMap* parent, int px0, int py0,
-                             std::span<const std::uint8_t> mask, DualHeightMap& map) const;
+                             bool keepWeights, std::span<const std::uint8_t> mask, DualHeightMap& map) const;
 
     std::unique_ptr<Subdivider> mSubdivider;
     DetailSettings mSettings;

@@ -23,8 +23,9 @@ struct DualHeightMap {
     /// W x W placement curvatures in degrees (placementCurvature), nested like the slopes, where a material
     /// is placed by curvature, else empty (0 everywhere).
     std::vector<float> curvature;
-    /// W x W x 4 material weights (round(255 w), material m at byte m) of the samples as the displacement
-    /// blended them, where several materials are placed, else empty.
+    /// W x W x 4 material weights (round(255 w), material m at byte m) the ground shows at the samples (blended
+    /// by the materials' heights, MaterialSet::weights; the displacement's own are not kept), where several
+    /// materials are placed, else empty.
     std::vector<std::uint8_t> weights;
 
     bool hasDisplacement() const { return !displacement.empty(); }

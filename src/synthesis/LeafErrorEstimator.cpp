@@ -72,7 +72,7 @@ float estimateLeafDetailError(DualHeightMap leaf, const WindowPlacement& where, 
     // The runtime displaces a static leaf from its static parent's displacement; here it has no parent, so
     // its even samples are evaluated at its own spacing. Only their material weights can differ (slope at a
     // finer spacing), and only where materials blend: the same surface up to that blend.
-    synthesizer.displace(where, nullptr, 0, leaf);
+    synthesizer.displace(where, nullptr, 0, leaf, ShownWeights::Skip);
     const LeafSurface surface(leaf, n);
 
     SplitMix64 random(seed);
@@ -85,7 +85,7 @@ float estimateLeafDetailError(DualHeightMap leaf, const WindowPlacement& where, 
     for (int d = 0; d < sampling.descents; ++d) {
         int quadrant = children[static_cast<std::size_t>(d)];
         WindowPlacement place = childPlacement(where, quadrant, n);
-        DualHeightMap node = synthesizer.synthesizeChild(leaf, quadrant, place);
+        DualHeightMap node = synthesizer.synthesizeChild(leaf, quadrant, place, ShownWeights::Skip);
         // The node's south-west sample in leaf sample units, and its spacing in them.
         double x0 = (quadrant & 1) * half, y0 = (quadrant >> 1) * half, step = 0.5;
         for (int level = 1;; ++level) {
@@ -98,7 +98,7 @@ float estimateLeafDetailError(DualHeightMap leaf, const WindowPlacement& where, 
             y0 += (quadrant >> 1) * half * step;
             step *= 0.5;
             place = childPlacement(place, quadrant, n);
-            node = synthesizer.synthesizeChild(node, quadrant, place);
+            node = synthesizer.synthesizeChild(node, quadrant, place, ShownWeights::Skip);
         }
     }
     return static_cast<float>(worst);

@@ -37,7 +37,11 @@ double ramp(double value, double lo, double hi, double blend, double shift = 0.0
     const double fromLo = lo <= first ? std::numeric_limits<double>::infinity() : value - lo;
     const double fromHi = hi >= last ? std::numeric_limits<double>::infinity() : hi - value;
     const double inside = std::min(fromLo, fromHi);  // < 0 outside
-    return smoothstep(1.0 + std::min(inside / blend, 4.0) + shift);
+    if (inside == std::numeric_limits<double>::infinity()) {
+        return 1.0;  // a rule without edges
+    }
+    // The shift is at most 3 x 4 blend widths: ground deeper inside than that is covered whatever the noise.
+    return smoothstep(1.0 + std::min(inside / blend, 13.0) + shift);
 }
 
 /// Splits "a, b, c" at commas and parses each as a number.
@@ -558,23 +562,34 @@ float MaterialSet::displacement(const PlacementSample& sample) const
     return static_cast<float>(sum);
 }
 
+MaterialSet::CoverTerms MaterialSet::coverTerms(std::size_t m) const
+{
+    TERRAIN_EXPECTS(m < mMaterials.size(), "no such material");
+    const Material& material = mMaterials[m];
+    // A third of the tint, divided by the tint's brightness so that it shifts the hue, not the brightness.
+    constexpr double kTintStrength = 0.35;
+    const auto& t = material.tint;
+    const double luminance = 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2];
+    CoverTerms terms{};
+    for (std::size_t i = 0; i < 3; ++i) {
+        const double tint = luminance > 0.0 ? t[i] / luminance : 1.0;
+        terms.scale[i] = (1.0 + kTintStrength * (tint - 1.0)) * (1.0 - material.colourCover);
+        terms.offset[i] = material.colourCover * material.colour[i];
+    }
+    return terms;
+}
+
 std::array<float, 3> MaterialSet::cover(const std::array<float, 3>& rgb, std::span<const double> weights) const
 {
     TERRAIN_EXPECTS(weights.size() >= mMaterials.size(), "one weight per material");
-    // A third of each tint, divided by the tint's brightness so that it shifts the hue, not the brightness.
-    constexpr double kTintStrength = 0.35;
     std::array<double, 3> sum = {0.0, 0.0, 0.0};
     for (std::size_t m = 0; m < mMaterials.size(); ++m) {
-        const Material& material = mMaterials[m];
         if (weights[m] == 0.0) {
             continue;
         }
-        const auto& t = material.tint;
-        const double luminance = 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2];
+        const CoverTerms terms = coverTerms(m);
         for (std::size_t i = 0; i < 3; ++i) {
-            const double tint = luminance > 0.0 ? t[i] / luminance : 1.0;
-            const double tinted = rgb[i] * (1.0 + kTintStrength * (tint - 1.0));
-            sum[i] += weights[m] * (tinted + material.colourCover * (material.colour[i] - tinted));
+            sum[i] += weights[m] * (rgb[i] * terms.scale[i] + terms.offset[i]);
         }
     }
     return {static_cast<float>(std::clamp(sum[0], 0.0, 1.0)), static_cast<float>(std::clamp(sum[1], 0.0, 1.0)),

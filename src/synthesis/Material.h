@@ -170,6 +170,13 @@ public:
     /// sum_m weight_m * mix(rgb * tint'_m, colour_m, colourCover_m), where tint'_m is a third of the tint at the
     /// map colour's brightness (the map's colours stay the base: a grass tint does not paint a dry valley green).
     std::array<float, 3> cover(const std::array<float, 3>& rgb, std::span<const double> weights) const;
+    /// Material m's part of cover() as a linear map of the map's colour: mix(rgb * tint'_m, colour_m,
+    /// colourCover_m) = rgb * scale + offset, per channel.
+    struct CoverTerms {
+        std::array<double, 3> scale;
+        std::array<double, 3> offset;
+    };
+    CoverTerms coverTerms(std::size_t m) const;
 
     /// The grid form: out[k] = displacement({slope[k], height[k], curvature[k], grid.x(i), grid.y(j)}) with
     /// k = j * width + i, bit-identical to the point form; a material whose weight is zero over the whole

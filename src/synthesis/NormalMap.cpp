@@ -64,7 +64,7 @@ std::vector<float> surfaceBelow(const DetailSynthesizer& synthesizer, const Dual
         node.surface(own);
         return own;
     }
-    return surfaceBelow(synthesizer, synthesizer.synthesizeChildren(node, where), where, depth);
+    return surfaceBelow(synthesizer, synthesizer.synthesizeChildren(node, where, ShownWeights::Skip), where, depth);
 }
 
 namespace {

@@ -124,7 +124,7 @@ void dynamicNode(benchmark::State& state, std::shared_ptr<const MaterialSet> mat
         if (withBound) {
             // As TerrainNodeSource makes a dynamic node: its children (which its normal map shades with too),
             // and the bound measured on them.
-            const auto children = synthesizer->synthesizeChildren(child, where);
+            const auto children = synthesizer->synthesizeChildren(child, where, ShownWeights::Skip);
             benchmark::DoNotOptimize(model.boundFromChildren(child, children, where, 5));
         }
         benchmark::DoNotOptimize(child.base.data());

@@ -30,8 +30,9 @@ Material parsed(const std::string& text)
 MaterialSet grassAndRock(double blendHeight)
 {
     std::vector<Material> m;
-    m.push_back(parsed("name = grass\ndisplacement = fbm\namplitude = 0.8\nwavelength = 40\nseed = 3\n"
-                       "tint = 0.55, 0.68, 0.40\n"));
+    m.push_back(
+        parsed("name = grass\ndisplacement = fbm\namplitude = 0.8\nwavelength = 40\nseed = 3\n"
+               "tint = 0.55, 0.68, 0.40\n"));
     std::string rock =
         "name = rock\ndisplacement = ridged\namplitude = 3\nwavelength = 24\nseed = 7\nslope = 30, 90\n"
         "slope_blend = 10\ntint = 0.60, 0.57, 0.53\n";
@@ -45,8 +46,8 @@ MaterialSet grassAndRock(double blendHeight)
 TEST(GroundCover, ShippedSnowLoadsWithItsRules)
 {
     std::vector<std::string> warnings;
-    auto set = MaterialSet::load({kMaterials / "grass.mat", kMaterials / "rock.mat", kMaterials / "snow.mat"},
-                                 warnings);
+    auto set =
+        MaterialSet::load({kMaterials / "grass.mat", kMaterials / "rock.mat", kMaterials / "snow.mat"}, warnings);
     ASSERT_TRUE(set.ok()) << set.error().message;
     EXPECT_TRUE(warnings.empty()) << warnings.front();
     const Material& snow = set->materials()[2];
@@ -56,8 +57,8 @@ TEST(GroundCover, ShippedSnowLoadsWithItsRules)
     EXPECT_GT(snow.placement.variationAmount, 0.0);
     EXPECT_TRUE(set->usesCurvature());
     EXPECT_TRUE(set->blendsByHeight());
-    // Gentle ground well above the line, not on a ridge, is snow whatever the variation; steep ground there rock; low ground
-    // grass; a sharp ridge above the line keeps less snow than a hollow beside it.
+    // Gentle ground well above the line, not on a ridge, is snow whatever the variation; steep ground there rock; low
+    // ground grass; a sharp ridge above the line keeps less snow than a hollow beside it.
     double w[3];
     set->weights({10.0, 5000.0, 10.0, 1234.0, 5678.0}, {}, w);
     EXPECT_EQ(w[2], 1.0);
@@ -117,8 +118,7 @@ TEST(GroundCover, CurvatureIsTheBendOverOneSample)
         const double b = 0.5 * a;
         auto bowl = [&](double x, double y) { return a * x * x + b * y * y; };
         const double expected = std::atan((a + b) * s) * 180.0 / std::numbers::pi;
-        EXPECT_NEAR(placementCurvature(bowl(-s, 0), bowl(s, 0), bowl(0, -s), bowl(0, s), bowl(0, 0), s), expected,
-                    1e-9)
+        EXPECT_NEAR(placementCurvature(bowl(-s, 0), bowl(s, 0), bowl(0, -s), bowl(0, s), bowl(0, 0), s), expected, 1e-9)
             << a;
     }
     // A material placed on hollows covers a bowl and not a dome.
@@ -183,8 +183,8 @@ TEST(GroundCover, HeightBlendShowsTheHigherMaterialAndLeavesTheSurfaceAlone)
     struct Case {
         double grass, rock, rockWeight;
     };
-    for (const Case& c : {Case{0.0, 0.0, 0.5}, Case{0.0, 1.0, 1.0}, Case{0.0, -1.0, 0.0}, Case{0.2, 0.6, 0.7},
-                          Case{-0.5, -0.9, 0.3}}) {
+    for (const Case& c :
+         {Case{0.0, 0.0, 0.5}, Case{0.0, 1.0, 1.0}, Case{0.0, -1.0, 0.0}, Case{0.2, 0.6, 0.7}, Case{-0.5, -0.9, 0.3}}) {
         const double d[2] = {c.grass, c.rock};
         blended.weights(half, d, w);
         EXPECT_NEAR(w[1], c.rockWeight, 1e-12) << c.grass << " " << c.rock;
@@ -274,9 +274,9 @@ TEST(GroundCover, NodeTexturesTakeTheCoverAtTheirTexelsPlaces)
                 // Texel i lies at sample i (n - 1) / (t - 1); the weight between samples is linear.
                 const double x = i * (n - 1.0) / (t - 1.0);
                 const int x0 = std::min(static_cast<int>(x), n - 2);
-                const double s = (std::min(255, 64 * x0) + (x - x0) * (std::min(255, 64 * (x0 + 1)) -
-                                                                      std::min(255, 64 * x0))) /
-                                 255.0;
+                const double s =
+                    (std::min(255, 64 * x0) + (x - x0) * (std::min(255, 64 * (x0 + 1)) - std::min(255, 64 * x0))) /
+                    255.0;
                 for (int c = 0; c < 3; ++c) {
                     EXPECT_NEAR(covered[(j * t + i) * 3 + c], s * 255.0, 0.51) << t << ": " << i << ", " << j;
                 }
