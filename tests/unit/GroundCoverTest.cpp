@@ -172,6 +172,18 @@ TEST(GroundCover, VariationIsSmoothOfUnitDeviationAndMovesTheEdges)
     EXPECT_GT(moved, 100);
     // Without variation: none.
     EXPECT_EQ(MaterialPlacement{}.variation(123.0, 456.0), 0.0);
+    // The largest amount moves edges by up to 12 blend widths, no further: ground deeper inside keeps its cover,
+    // and a rule without edges (slope 0-90, no height or curvature limits) covers everything.
+    const Material strong = parsed("name = s\nheight = 1000, 2000\nheight_blend = 10\nvariation = 4, 200\n");
+    const Material everywhere = parsed("name = e\nvariation = 4, 200\n");
+    int patches = 0;
+    for (int k = 0; k < 400; ++k) {
+        const double x = k * 53.0, y = k * 17.0;
+        EXPECT_EQ(strong.placement.coverage({10.0, 1500.0, 0.0, x, y}), 1.0) << x;
+        EXPECT_EQ(everywhere.placement.coverage({45.0, -300.0, -20.0, x, y}), 1.0) << x;
+        patches += strong.placement.coverage({10.0, 1000.0 + 0.1 * k, 0.0, x, y}) < 0.5;
+    }
+    EXPECT_GT(patches, 20);  // near the edge the noise does thin it
 }
 
 TEST(GroundCover, HeightBlendShowsTheHigherMaterialAndLeavesTheSurfaceAlone)
