@@ -5,8 +5,9 @@
 // surface is the node's own even samples (they are the parent's samples) along the template triangulation; its
 // normals at its samples are made with the node (lod/NodeTextures.h), and between parent samples the mean of the
 // two is taken (gpudata/NodeVertexData.h computes the same on the CPU). The includer declares the outputs written
-// here: vRelative, vNormal (without NORMAL_MAP), vNodeUv, vLocal, vMaterials, vMorph, vParentOffset, vSlots, and
-// with ATMOSPHERE the air at the vertex (light.glsl, airAt): vSunlight, vAirTransmittance, vAerial.
+// here: vRelative, vNormal (without NORMAL_MAP), vNodeUv, vLocal, vMaterials, vMorph, vParentOffset, vSlots, with
+// SHADOWS vSkyVisibility, and with ATMOSPHERE the air at the vertex (light.glsl, airAt): vSunlight,
+// vAirTransmittance, vAerial.
 
 uniform mat4 uViewProjection;  // camera-relative world -> clip (rotation and projection only)
 uniform float uInverseCells;   // 1 / (N - 1)
@@ -17,6 +18,11 @@ uniform sampler2DArray uParentNormals;  // per slot: ((N + 1) / 2)^2 unit normal
 #endif
 #ifdef DETAIL
 uniform sampler2DArray uWeights;  // per slot: N x N material weights (3.4.5)
+#endif
+#ifdef SHADOWS
+// per slot: N x N visibilities of the sky at the node's samples (r) and at the same places on its parent's surface
+// (g), from the nodes' horizons (lod/NodeHorizons.h); the sun's rides in the colour's alpha (terrain.frag)
+uniform sampler2DArray uLight;
 #endif
 
 int gSlot;
@@ -54,6 +60,10 @@ void emitSurfaceVertex(ivec2 p, vec4 node0, vec4 node1, vec4 node2, float drop)
     vRelative = vec3(node0.xy + vec2(p) * spacing, z);
     vNodeUv = vec2(p) * uInverseCells;
     vLocal = vec2(p) * spacing;
+#ifdef SHADOWS
+    vec2 sky = texelFetch(uLight, ivec3(p, gSlot), 0).rg;
+    vSkyVisibility = mix(sky.g, sky.r, morph);
+#endif
 #ifdef DETAIL
     vMaterials = texelFetch(uWeights, ivec3(p, gSlot), 0);
 #else

@@ -34,16 +34,15 @@ flat in int vInstance;  // the node's index in the frame's draw order
 layout(std430, binding = 0) buffer PixelCounts { uint uPixelCounts[]; };
 #endif
 
-uniform sampler2DArray uColour;   // per slot: the node's texture, corner texels centred on the corners (3.2.7)
+uniform sampler2DArray uColour;   // per slot: the node's texture, corner texels centred on the corners (3.2.7);
+                                  // with SHADOWS the sun's visibility in alpha (1 without: RGB layers)
 uniform sampler2DArray uParentColour;  // the same textures in the parent's pool array
 uniform float uTexels;            // texels per side of a node's texture
 uniform float uLayerTexels;       // texels per side of a layer (>= uTexels: DXT1 pads to a multiple of 4)
 #ifdef SHADOWS
-// per slot: N x N visibilities of the sun and the sky at the node's samples (rg) and at the same places on its
-// parent's surface (ba), derived from the nodes' horizons for the frame's sun (lod/NodeHorizons.h); corner texels
-// on the node's corners
-uniform sampler2DArray uLight;
-uniform float uInverseCells;  // 1 / (N - 1)
+// The sky's visibility, morphed, from the vertices (surface.glsl). The sun's is the colour's alpha, derived from
+// the nodes' horizons for the frame's sun (lod/NodeHorizons.h): the same fetch as the colour, own and parent's.
+in float vSkyVisibility;
 #endif
 #ifdef NORMAL_MAP
 uniform sampler2DArray uNormalMaps;  // per slot: unit normals (x, y) of the surface below, corner texels on corners
@@ -79,13 +78,12 @@ vec3 mappedNormal()
 }
 #endif
 
-// The share of the sun (x) and of the sky (y) the terrain around leaves the fragment, morphed like the colours.
-vec2 visibility()
+// The share of the sun (x) and of the sky (y) the terrain around leaves the fragment, morphed like the colours:
+// the sun's from the node's colour `own` and its parent's `parent`.
+vec2 visibility(vec4 own, vec4 parent)
 {
 #ifdef SHADOWS
-    float cells = 1.0 / uInverseCells;
-    vec4 light = texture(uLight, vec3((vNodeUv * cells + 0.5) / (cells + 1.0), float(vSlots.x)));
-    return mix(light.ba, light.rg, vMorph);
+    return vec2(mix(parent.a, own.a, vMorph), vSkyVisibility);
 #else
     return vec2(1.0);
 #endif
@@ -111,9 +109,9 @@ void main()
         fragColour = vec4(0.05, 0.05, 0.05, 1.0);
         return;
     }
-    vec3 own = texture(uColour, vec3(texelCentre(vNodeUv), float(vSlots.x))).rgb;
-    vec3 parent = texture(uParentColour, vec3(texelCentre(vParentOffset + 0.5 * vNodeUv), float(vSlots.y))).rgb;
-    vec3 albedo = mix(parent, own, vMorph);
+    vec4 own = texture(uColour, vec3(texelCentre(vNodeUv), float(vSlots.x)));
+    vec4 parent = texture(uParentColour, vec3(texelCentre(vParentOffset + 0.5 * vNodeUv), float(vSlots.y)));
+    vec3 albedo = mix(parent.rgb, own.rgb, vMorph);
 #ifdef DETAIL
     albedo *= detailFactor(vLocal, vMaterials, length(vRelative));
 #endif
@@ -123,8 +121,8 @@ void main()
     vec3 n = normalize(vNormal);
 #endif
 #ifdef ATMOSPHERE
-    fragColour = vec4(litThroughAir(albedo, n, visibility(), Air(vSunlight, vAirTransmittance, vAerial)), 1.0);
+    fragColour = vec4(litThroughAir(albedo, n, visibility(own, parent), Air(vSunlight, vAirTransmittance, vAerial)), 1.0);
 #else
-    fragColour = vec4(litAndHazed(albedo, n, vRelative, visibility()), 1.0);
+    fragColour = vec4(litAndHazed(albedo, n, vRelative, visibility(own, parent)), 1.0);
 #endif
 }

@@ -35,6 +35,9 @@ flat out vec2 vParentOffset;
 flat out ivec2 vSlots;
 precise gl_Position;
 
+#ifdef SHADOWS
+out float vSkyVisibility;  // the share of the sky the terrain around leaves the vertex, morphed (surface.glsl)
+#endif
 #ifdef ATMOSPHERE
 out vec3 vSunlight;  // the air at the vertex (light.glsl, Air)
 out vec3 vAirTransmittance;

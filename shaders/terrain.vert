@@ -40,6 +40,9 @@ flat out int vInstance;
 flat out vec4 vLayerOrigin[LAYER_COUNT];
 #endif
 
+#ifdef SHADOWS
+out float vSkyVisibility;  // the share of the sky the terrain around leaves the vertex, morphed (surface.glsl)
+#endif
 #ifdef ATMOSPHERE
 out vec3 vSunlight;  // the air at the vertex (light.glsl, Air)
 out vec3 vAirTransmittance;

@@ -43,9 +43,9 @@ SlotBytes poolSlotBytes(const MapHeader& header, const PoolLayout& layout)
     SlotBytes b;
     b.heights = w * w * sizeof(std::uint16_t);
     b.normals = layout.normalMapTexels == 0 ? m * m * 2 : 0;
-    b.colour = layout.dxt1 ? blocks(t) * blocks(t) / 2 : t * t * 3;
+    b.colour = layout.shadows ? t * t * 4 : (layout.dxt1 ? blocks(t) * blocks(t) / 2 : t * t * 3);
     b.weights = layout.detailLayers > 0 ? n * n * sizeof(std::uint16_t) : 0;
-    b.light = layout.shadows ? n * n * 4 : 0;
+    b.light = layout.shadows ? n * n * 2 : 0;
     const auto texels = static_cast<std::size_t>(layout.normalMapTexels);
     b.normalMap = layout.compressNormals ? blocks(texels) * blocks(texels) : texels * texels * 2;
     b.constants = (3 + static_cast<std::size_t>(layout.detailLayers)) * 4 * sizeof(float);

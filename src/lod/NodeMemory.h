@@ -14,10 +14,11 @@ namespace terrain {
 struct SlotBytes {
     std::size_t heights = 0;    ///< the surface with a 1-sample border, 16 bits a sample
     std::size_t normals = 0;    ///< the parent's normals at its samples, 2 bytes each (without normal maps)
-    std::size_t colour = 0;     ///< the colour texture (RGB8, or DXT1 with node_texture_compression)
+    std::size_t colour = 0;     ///< the colour texture (RGB8, or DXT1 with node_texture_compression; RGBA8 with
+                                ///< shadows: the sun's visibility in alpha)
     std::size_t weights = 0;    ///< material weights (RGBA4), 0 without detail layers
     std::size_t normalMap = 0;  ///< the normal map of the surface below (RGTC2, or RG8), 0 without normal maps
-    std::size_t light = 0;  ///< the sun's and sky's visibility, own and parent's (RGBA8 a sample), 0 without shadows
+    std::size_t light = 0;      ///< the sky's visibility, own and parent's (RG8 a sample), 0 without shadows
     std::size_t constants = 0;  ///< per drawn node, in the frame's constants buffer
     std::size_t total() const { return heights + normals + colour + weights + normalMap + light + constants; }
 };

@@ -260,7 +260,8 @@ Status TerrainRenderer::createPools(const PoolOptions& pools)
     const int w = n + 2;  // the surface with a 1-sample border: own normals at the edges need it
     const int m = (n + 1) / 2;
     const int t = static_cast<int>(mHeader.textureSize);
-    mDxt1 = pools.compressColour && epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
+    // With shadows the colour layers carry the sun's visibility in alpha (fillLight): RGBA8, not DXT1.
+    mDxt1 = pools.compressColour && !pools.shadows && epoxy_has_gl_extension("GL_EXT_texture_compression_s3tc");
     mColourLayerSize = mDxt1 ? blockLayerSize(t) : t;
     mSlotBytes =
         poolSlotBytes(mHeader, {pools.normalMapTexels, pools.compressNormals, mDxt1, mDetail.count(), pools.shadows});
@@ -271,7 +272,8 @@ Status TerrainRenderer::createPools(const PoolOptions& pools)
     const TextureArrayFormat colour =
         mDxt1
             ? TextureArrayFormat{GL_COMPRESSED_RGB_S3TC_DXT1_EXT, 0, 0, GL_LINEAR, GL_CLAMP_TO_EDGE, mSlotBytes.colour}
-            : TextureArrayFormat{GL_RGB8, GL_RGB, GL_UNSIGNED_BYTE, GL_LINEAR, GL_CLAMP_TO_EDGE};
+        : pools.shadows ? TextureArrayFormat{GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, GL_CLAMP_TO_EDGE}
+                        : TextureArrayFormat{GL_RGB8, GL_RGB, GL_UNSIGNED_BYTE, GL_LINEAR, GL_CLAMP_TO_EDGE};
     const TextureArrayFormat weights{GL_RGBA4, GL_RGBA, GL_UNSIGNED_SHORT_4_4_4_4, GL_NEAREST};
     // RGTC is core since OpenGL 3.0: every context this renderer runs on decodes it.
     const TextureArrayFormat normalMaps =
@@ -294,8 +296,7 @@ Status TerrainRenderer::createPools(const PoolOptions& pools)
             pool.normalMaps = createTextureArray(normalMaps, mNormalLayerSize, layers);
         }
         if (mShadows) {
-            pool.light =
-                createTextureArray({GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, GL_CLAMP_TO_EDGE}, n, layers);
+            pool.light = createTextureArray({GL_RG8, GL_RG, GL_UNSIGNED_BYTE, GL_NEAREST, GL_CLAMP_TO_EDGE}, n, layers);
         }
     }
     mSlotHeights.assign(slots, {0.0f, 0.0f});
@@ -313,18 +314,42 @@ void TerrainRenderer::fillLight(int slot)
 {
     const NodeData& node = *mSlotData[static_cast<std::size_t>(slot)];
     const int n = static_cast<int>(mHeader.chunkSize);
-    std::vector<std::uint8_t> light(static_cast<std::size_t>(n) * static_cast<std::size_t>(n) * 4, 255);
+    const int t = static_cast<int>(mHeader.textureSize);
+    const auto samples = static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
+    const auto texels = static_cast<std::size_t>(t) * static_cast<std::size_t>(t);
+    // The sun's and sky's visibility at the colour's texels (the sun's goes into the colour's alpha, fetched
+    // with the colour), the sky's of the node and of its parent's surface at the node's samples (the vertex
+    // programs read those).
+    std::vector<std::uint8_t> atTexels(texels * 2, 255), own(samples * 2, 255), parent(samples * 2, 255);
     if (node.horizons.size >= 2 && node.parentHorizons.size >= 2) {
         // The sun's direction angle from +x towards +y and its elevation, as the horizons measure them.
         const double azimuth = std::atan2(double{mSun.y}, double{mSun.x});
         const double elevation = std::asin(std::clamp(double{mSun.z}, -1.0, 1.0));
-        latticeVisibility(node.horizons, azimuth, elevation, kShadowSoftness, n, light, 4, 0);
-        latticeVisibility(node.parentHorizons, azimuth, elevation, kShadowSoftness, n, light, 4, 2);
+        latticeVisibility(node.horizons, azimuth, elevation, kShadowSoftness, t, atTexels, 2, 0);
+        if (t == n) {
+            own = atTexels;
+        } else {
+            latticeVisibility(node.horizons, azimuth, elevation, kShadowSoftness, n, own, 2, 0);
+        }
+        latticeVisibility(node.parentHorizons, azimuth, elevation, kShadowSoftness, n, parent, 2, 0);
+    }
+    std::vector<std::uint8_t> sky(samples * 2);
+    for (std::size_t k = 0; k < samples; ++k) {
+        sky[2 * k] = own[2 * k + 1];
+        sky[2 * k + 1] = parent[2 * k + 1];
+    }
+    TERRAIN_EXPECTS(node.texture.size() >= texels * 3, "a node's colours hold T x T RGB texels");
+    std::vector<std::uint8_t> rgba(texels * 4);
+    for (std::size_t k = 0; k < texels; ++k) {
+        std::copy_n(node.texture.data() + 3 * k, 3, rgba.data() + 4 * k);
+        rgba[4 * k + 3] = atTexels[2 * k];
     }
     const PoolArrays& pool = mArrays[static_cast<std::size_t>(arrayOf(slot))];
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, pool.colour.name());
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layerOf(slot), t, t, 1, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
     glBindTexture(GL_TEXTURE_2D_ARRAY, pool.light.name());
-    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layerOf(slot), n, n, 1, GL_RGBA, GL_UNSIGNED_BYTE, light.data());
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layerOf(slot), n, n, 1, GL_RG, GL_UNSIGNED_BYTE, sky.data());
 }
 
 void TerrainRenderer::fill(int slot, const NodePtr& node, RenderStats& stats)
@@ -360,7 +385,9 @@ void TerrainRenderer::fill(int slot, const NodePtr& node, RenderStats& stats)
         glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, m, m, 1, GL_RG, GL_BYTE, normals.data());
     }
     glBindTexture(GL_TEXTURE_2D_ARRAY, pool.colour.name());
-    if (mDxt1) {
+    if (pool.light) {
+        // With the sun's visibility in alpha (fillLight, below).
+    } else if (mDxt1) {
         const std::vector<std::uint8_t> blocks = compressDxt1(node->texture, t);
         glCompressedTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, mColourLayerSize, mColourLayerSize, 1,
                                   GL_COMPRESSED_RGB_S3TC_DXT1_EXT, static_cast<GLsizei>(blocks.size()), blocks.data());

@@ -198,10 +198,10 @@ private:
     struct PoolArrays {
         gl::Texture heights;        ///< GL_R16 (quantizeHeightsR16), (N + 2)^2 per layer
         gl::Texture parentNormals;  ///< GL_RG8_SNORM, ((N + 1) / 2)^2 per layer; none with normal maps
-        gl::Texture colour;         ///< DXT1 (or GL_RGB8), mColourLayerSize^2 per layer
+        gl::Texture colour;         ///< DXT1 (or GL_RGB8; GL_RGBA8 with shadows: the sun's visibility in alpha)
         gl::Texture weights;        ///< GL_RGBA4, N^2 per layer; none without materials
         gl::Texture normalMaps;     ///< RGTC2 (or GL_RG8_SNORM), mNormalLayerSize^2 per layer; or none
-        gl::Texture light;          ///< GL_RGBA8, N^2 per layer: sun, sky, parent's sun, parent's sky (linear); or none
+        gl::Texture light;  ///< GL_RG8, N^2 per layer: the sky's visibility, own and parent's (nearest); or none
     };
     std::vector<PoolArrays> mArrays;
     std::size_t mLayersPerArray = 1;

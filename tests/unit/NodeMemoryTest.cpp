@@ -85,6 +85,10 @@ TEST(NodeMemoryTest, SlotBytesAreTheFormatsSizes)
     EXPECT_EQ(plainSlot.normalMap, 0u);
     EXPECT_EQ(plainSlot.total(), 67u * 67 * 2 + 33u * 33 * 2 + 65u * 65 * 3 + 3u * 16);
     EXPECT_EQ(poolSlotBytes(header, {129, false, false, 0}).normalMap, 129u * 129 * 2);
+    // With shadows the colour is RGBA8 (the sun's visibility in alpha), DXT1 or not, and the sky's visibility RG8.
+    const SlotBytes shadowed = poolSlotBytes(header, {129, true, true, 2, true});
+    EXPECT_EQ(shadowed.colour, 65u * 65 * 4);
+    EXPECT_EQ(shadowed.light, 65u * 65 * 2);
 }
 
 TEST(NodeMemoryTest, TheBudgetHoldsWhatItPaysForWithinTheCachesLimits)
