@@ -484,7 +484,8 @@ void addDisplayOptions(std::vector<OptionSpec>& t)
     t.push_back(boolOption("node_texture_compression", kGroupDisplay,
                            "Keep the nodes' colour textures on the GPU as DXT1 (S3TC): 2.3 KB instead of 12.7 KB a "
                            "65 x 65 node. Off by default: Mesa's llvmpipe decodes DXT1 in software, which cost about "
-                           "15% of frame time in RenderBench.",
+                           "15% of frame time in RenderBench. With shadows the colours carry the sun's visibility in "
+                           "alpha and stay RGBA8 (16.9 KB): this option then changes nothing.",
                            &O::nodeTextureCompression));
     t.push_back({"normal_map_compression", kGroupDisplay,
                  "Keep the nodes' normal maps (dynamic_texture_size) as RGTC2 blocks, on the GPU and in the node "

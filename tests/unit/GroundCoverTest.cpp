@@ -233,7 +233,8 @@ TEST(GroundCover, HeightBlendShowsTheHigherMaterialAndLeavesTheSurfaceAlone)
             const double d[2] = {static_cast<float>(blended.materials()[0].displacementAt(at.x, at.y)),
                                  static_cast<float>(blended.materials()[1].displacementAt(at.x, at.y))};
             blended.weights(at, d, w);
-            EXPECT_NEAR(weightsBlended[2 * k + 1], std::lround(w[1] * 255.0), 0) << i << ", " << j;
+            EXPECT_EQ(weightsBlended[2 * k + 1], static_cast<std::uint8_t>(std::lround(w[1] * 255.0)))
+                << i << ", " << j;
             differing += weightsBlended[2 * k + 1] != weightsPlain[2 * k + 1];
         }
     }
