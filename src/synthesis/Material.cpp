@@ -144,9 +144,12 @@ Status assign(Expected<T> value, T& target)
     return {};
 }
 
-const std::map<std::string, Setter, std::less<>>& setters()
+using SetterTable = std::map<std::string, Setter, std::less<>>;
+
+/// The keys of the displacement and the detail textures.
+SetterTable displacementSetters()
 {
-    static const std::map<std::string, Setter, std::less<>> table = {
+    return {
         {"name",
          [](const Reader& r) -> Status {
              if (r.entry.value.empty()) {
@@ -230,6 +233,13 @@ const std::map<std::string, Setter, std::less<>>& setters()
              return {};
          }},
         {"detail_texture_size", [](const Reader& r) { return assign(r.positive(), r.material.detailTextureSize); }},
+    };
+}
+
+/// The keys of the ground's colour and the placement.
+SetterTable groundSetters()
+{
+    return {
         {"tint",
          [](const Reader& r) {
              return readRgb(r.entry, r.material.tint, [&](const std::string& what) { return r.fail(what); });
@@ -297,6 +307,15 @@ const std::map<std::string, Setter, std::less<>>& setters()
              return assign(r.number(1e-3, 1e5, "[0.001, 100000] metres"), r.material.placement.heightBlend);
          }},
     };
+}
+
+const SetterTable& setters()
+{
+    static const SetterTable table = [] {
+        SetterTable all = displacementSetters();
+        all.merge(groundSetters());
+        return all;
+    }();
     return table;
 }
 

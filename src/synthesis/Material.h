@@ -1,6 +1,6 @@
 // Materials (paper 3.4.5): a displacement function plus detail texture(s) and a ground colour, read from
-// `materials/*.mat` (`option = value`, core/ConfigFile.h). Going past the paper ("multiple materials are
-// not implemented"), a MaterialSet places several materials by slope, height, curvature and a macro variation,
+// `materials/*.mat` (`option = value`, core/ConfigFile.h). Going past the paper, which blends no materials, a
+// MaterialSet places several materials by slope, height, curvature and a macro variation,
 // blended by the height of their own displacement where they meet, continuous everywhere so the surface has no
 // seam where materials meet; the same weights colour the nodes (MaterialSet::cover). Keys: materials/README.md.
 #pragma once

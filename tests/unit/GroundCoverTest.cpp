@@ -74,38 +74,6 @@ TEST(GroundCover, ShippedSnowLoadsWithItsRules)
     }
 }
 
-TEST(GroundCover, InvalidValuesNameFileLineAndKey)
-{
-    struct Bad {
-        const char* line;
-        const char* says;
-    };
-    const Bad bad[] = {
-        {"colour = 1, 1", "expected 'r, g, b', each in [0, 1]"},
-        {"colour = 0.5, nan, 0.5", "expected 'r, g, b', each in [0, 1]"},
-        {"colour_cover = 1.5", "expected a number in [0, 1]"},
-        {"blend_height = -1", "expected a number in [0, 10000] metres"},
-        {"curvature = 10, -10", "expected 'min, max' with min <= max, degrees in [-90, 90]"},
-        {"curvature = -100, 0", "expected 'min, max' with min <= max, degrees in [-90, 90]"},
-        {"curvature_blend = 0", "expected a number in [0.001, 90] degrees"},
-        {"variation = 5, 100", "expected 'amount, wavelength'"},
-        {"variation = 1, 0.5", "expected 'amount, wavelength'"},
-        {"variation = 1", "expected 'amount, wavelength'"},
-        {"variation = inf, 100", "expected 'amount, wavelength'"},
-    };
-    for (const Bad& b : bad) {
-        std::vector<std::string> warnings;
-        auto config = ConfigFile::parse(std::string("# first line\nname = x\n") + b.line + "\n", "bad.mat");
-        ASSERT_TRUE(config.ok());
-        auto m = parseMaterial(*config, warnings);
-        ASSERT_FALSE(m.ok()) << b.line;
-        const std::string& message = m.error().message;
-        std::string key(b.line, std::strcspn(b.line, " ="));
-        EXPECT_EQ(message.rfind("bad.mat:3: " + key + " = ", 0), 0u) << message;
-        EXPECT_NE(message.find(b.says), std::string::npos) << message;
-    }
-}
-
 TEST(GroundCover, CurvatureIsTheBendOverOneSample)
 {
     // Any plane: 0.

@@ -195,6 +195,17 @@ TEST(Material, InvalidValuesNameFileLineAndKey)
         {"height = a, b", "expected 'min, max' with min <= max, metres"},
         {"height_blend = 0", "expected a number in [0.001, 100000] metres"},
         {"name =", "expected a name"},
+        {"colour = 1, 1", "expected 'r, g, b', each in [0, 1]"},
+        {"colour = 0.5, nan, 0.5", "expected 'r, g, b', each in [0, 1]"},
+        {"colour_cover = 1.5", "expected a number in [0, 1]"},
+        {"blend_height = -1", "expected a number in [0, 10000] metres"},
+        {"curvature = 10, -10", "expected 'min, max' with min <= max, degrees in [-90, 90]"},
+        {"curvature = -100, 0", "expected 'min, max' with min <= max, degrees in [-90, 90]"},
+        {"curvature_blend = 0", "expected a number in [0.001, 90] degrees"},
+        {"variation = 5, 100", "expected 'amount, wavelength'"},
+        {"variation = 1, 0.5", "expected 'amount, wavelength'"},
+        {"variation = 1", "expected 'amount, wavelength'"},
+        {"variation = inf, 100", "expected 'amount, wavelength'"},
     };
     for (const Bad& b : bad) {
         std::vector<std::string> warnings;
