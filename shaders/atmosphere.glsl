@@ -16,6 +16,7 @@ uniform float uMieHeight;
 uniform float uMieAnisotropy;
 uniform float uTopScaleHeights;
 uniform float uCameraAltitude;  // metres (world z)
+uniform vec2 uCameraDensities;  // the Rayleigh and Mie densities at the camera, exp(-altitude / scale height)
 uniform float uExposure;
 uniform float uSunAirMass;  // airMass() of the sun's elevation, per frame
 // psi_ms (light/Atmosphere.h, multipleScattering) at altitudes top (i / (n - 1))^2, for the frame's sun.
@@ -24,22 +25,33 @@ uniform float uMultipleScatteringTop;
 
 const float kPi = 3.14159265358979;
 
-// (1 - e^-x) / x, its series near 0.
-float decayFactor(float x)
+// The view ray to a point `rise` metres above the camera and `len` metres from it: its optical depths (Rayleigh,
+// Mie; metres at sea-level density) and the densities at the point, the camera's times their fall along the ray.
+// Two exponentials: what a vertex program computes for every vertex (airAt).
+void viewRay(float rise, float len, out vec2 depth, out vec2 density)
 {
-    return abs(x) < 1e-2 ? 1.0 - x * (0.5 - x / 6.0) : (1.0 - exp(-x)) / x;
+    vec2 x = rise / vec2(uRayleighHeight, uMieHeight);
+    vec2 fall = exp(-x);
+    density = uCameraDensities * fall;
+    // len times the mean density along the ray over the camera's: (1 - e^-x) / x, its series near 0.
+    vec2 series = 1.0 - x * (0.5 - x / 6.0);
+    vec2 decay = vec2(abs(x.x) < 1e-2 ? series.x : (1.0 - fall.x) / x.x,
+                      abs(x.y) < 1e-2 ? series.y : (1.0 - fall.y) / x.y);
+    depth = uCameraDensities * (len * decay);
 }
 
-float densityIntegral(float altitude, float rise, float len, float scaleHeight)
+// The transmittance of a ray of optical depths `depth` (viewRay).
+vec3 transmittanceOf(vec2 depth)
 {
-    return exp(-altitude / scaleHeight) * len * decayFactor(rise / scaleHeight);
+    return exp(-(uRayleighScattering * depth.x + vec3(uMieExtinction * depth.y)));
 }
 
-vec3 airTransmittance(float altitude, float rise, float len)
+// The view ray's transmittance to a point `relative` metres from the camera.
+vec3 viewTransmittance(vec3 relative)
 {
-    float rayleigh = densityIntegral(altitude, rise, len, uRayleighHeight);
-    float mie = densityIntegral(altitude, rise, len, uMieHeight);
-    return exp(-(uRayleighScattering * rayleigh + vec3(uMieExtinction * mie)));
+    vec2 depth, density;
+    viewRay(relative.z, length(relative), depth, density);
+    return transmittanceOf(depth);
 }
 
 float airMass(float elevation)
@@ -128,26 +140,34 @@ vec3 inscatter(float altitude, float slope, float len, float mu, int samples)
     return sum / float(samples);
 }
 
-// The view direction at table coordinates `c` (light/AtmosphereTables.h, directionAt): azimuth c.x^2 pi from the
-// sun's, elevation from c.y spaced finely at the horizon.
+// The view direction at table coordinates `c` (light/AtmosphereTables.h, directionAt): azimuth 4 atan(c.x^2) from
+// the sun's, elevation 2 atan((2 c.y - 1)^2) signed, spaced finely at the horizon.
 vec3 tableDirection(vec2 c, vec3 sun)
 {
     float sunAzimuth = sun.x == 0.0 && sun.y == 0.0 ? 0.0 : atan(sun.y, sun.x);
-    float azimuth = sunAzimuth - c.x * c.x * kPi;
+    float azimuth = sunAzimuth - 4.0 * atan(clamp(c.x * c.x, 0.0, 1.0));
     float e = 2.0 * c.y - 1.0;
-    float elevation = e * abs(e) * (0.5 * kPi);
-    return vec3(cos(elevation) * vec2(cos(azimuth), sin(azimuth)), sin(elevation));
+    float t = min(e * e, 1.0);  // tan(|elevation| / 2)
+    float z = 2.0 * t / (1.0 + t * t);
+    return vec3((1.0 - t * t) / (1.0 + t * t) * vec2(cos(azimuth), sin(azimuth)), e < 0.0 ? -z : z);
 }
 
-// The table coordinates of unit view direction `view` (directionCoordinate).
+// The table coordinates of view direction `view` of any length > 0 (directionCoordinate) with the sun in unit
+// direction `sun`: no inverse trigonometric function, for a vertex program's lookup. tan(azimuth / 4) from the
+// horizontal unit directions a and b is |a - b| / (2 + |a + b|) (0 where either is vertical), tan(|elevation| / 2)
+// is |z| / (length + horizontal length).
 vec2 tableCoordinate(vec3 view, vec3 sun)
 {
-    float cross = view.x * sun.y - view.y * sun.x;
-    float along = dot(view.xy, sun.xy);
-    float azimuth = cross == 0.0 && along == 0.0 ? 0.0 : atan(abs(cross), along);
-    float elevation = asin(clamp(view.z, -1.0, 1.0));
-    float e = sqrt(abs(elevation) / (0.5 * kPi));
-    return vec2(sqrt(azimuth / kPi), 0.5 + 0.5 * (elevation < 0.0 ? -e : e));
+    float viewHorizontal = dot(view.xy, view.xy), sunHorizontal = dot(sun.xy, sun.xy);
+    float azimuthTangent = 0.0;
+    if (viewHorizontal > 0.0 && sunHorizontal > 0.0) {
+        vec2 a = view.xy * inversesqrt(viewHorizontal), b = sun.xy * inversesqrt(sunHorizontal);
+        azimuthTangent = length(a - b) / (2.0 + length(a + b));
+    }
+    float horizontal = sqrt(viewHorizontal);
+    float len = sqrt(viewHorizontal + view.z * view.z);
+    float e = len > 0.0 ? sqrt(min(abs(view.z) / (len + horizontal), 1.0)) : 0.0;
+    return vec2(sqrt(min(azimuthTangent, 1.0)), 0.5 + 0.5 * (view.z < 0.0 ? -e : e));
 }
 
 // A coordinate in [0, 1] as the texture coordinate of a table `cells` long whose first and last cells are its ends.
@@ -174,16 +194,15 @@ uniform sampler3D uAerialTable;
 uniform sampler2D uSkyTable;
 uniform float uAerialRange;  // metres the aerial table spans
 
-// The aerial table's coordinates in [0, 1]^3 of a surface point `relative` metres from the camera (azimuth,
-// elevation, sqrt(distance / range)). Its azimuth folds at the sun's: what a vertex reads from the table
-// interpolates over a triangle (light.glsl, Air), the coordinates would not.
-vec3 aerialCoordinate(vec3 relative, vec3 sun)
+// The aerial table's coordinates in [0, 1]^3 of a surface point `relative` metres from the camera, `len` metres
+// away (azimuth, elevation, sqrt(distance / range)). Its azimuth folds at the sun's: what a vertex reads from the
+// table interpolates over a triangle (Air), the coordinates would not.
+vec3 aerialCoordinate(vec3 relative, float len, vec3 sun)
 {
-    float len = length(relative);
     if (len <= 0.0) {
         return vec3(0.0);
     }
-    return vec3(tableCoordinate(relative / len, sun), sqrt(min(len / uAerialRange, 1.0)));
+    return vec3(tableCoordinate(relative, sun), sqrt(min(len / uAerialRange, 1.0)));
 }
 
 // The light the air scatters in between the camera and the point at aerial coordinates `c` (one fetch).
@@ -193,12 +212,32 @@ vec3 aerialInscattered(vec3 c)
     return texture(uAerialTable, (c * (cells - 1.0) + 0.5) / cells).rgb * (c.z * c.z);
 }
 
+// What the air does to a surface point `relative` metres from the camera: the sunlight that reaches it
+// (sunTransmittance), the transmittance of the view ray, and the light the air scatters in along it (one fetch of
+// the aerial table). All three change smoothly over a triangle: the terrain's vertex programs make them per vertex
+// (surface.glsl), and the fragments interpolate them, which saves a fetch of a 3D table and eight exponentials a
+// pixel. (The table's coordinates would not interpolate: their azimuth folds at the sun's.)
+struct Air {
+    vec3 sunlight;
+    vec3 transmittance;
+    vec3 inscattered;
+};
+
+Air airAt(vec3 relative, vec3 sun)
+{
+    float len = length(relative);
+    vec2 depth, density;
+    viewRay(relative.z, len, depth, density);
+    return Air(sunTransmittanceAt(density.x, density.y), transmittanceOf(depth),
+               aerialInscattered(aerialCoordinate(relative, len, sun)));
+}
+
 // The light of a surface point `relative` metres from the camera, `radiance` where it is, as it reaches the
 // camera: times the air's transmittance, plus what the air scatters in.
 vec3 aerialPerspective(vec3 radiance, vec3 relative, vec3 sun)
 {
-    return radiance * airTransmittance(uCameraAltitude, relative.z, length(relative)) +
-           aerialInscattered(aerialCoordinate(relative, sun));
+    Air air = airAt(relative, sun);
+    return radiance * air.transmittance + air.inscattered;
 }
 
 // The sky's radiance in unit direction `view` (the sun's disc not included; one fetch of the sky table).

@@ -65,14 +65,6 @@ void main()
         colour = mix(colour, morphed(uColour, uPreviousColour, vCoarseUv, uRing + 1, vCoarseRemaining), vBlend);
     }
     vec3 albedo = colour.rgb;
-#ifdef DETAIL
-    vec4 materials = morphed(uMaterials, uPreviousMaterials, vFineUv, uRing, vRemaining);
-    if (uHasCoarser != 0) {
-        materials = mix(materials, morphed(uMaterials, uPreviousMaterials, vCoarseUv, uRing + 1, vCoarseRemaining),
-                        vBlend);
-    }
-    albedo *= detailFactor(vLocal, materials, length(vRelative));
-#endif
 #ifdef NORMAL_MAP
     vec2 nxy = morphed(uNormals, uPreviousNormals, vNormalUv, uRing, vRemaining).xy;
     if (uHasCoarser != 0) {
@@ -81,6 +73,14 @@ void main()
     vec3 n = normalize(vec3(nxy, sqrt(max(1.0 - dot(nxy, nxy), 0.0))));
 #else
     vec3 n = normalize(vNormal);
+#endif
+#ifdef DETAIL
+    vec4 materials = morphed(uMaterials, uPreviousMaterials, vFineUv, uRing, vRemaining);
+    if (uHasCoarser != 0) {
+        materials = mix(materials, morphed(uMaterials, uPreviousMaterials, vCoarseUv, uRing + 1, vCoarseRemaining),
+                        vBlend);
+    }
+    albedo *= detailFactor(vLocal, vRelative, materials, n);
 #endif
     fragColour = vec4(litAndHazed(albedo, n, vRelative, vec2(colour.a, 1.0)), 1.0);
 }

@@ -15,25 +15,6 @@ uniform float uHazeDistance;  // metres at which haze reaches 63 %
 // The mean reflectance of the ground around a point, for the light it bounces onto slopes (light/Atmosphere.h).
 const float kGroundAlbedo = GROUND_ALBEDO;
 
-// What the air does to a surface point `relative` metres from the camera: the sunlight that reaches it
-// (sunTransmittance), the transmittance of the view ray, and the light the air scatters in along it (one fetch of
-// the aerial table). All three change smoothly over a triangle: the terrain's vertex programs make them per vertex
-// (surface.glsl), and the fragments interpolate them, which saves a dozen exponentials and inverse trigonometric
-// functions and a fetch of a 3D table a pixel. (The table's coordinates would not interpolate: their azimuth
-// folds at the sun's.)
-struct Air {
-    vec3 sunlight;
-    vec3 transmittance;
-    vec3 inscattered;
-};
-
-Air airAt(vec3 relative)
-{
-    return Air(sunTransmittance(uCameraAltitude + relative.z),
-               airTransmittance(uCameraAltitude, relative.z, length(relative)),
-               aerialInscattered(aerialCoordinate(relative, uSunDirection)));
-}
-
 // The surface colour `albedo` lit with unit normal n through `air`. `visibility`: the share of the sun (x) and of the
 // sky (y) that the terrain around does not hide (1, 1 in the open); the sky's also scales the light the ground
 // around bounces (what hides the sky hides the ground around too).
@@ -56,7 +37,7 @@ vec3 litThroughAir(vec3 albedo, vec3 n, vec2 visibility, Air air)
 vec3 litAndHazed(vec3 albedo, vec3 n, vec3 relative, vec2 visibility)
 {
 #ifdef ATMOSPHERE
-    return litThroughAir(albedo, n, visibility, airAt(relative));
+    return litThroughAir(albedo, n, visibility, airAt(relative, uSunDirection));
 #else
     vec3 light = visibility.y * uAmbient * (0.6 + 0.4 * n.z) + visibility.x * uSunColour * max(dot(n, uSunDirection), 0.0);
     vec3 colour = albedo * light;

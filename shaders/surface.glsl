@@ -6,7 +6,7 @@
 // normals at its samples are made with the node (lod/NodeTextures.h), and between parent samples the mean of the
 // two is taken (gpudata/NodeVertexData.h computes the same on the CPU). The includer declares the outputs written
 // here: vRelative, vNormal (without NORMAL_MAP), vNodeUv, vLocal, vMaterials, vMorph, vParentOffset, vSlots, with
-// SHADOWS vSkyVisibility, and with ATMOSPHERE the air at the vertex (light.glsl, airAt): vSunlight,
+// SHADOWS vSkyVisibility, and with ATMOSPHERE the air at the vertex (atmosphere.glsl, airAt): vSunlight,
 // vAirTransmittance, vAerial.
 
 uniform mat4 uViewProjection;  // camera-relative world -> clip (rotation and projection only)
@@ -74,7 +74,7 @@ void emitSurfaceVertex(ivec2 p, vec4 node0, vec4 node1, vec4 node2, float drop)
     vSlots = ivec2(gSlot, int(node1.z));
     gl_Position = uViewProjection * vec4(vRelative, 1.0);
 #ifdef ATMOSPHERE
-    Air air = airAt(vRelative);
+    Air air = airAt(vRelative, uSunDirection);
     vSunlight = air.sunlight;
     vAirTransmittance = air.transmittance;
     vAerial = air.inscattered;

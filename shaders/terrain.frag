@@ -20,7 +20,7 @@ in vec2 vNodeUv;
 in vec2 vLocal;
 in vec4 vMaterials;
 #ifdef ATMOSPHERE
-in vec3 vSunlight;  // the air at the fragment, interpolated between the vertices' (light.glsl, Air)
+in vec3 vSunlight;  // the air at the fragment, interpolated between the vertices' (atmosphere.glsl, Air)
 in vec3 vAirTransmittance;
 in vec3 vAerial;
 #endif
@@ -112,13 +112,13 @@ void main()
     vec4 own = texture(uColour, vec3(texelCentre(vNodeUv), float(vSlots.x)));
     vec4 parent = texture(uParentColour, vec3(texelCentre(vParentOffset + 0.5 * vNodeUv), float(vSlots.y)));
     vec3 albedo = mix(parent.rgb, own.rgb, vMorph);
-#ifdef DETAIL
-    albedo *= detailFactor(vLocal, vMaterials, length(vRelative));
-#endif
 #ifdef NORMAL_MAP
     vec3 n = normalize(mappedNormal());
 #else
     vec3 n = normalize(vNormal);
+#endif
+#ifdef DETAIL
+    albedo *= detailFactor(vLocal, vRelative, vMaterials, n);
 #endif
 #ifdef ATMOSPHERE
     fragColour = vec4(litThroughAir(albedo, n, visibility(own, parent), Air(vSunlight, vAirTransmittance, vAerial)), 1.0);

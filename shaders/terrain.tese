@@ -39,7 +39,7 @@ precise gl_Position;
 out float vSkyVisibility;  // the share of the sky the terrain around leaves the vertex, morphed (surface.glsl)
 #endif
 #ifdef ATMOSPHERE
-out vec3 vSunlight;  // the air at the vertex (light.glsl, Air)
+out vec3 vSunlight;  // the air at the vertex (atmosphere.glsl, Air)
 out vec3 vAirTransmittance;
 out vec3 vAerial;
 #endif

@@ -33,20 +33,29 @@ std::pair<int, double> cellOf(double c, int n)
 
 glm::dvec2 directionCoordinate(const glm::dvec3& view, const glm::dvec3& sun)
 {
-    const double cross = view.x * sun.y - view.y * sun.x;
-    const double dot = view.x * sun.x + view.y * sun.y;
-    const double azimuth = cross == 0.0 && dot == 0.0 ? 0.0 : std::atan2(std::abs(cross), dot);
-    const double elevation = std::asin(std::clamp(view.z, -1.0, 1.0));
-    const double e = std::sqrt(std::abs(elevation) / (kPi / 2.0));
-    return {std::sqrt(azimuth / kPi), 0.5 + 0.5 * std::copysign(e, elevation)};
+    // tan(azimuth / 4) from the two horizontal unit directions a and b: |a - b| / (2 + |a + b|), the sine and the
+    // cosine of half the azimuth over 1 + that cosine; 0 where either direction is vertical.
+    const double viewHorizontal = std::hypot(view.x, view.y), sunHorizontal = std::hypot(sun.x, sun.y);
+    double azimuthTangent = 0.0;
+    if (viewHorizontal > 0.0 && sunHorizontal > 0.0) {
+        const glm::dvec2 a = glm::dvec2(view.x, view.y) / viewHorizontal, b = glm::dvec2(sun.x, sun.y) / sunHorizontal;
+        azimuthTangent = glm::length(a - b) / (2.0 + glm::length(a + b));
+    }
+    // tan(|elevation| / 2): |z| over the length plus the horizontal length.
+    const double length = std::hypot(viewHorizontal, view.z);
+    const double elevationTangent = length > 0.0 ? std::abs(view.z) / (length + viewHorizontal) : 0.0;
+    return {std::sqrt(std::min(azimuthTangent, 1.0)),
+            0.5 + 0.5 * std::copysign(std::sqrt(std::min(elevationTangent, 1.0)), view.z)};
 }
 
 glm::dvec3 directionAt(const glm::dvec2& coordinate, const glm::dvec3& sun)
 {
-    const double azimuth = azimuthOf(sun) - coordinate.x * coordinate.x * kPi;
+    const double azimuth = azimuthOf(sun) - 4.0 * std::atan(std::clamp(coordinate.x * coordinate.x, 0.0, 1.0));
     const double e = 2.0 * coordinate.y - 1.0;
-    const double elevation = std::copysign(e * e, e) * (kPi / 2.0);
-    return {std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation)};
+    const double t = std::min(e * e, 1.0);  // tan(|elevation| / 2)
+    const double horizontal = (1.0 - t * t) / (1.0 + t * t);
+    const double z = std::copysign(2.0 * t / (1.0 + t * t), e);
+    return {horizontal * std::cos(azimuth), horizontal * std::sin(azimuth), z};
 }
 
 double distanceCoordinate(double distance, double range)

@@ -3,15 +3,19 @@
 // Over a flat ground with densities that fall with height, the light the air scatters towards the viewer along a
 // ray depends only on the viewer's altitude, the sun, the ray's direction relative to the sun and its length, so
 // for one frame (one altitude, one sun) it is a function of three numbers:
-// - the azimuth between the ray and the sun, in [0, pi] (the air is symmetric about the sun's vertical plane);
-// - the ray's elevation, spaced finely near the horizon, where the light changes fastest (Hillaire's
-//   0.5 + 0.5 sign(e) sqrt(|e| / (pi / 2)));
+// - the azimuth a between the ray and the sun, in [0, pi] (the air is symmetric about the sun's vertical plane),
+//   as sqrt(tan(a / 4)): spaced finely near the sun, where Mie's peak is;
+// - the ray's elevation e, as 0.5 + 0.5 sign(e) sqrt(tan(|e| / 2)): spaced finely near the horizon, where the light
+//   changes fastest (like Hillaire's 0.5 + 0.5 sign(e) sqrt(|e| / (pi / 2))), evenly near the zenith.
+// Neither needs an inverse trigonometric function to look up (the vertex programs do it for every vertex): with
+// a and b the horizontal unit directions of the ray and the sun, tan(a / 4) = |a - b| / (2 + |a + b|), and
+// tan(|e| / 2) = |z| / (length + horizontal length) of the ray;
 // - the distance, as sqrt(distance / range): dense near the viewer, where the light builds up.
 // The aerial table holds the in-scattered light of segments (aerialPerspective's .inscattered, phase functions
 // included) over those three, divided by the distance coordinate squared (distance / range): the light per
 // metre, which is smooth where the light itself starts from 0 in a straight line (a lookup multiplies it back); the sky
-// table the sky's radiance (skyRadiance) over the first two. The view ray's transmittance stays in closed form per
-// pixel (three exponentials, cheaper than a fetch on a CPU rasterizer).
+// table the sky's radiance (skyRadiance) over the first two. The view ray's transmittance and the sunlight stay in
+// closed form (eight exponentials a vertex, cheaper than a fetch on a CPU rasterizer).
 //
 // Cells sit on the coordinates' grid points: cell i of n is coordinate i / (n - 1), so the first and last
 // cells are the ends of each range exactly (OpenGL's texture coordinate (c (n - 1) + 0.5) / n). The renderer's
@@ -38,7 +42,7 @@ inline constexpr int kSkyTableAzimuths = 64;
 inline constexpr int kSkyTableElevations = 128;
 
 /// The coordinates in [0, 1]^2 of unit view direction `view` with the sun in unit direction `sun`: x the
-/// azimuth between them over pi, y the elevation's (see above). Defined for every pair of unit vectors,
+/// azimuth's between them, y the elevation's (see above). Defined for every pair of unit vectors,
 /// vertical ones included (azimuth 0).
 glm::dvec2 directionCoordinate(const glm::dvec3& view, const glm::dvec3& sun);
 /// A unit view direction at coordinates `coordinate` (directionCoordinate's inverse; of the two mirror images

@@ -112,6 +112,19 @@ void DetailLayers::bind(int unit) const
     }
 }
 
+void DetailLayers::setCameraUniforms(const ShaderProgram& program, const glm::dvec3& camera) const
+{
+    if (empty()) {
+        return;
+    }
+    std::vector<glm::vec4> origins;
+    for (int k = 0; k < count(); ++k) {
+        origins.push_back(origin(k, {camera.x, camera.z}));
+        origins.push_back(origin(k, {camera.y, camera.z}));
+    }
+    glUniform4fv(program.uniform("uCliffOrigin"), static_cast<GLsizei>(origins.size()), glm::value_ptr(origins[0]));
+}
+
 glm::vec4 DetailLayers::origin(int k, glm::dvec2 corner) const
 {
     const glm::dvec2 repeats = corner / mSizes[static_cast<std::size_t>(k)];

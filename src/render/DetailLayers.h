@@ -12,6 +12,7 @@
 #include "synthesis/Material.h"
 
 #include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
 #include <vector>
@@ -47,6 +48,9 @@ public:
     /// metres times the layer's scale to them, so coordinates stay small and exact however far from the origin
     /// the point is, and nodes side by side agree on every lattice vertex.
     glm::vec4 origin(int k, glm::dvec2 corner) const;
+    /// Sets `program`'s (in use) per-frame uniforms: uCliffOrigin, each layer's origin() at the camera `camera` on
+    /// the vertical planes x-z and y-z, which the cliffs' projections count from (shaders/detail.glsl).
+    void setCameraUniforms(const ShaderProgram& program, const glm::dvec3& camera) const;
 
 private:
     gl::Texture mTexture;

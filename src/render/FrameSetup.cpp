@@ -57,6 +57,9 @@ void setAtmosphereUniforms(const ShaderProgram& program, const Camera& camera, c
     glUniform1f(program.uniform("uMieAnisotropy"), static_cast<float>(air.mieAnisotropy));
     glUniform1f(program.uniform("uTopScaleHeights"), static_cast<float>(air.topScaleHeights));
     glUniform1f(program.uniform("uCameraAltitude"), static_cast<float>(camera.position.z));
+    glUniform2f(program.uniform("uCameraDensities"),
+                static_cast<float>(std::exp(-camera.position.z / air.rayleighHeight)),
+                static_cast<float>(std::exp(-camera.position.z / air.mieHeight)));
     glUniform1f(program.uniform("uExposure"), style.exposure);
     const double sunElevation = std::asin(std::clamp(double{glm::normalize(style.sunDirection).z}, -1.0, 1.0));
     glUniform1f(program.uniform("uSunAirMass"), static_cast<float>(airMass(sunElevation)));

@@ -43,7 +43,8 @@ void main()
 )";
 
 // Row 0: the in-scattered light of the segment to the case's point; row 1: its transmittance; row 2: the sky's
-// radiance in the case's direction. Column: the case. With LOOKUP: rows 0 and 2 from the tables, row 1 unused.
+// radiance in the case's direction. Column: the case. With LOOKUP: what the terrain's vertex programs take
+// (airAt): rows 0 and 2 from the tables, row 1 the sunlight at the case's point.
 const char* kProbeFragment = R"(#version 330 core
 #include "atmosphere.glsl"
 uniform vec3 uRelative[64];
@@ -56,11 +57,11 @@ void main()
     vec3 view = normalize(relative);
 #ifdef LOOKUP
     vec3 value = p.y == 0 ? aerialPerspective(vec3(0.0), relative, uSun)
-               : p.y == 1 ? vec3(0.0)
+               : p.y == 1 ? airAt(relative, uSun).sunlight
                           : skyRadiance(view, uSun);
 #else
     vec3 value = p.y == 0 ? aerialSum(view, length(relative), uSun)
-               : p.y == 1 ? airTransmittance(uCameraAltitude, relative.z, length(relative))
+               : p.y == 1 ? viewTransmittance(relative)
                           : skySum(view, uSun);
 #endif
     fragColour = vec4(value, 1.0);
@@ -234,11 +235,13 @@ TEST(AtmosphereGLTest, TheRenderersTablesAreTheCppTables)
                 const glm::dvec3 view = glm::normalize(relative);
                 const glm::dvec3 inscattered = tables.inscattered(view, glm::length(relative));
                 const glm::dvec3 sky = tables.sky(view);
+                const glm::dvec3 sunlight = sunTransmittance(air, altitude + relative.z, std::asin(sun.z));
                 for (int c = 0; c < 3; ++c) {
                     const std::string where = "sun " + std::to_string(sunElevation) + ", altitude " +
                                               std::to_string(altitude) + ", case " + std::to_string(k) + ", channel " +
                                               std::to_string(c);
                     EXPECT_NEAR(target.at(0, k, c), inscattered[c], 5e-3 * inscattered[c] + 1e-7) << where;
+                    EXPECT_NEAR(target.at(1, k, c), sunlight[c], 2e-3 * sunlight[c] + 1e-6) << where;
                     EXPECT_NEAR(target.at(2, k, c), sky[c], 5e-3 * sky[c] + 1e-7) << where;
                     worst = std::max({worst, std::abs(target.at(0, k, c) / inscattered[c] - 1.0),
                                       std::abs(target.at(2, k, c) / sky[c] - 1.0)});

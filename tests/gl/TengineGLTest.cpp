@@ -73,6 +73,40 @@ protected:
         const std::filesystem::path dir = TERRAIN_MATERIALS_DIR;
         return {dir / "grass.mat", dir / "rock.mat"};
     }
+    /// The shipped materials without their detail textures, written to `dir`: drawn with them, a frame shows the
+    /// same relief, colours and tints as with the shipped ones, without the detail layers.
+    static std::vector<std::filesystem::path> plainMaterials(const std::filesystem::path& dir)
+    {
+        std::vector<std::filesystem::path> plain;
+        for (const auto& file : detailMaterials()) {
+            std::ifstream in(file);
+            std::ofstream out(dir / file.filename());
+            for (std::string line; std::getline(in, line);) {
+                if (line.rfind("detail_texture", 0) != 0) {
+                    out << line << "\n";
+                }
+            }
+            plain.push_back(dir / file.filename());
+        }
+        return plain;
+    }
+    /// The detail layers' share of the luminance of `detailed` in its `width` x `height` window at (x0, y0): over
+    /// the same frame drawn with plainMaterials(), `flat`, so that the relief's shading and the colours cancel.
+    static std::vector<double> detailShare(const Image& detailed, const Image& flat, int x0, int y0, int width,
+                                           int height)
+    {
+        std::vector<double> share;
+        for (int y = y0; y < y0 + height; ++y) {
+            for (int x = x0; x < x0 + width; ++x) {
+                auto luminance = [&](const Image& image) {
+                    const std::uint8_t* p = image.pixel(x, y);
+                    return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+                };
+                share.push_back(luminance(detailed) / std::max(luminance(flat), 1.0));
+            }
+        }
+        return share;
+    }
     /// Settings that fly the low path with the shipped materials (over detailMap()), plus `more`.
     static std::vector<std::string> lowDetailFlight(std::vector<std::string> more)
     {
@@ -1173,18 +1207,7 @@ TEST_F(TengineGLTest, CloseUpGroundShowsNoRepeatingTile)
         path << "0 " << kX << ' ' << kY << ' ' << ground->height + 25.0 << " 0 -89.9\n"
              << "1 " << kX << ' ' << kY << ' ' << ground->height + 25.0 << " 0 -89.9\n";
     }
-    // The shipped materials without their detail textures.
-    std::vector<std::string> plain;
-    for (const auto& file : detailMaterials()) {
-        std::ifstream in(file);
-        std::ofstream out(dir / file.filename().string());
-        for (std::string line; std::getline(in, line);) {
-            if (line.rfind("detail_texture", 0) != 0) {
-                out << line << "\n";
-            }
-        }
-        plain.push_back((dir / file.filename().string()).string());
-    }
+    const std::vector<std::filesystem::path> plain = plainMaterials(dir.path());
     const auto files = detailMaterials();
     auto draw = [&](const std::string& name, const std::string& materials) {
         std::vector<std::string> args = {detailMap().string(),
@@ -1207,24 +1230,96 @@ TEST_F(TengineGLTest, CloseUpGroundShowsNoRepeatingTile)
         return frame(dir / name, 0);
     };
     const Image detailed = draw("detailed", files[0].string() + ", " + files[1].string());
-    const Image flat = draw("flat", plain[0] + ", " + plain[1]);
+    const Image flat = draw("flat", plain[0].string() + ", " + plain[1].string());
     ASSERT_EQ(detailed.width, 1280);
     ASSERT_EQ(flat.width, 1280);
     constexpr int kWidth = 1024, kHeight = 512;
-    const int x0 = (detailed.width - kWidth) / 2, y0 = (detailed.height - kHeight) / 2;
-    std::vector<double> share;
-    for (int y = y0; y < y0 + kHeight; ++y) {
-        for (int x = x0; x < x0 + kWidth; ++x) {
-            auto luminance = [&](const Image& image) {
-                const std::uint8_t* p = image.pixel(x, y);
-                return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-            };
-            share.push_back(luminance(detailed) / std::max(luminance(flat), 1.0));
-        }
-    }
+    const std::vector<double> share =
+        detailShare(detailed, flat, (detailed.width - kWidth) / 2, (detailed.height - kHeight) / 2, kWidth, kHeight);
     const test::AutocorrelationPeak peak = test::autocorrelationPeak(share, kWidth, kHeight, 16, 160);
     std::printf("close-up detail: autocorrelation peak %.3f at lag (%d, %d) pixels\n", peak.value, peak.dx, peak.dy);
     EXPECT_LE(peak.value, 0.10);
+}
+
+// Detail on a cliff is not stretched down its face: a 70 degree face seen level from 20 m in front of its middle
+// shows the detail layers' share of the frame (detailShare) with the same correlation length down the face as
+// across it, within 40%. Projected from above, as on the plains, the layers would stretch down the face by
+// 1 / tan(70 degrees) per metre of height: 2.7x (so the test fails if the cliffs' projection is off).
+TEST_F(TengineGLTest, CliffDetailIsNotStretchedDownTheFace)
+{
+    constexpr double kFoot = 100.0, kTop = 120.0;
+    const double rise = std::tan(70.0 * std::numbers::pi / 180.0);
+    HeightField field;
+    field.width = field.height = 257;
+    field.integerSamples = false;
+    for (int j = 0; j < field.height; ++j) {
+        for (int i = 0; i < field.width; ++i) {
+            field.samples.push_back(static_cast<float>(std::clamp((i - kFoot) * rise, 0.0, kTop)));
+        }
+    }
+    test::ScratchDir dir;
+    const std::filesystem::path mapFile = dir / "cliff.map";
+    ASSERT_TRUE(test::buildDetailMap(std::move(field), 1.0, mapFile, detailMaterials()).ok());
+    {
+        const double faceX = kFoot + 0.5 * kTop / rise;
+        std::ofstream path(dir / "cliff.path");
+        for (int k = 0; k < 2; ++k) {
+            path << k << ' ' << faceX - 20.0 << " 128 " << 0.5 * kTop << " 90 0\n";
+        }
+    }
+    const std::vector<std::filesystem::path> plain = plainMaterials(dir.path());
+    const auto files = detailMaterials();
+    auto draw = [&](const std::string& name, const std::string& materials) {
+        const test::RunResult run = test::runProgram(
+            TERRAIN_TENGINE_EXE, {mapFile.string(), "--set", "camera_path=" + (dir / "cliff.path").string(), "--set",
+                                  "video_mode=true", "--set", "video_ffmpeg=false", "--set", "video_frames=1", "--set",
+                                  "draw_user_interface=false", "--set", "sun_azimuth=250", "--set",
+                                  "image_path=" + (dir / name).string(), "--set", "detail_materials=" + materials});
+        EXPECT_EQ(run.exitCode, 0) << run.output;
+        return frame(dir / name, 0);
+    };
+    const Image detailed = draw("detailed", files[0].string() + ", " + files[1].string());
+    const Image flat = draw("flat", plain[0].string() + ", " + plain[1].string());
+    ASSERT_EQ(detailed.width, 1280);
+    ASSERT_EQ(flat.width, 1280);
+    constexpr int kSize = 512;
+    std::vector<double> share =
+        detailShare(detailed, flat, (detailed.width - kSize) / 2, (detailed.height - kSize) / 2, kSize, kSize);
+    double mean = 0.0;
+    for (double v : share) {
+        mean += v / static_cast<double>(share.size());
+    }
+    for (double& v : share) {
+        v -= mean;
+    }
+    // The normalised autocorrelation at a lag of (dx, dy) pixels, and the lag along an axis where it falls to 1/2.
+    auto correlation = [&](int dx, int dy) {
+        double products = 0.0, squares = 0.0;
+        for (int y = 0; y + dy < kSize; ++y) {
+            for (int x = 0; x + dx < kSize; ++x) {
+                const double a = share[static_cast<std::size_t>(y) * kSize + static_cast<std::size_t>(x)];
+                products += a * share[static_cast<std::size_t>(y + dy) * kSize + static_cast<std::size_t>(x + dx)];
+                squares += a * a;
+            }
+        }
+        return products / squares;
+    };
+    auto halfLength = [&](int ax, int ay) {
+        double previous = 1.0;
+        for (int d = 1; d <= 128; ++d) {
+            const double r = correlation(ax * d, ay * d);
+            if (r < 0.5) {
+                return d - 1 + (previous - 0.5) / (previous - r);
+            }
+            previous = r;
+        }
+        return 128.0;
+    };
+    const double across = halfLength(1, 0), down = halfLength(0, 1);
+    std::printf("cliff detail: correlation falls to 1/2 at %.2f pixels across the face, %.2f down it (%.2fx)\n", across,
+                down, down / across);
+    EXPECT_GT(across, 1.0) << "detail to measure";
+    EXPECT_NEAR(down / across, 1.0, 0.4);
 }
 
 // Aerial perspective on distant relief: four walls facing the viewer 2.5, 5, 20 and 60 km east of it, painted in
