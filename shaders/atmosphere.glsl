@@ -26,18 +26,19 @@ uniform float uMultipleScatteringTop;
 const float kPi = 3.14159265358979;
 
 // The view ray to a point `rise` metres above the camera and `len` metres from it: its optical depths (Rayleigh,
-// Mie; metres at sea-level density) and the densities at the point, the camera's times their fall along the ray.
-// Two exponentials: what a vertex program computes for every vertex (airAt).
+// Mie; metres at sea-level density) and the densities at the point (exp(-altitude / scale height)). Two
+// exponentials, with the camera's densities a uniform: what the terrain's vertex programs compute for every
+// vertex (airAt). The depth is len times the mean density along the ray, (camera's - point's) / (rise / scale
+// height), its series near rise 0; exact from the ground to orbit (the camera's densities may underflow to 0).
 void viewRay(float rise, float len, out vec2 depth, out vec2 density)
 {
-    vec2 x = rise / vec2(uRayleighHeight, uMieHeight);
-    vec2 fall = exp(-x);
-    density = uCameraDensities * fall;
-    // len times the mean density along the ray over the camera's: (1 - e^-x) / x, its series near 0.
-    vec2 series = 1.0 - x * (0.5 - x / 6.0);
-    vec2 decay = vec2(abs(x.x) < 1e-2 ? series.x : (1.0 - fall.x) / x.x,
-                      abs(x.y) < 1e-2 ? series.y : (1.0 - fall.y) / x.y);
-    depth = uCameraDensities * (len * decay);
+    vec2 heights = vec2(uRayleighHeight, uMieHeight);
+    vec2 x = rise / heights;
+    density = exp(-(uCameraAltitude + rise) / heights);
+    vec2 series = uCameraDensities * (1.0 - x * (0.5 - x / 6.0));
+    vec2 mean = vec2(abs(x.x) < 1e-2 ? series.x : (uCameraDensities.x - density.x) / x.x,
+                     abs(x.y) < 1e-2 ? series.y : (uCameraDensities.y - density.y) / x.y);
+    depth = len * mean;
 }
 
 // The transmittance of a ray of optical depths `depth` (viewRay).
@@ -127,7 +128,7 @@ vec3 inscatter(float altitude, float slope, float len, float mu, int samples)
         float mieDepth = mieStart * t * (abs(rise) < 1e-2 * uMieHeight
                                               ? 1.0 - rise / uMieHeight * (0.5 - rise / (6.0 * uMieHeight))
                                               : (1.0 - mieFall) * uMieHeight / rise);
-        vec3 viewTransmittance = exp(-(uRayleighScattering * rayleighDepth + vec3(uMieExtinction * mieDepth)));
+        vec3 toSample = exp(-(uRayleighScattering * rayleighDepth + vec3(uMieExtinction * mieDepth)));
         float rayleighDensity = rayleighStart * rayleighFall, mieDensity = mieStart * mieFall;
         vec3 scattering = uRayleighScattering * (rayleighDensity * rayleighPhaseValue) +
                           vec3(uMieScattering * mieDensity * miePhaseValue);
@@ -135,7 +136,7 @@ vec3 inscatter(float altitude, float slope, float len, float mu, int samples)
         vec3 light = scattering * sunTransmittanceAt(rayleighDensity, mieDensity) +
                      (uRayleighScattering * rayleighDensity + vec3(uMieScattering * mieDensity)) *
                          multipleScatteringAt(altitude + rise);
-        sum += viewTransmittance * light * (2.0 * len * u);
+        sum += toSample * light * (2.0 * len * u);
     }
     return sum / float(samples);
 }

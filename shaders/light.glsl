@@ -1,6 +1,6 @@
 // The terrain's light and air. Shared by the quadtree's and the clipmap's fragment programs (terrain.frag,
-// clipmap.frag) and the quadtree's vertex programs (the air per vertex, surface.glsl); the sky (sky.frag) takes
-// the same sun. The renderers set these from SceneStyle.
+// clipmap.frag) and the quadtree's vertex programs (their sun, for the air per vertex: surface.glsl,
+// atmosphere.glsl's airAt); the sky (sky.frag) takes the same sun. The renderers set these from SceneStyle.
 // With ATMOSPHERE (atmosphere = true): the node colours as reflectances lit by the sun through the air
 // (sunTransmittance), by the sky's irradiance and by the light the ground around bounces onto slopes, seen
 // through the air (aerialPerspective), tone mapped (atmosphere.glsl, included before this file). Without: the sun

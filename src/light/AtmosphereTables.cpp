@@ -7,13 +7,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 namespace terrain {
 
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 /// The sun's azimuth (atan2(y, x)); 0 for a sun at the zenith or nadir.
 double azimuthOf(const glm::dvec3& v)

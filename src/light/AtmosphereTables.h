@@ -15,7 +15,8 @@
 // included) over those three, divided by the distance coordinate squared (distance / range): the light per
 // metre, which is smooth where the light itself starts from 0 in a straight line (a lookup multiplies it back); the sky
 // table the sky's radiance (skyRadiance) over the first two. The view ray's transmittance and the sunlight stay in
-// closed form (eight exponentials a vertex, cheaper than a fetch on a CPU rasterizer).
+// closed form (eight exponentials, cheaper than a fetch on a CPU rasterizer: per vertex for the quadtree, per pixel
+// for the clipmap).
 //
 // Cells sit on the coordinates' grid points: cell i of n is coordinate i / (n - 1), so the first and last
 // cells are the ends of each range exactly (OpenGL's texture coordinate (c (n - 1) + 0.5) / n). The renderer's

@@ -1244,7 +1244,7 @@ TEST_F(TengineGLTest, CloseUpGroundShowsNoRepeatingTile)
 // Detail on a cliff is not stretched down its face: a 70 degree face seen level from 20 m in front of its middle
 // shows the detail layers' share of the frame (detailShare) with the same correlation length down the face as
 // across it, within 40%. Projected from above, as on the plains, the layers would stretch down the face by
-// 1 / tan(70 degrees) per metre of height: 2.7x (so the test fails if the cliffs' projection is off).
+// tan(70 degrees), 2.7x: a metre of the texture covers that many metres of height (the test fails so).
 TEST_F(TengineGLTest, CliffDetailIsNotStretchedDownTheFace)
 {
     constexpr double kFoot = 100.0, kTop = 120.0;
