@@ -47,14 +47,6 @@ vec3 transmittanceOf(vec2 depth)
     return exp(-(uRayleighScattering * depth.x + vec3(uMieExtinction * depth.y)));
 }
 
-// The view ray's transmittance to a point `relative` metres from the camera.
-vec3 viewTransmittance(vec3 relative)
-{
-    vec2 depth, density;
-    viewRay(relative.z, length(relative), depth, density);
-    return transmittanceOf(depth);
-}
-
 float airMass(float elevation)
 {
     float degrees = max(elevation, 0.0) * (180.0 / kPi);

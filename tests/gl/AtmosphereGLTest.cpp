@@ -61,7 +61,7 @@ void main()
                           : skyRadiance(view, uSun);
 #else
     vec3 value = p.y == 0 ? aerialSum(view, length(relative), uSun)
-               : p.y == 1 ? viewTransmittance(relative)
+               : p.y == 1 ? airAt(relative, uSun).transmittance
                           : skySum(view, uSun);
 #endif
     fragColour = vec4(value, 1.0);

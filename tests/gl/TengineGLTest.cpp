@@ -107,6 +107,50 @@ protected:
         }
         return share;
     }
+    /// detailShare of the centred `width` x `height` window of the 1280 x 720 frame that camera path `path` shows
+    /// first over `mapFile` in video mode, drawn with the shipped materials and with plainMaterials() (frames and
+    /// material copies go under `dir`), with further settings `more`. Empty where a frame is missing or of
+    /// another size (reported).
+    static std::vector<double> centredDetailShare(const std::filesystem::path& mapFile,
+                                                  const std::filesystem::path& path, const std::filesystem::path& dir,
+                                                  int width, int height, const std::vector<std::string>& more = {})
+    {
+        const std::vector<std::filesystem::path> plain = plainMaterials(dir);
+        const auto files = detailMaterials();
+        auto draw = [&](const std::string& name, const std::vector<std::filesystem::path>& materials) {
+            std::vector<std::string> args = {
+                mapFile.string(),
+                "--set",
+                "camera_path=" + path.string(),
+                "--set",
+                "video_mode=true",
+                "--set",
+                "video_ffmpeg=false",
+                "--set",
+                "video_frames=1",
+                "--set",
+                "draw_user_interface=false",
+                "--set",
+                "image_path=" + (dir / name).string(),
+                "--set",
+                "detail_materials=" + materials[0].string() + ", " + materials[1].string()};
+            for (const std::string& setting : more) {
+                args.push_back("--set");
+                args.push_back(setting);
+            }
+            const test::RunResult run = test::runProgram(TERRAIN_TENGINE_EXE, args);
+            EXPECT_EQ(run.exitCode, 0) << run.output;
+            return frame(dir / name, 0);
+        };
+        const Image detailed = draw("detailed", files);
+        const Image flat = draw("flat", plain);
+        EXPECT_EQ(detailed.width, 1280);
+        EXPECT_EQ(flat.width, 1280);
+        if (detailed.width != 1280 || flat.width != 1280) {
+            return {};
+        }
+        return detailShare(detailed, flat, (detailed.width - width) / 2, (detailed.height - height) / 2, width, height);
+    }
     /// Settings that fly the low path with the shipped materials (over detailMap()), plus `more`.
     static std::vector<std::string> lowDetailFlight(std::vector<std::string> more)
     {
@@ -1207,35 +1251,9 @@ TEST_F(TengineGLTest, CloseUpGroundShowsNoRepeatingTile)
         path << "0 " << kX << ' ' << kY << ' ' << ground->height + 25.0 << " 0 -89.9\n"
              << "1 " << kX << ' ' << kY << ' ' << ground->height + 25.0 << " 0 -89.9\n";
     }
-    const std::vector<std::filesystem::path> plain = plainMaterials(dir.path());
-    const auto files = detailMaterials();
-    auto draw = [&](const std::string& name, const std::string& materials) {
-        std::vector<std::string> args = {detailMap().string(),
-                                         "--set",
-                                         "camera_path=" + (dir / "down.path").string(),
-                                         "--set",
-                                         "video_mode=true",
-                                         "--set",
-                                         "video_ffmpeg=false",
-                                         "--set",
-                                         "video_frames=1",
-                                         "--set",
-                                         "draw_user_interface=false",
-                                         "--set",
-                                         "image_path=" + (dir / name).string(),
-                                         "--set",
-                                         "detail_materials=" + materials};
-        const test::RunResult run = test::runProgram(TERRAIN_TENGINE_EXE, args);
-        EXPECT_EQ(run.exitCode, 0) << run.output;
-        return frame(dir / name, 0);
-    };
-    const Image detailed = draw("detailed", files[0].string() + ", " + files[1].string());
-    const Image flat = draw("flat", plain[0].string() + ", " + plain[1].string());
-    ASSERT_EQ(detailed.width, 1280);
-    ASSERT_EQ(flat.width, 1280);
     constexpr int kWidth = 1024, kHeight = 512;
-    const std::vector<double> share =
-        detailShare(detailed, flat, (detailed.width - kWidth) / 2, (detailed.height - kHeight) / 2, kWidth, kHeight);
+    const std::vector<double> share = centredDetailShare(detailMap(), dir / "down.path", dir.path(), kWidth, kHeight);
+    ASSERT_EQ(share.size(), static_cast<std::size_t>(kWidth) * kHeight);
     const test::AutocorrelationPeak peak = test::autocorrelationPeak(share, kWidth, kHeight, 16, 160);
     std::printf("close-up detail: autocorrelation peak %.3f at lag (%d, %d) pixels\n", peak.value, peak.dx, peak.dy);
     EXPECT_LE(peak.value, 0.10);
@@ -1267,24 +1285,10 @@ TEST_F(TengineGLTest, CliffDetailIsNotStretchedDownTheFace)
             path << k << ' ' << faceX - 20.0 << " 128 " << 0.5 * kTop << " 90 0\n";
         }
     }
-    const std::vector<std::filesystem::path> plain = plainMaterials(dir.path());
-    const auto files = detailMaterials();
-    auto draw = [&](const std::string& name, const std::string& materials) {
-        const test::RunResult run = test::runProgram(
-            TERRAIN_TENGINE_EXE, {mapFile.string(), "--set", "camera_path=" + (dir / "cliff.path").string(), "--set",
-                                  "video_mode=true", "--set", "video_ffmpeg=false", "--set", "video_frames=1", "--set",
-                                  "draw_user_interface=false", "--set", "sun_azimuth=250", "--set",
-                                  "image_path=" + (dir / name).string(), "--set", "detail_materials=" + materials});
-        EXPECT_EQ(run.exitCode, 0) << run.output;
-        return frame(dir / name, 0);
-    };
-    const Image detailed = draw("detailed", files[0].string() + ", " + files[1].string());
-    const Image flat = draw("flat", plain[0].string() + ", " + plain[1].string());
-    ASSERT_EQ(detailed.width, 1280);
-    ASSERT_EQ(flat.width, 1280);
     constexpr int kSize = 512;
     std::vector<double> share =
-        detailShare(detailed, flat, (detailed.width - kSize) / 2, (detailed.height - kSize) / 2, kSize, kSize);
+        centredDetailShare(mapFile, dir / "cliff.path", dir.path(), kSize, kSize, {"sun_azimuth=250"});
+    ASSERT_EQ(share.size(), static_cast<std::size_t>(kSize) * kSize);
     double mean = 0.0;
     for (double v : share) {
         mean += v / static_cast<double>(share.size());
