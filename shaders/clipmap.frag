@@ -14,6 +14,7 @@ in vec2 vCoarseUv;
 in float vBlend;
 in float vRemaining;        // of this ring's morph at the fragment (0: none under way)
 in float vCoarseRemaining;  // of the coarser ring's
+in float vSkyVisibility;    // the share of the sky the terrain around leaves the fragment (shaders/clipmap.vert)
 
 uniform sampler2DArray uColour;          // per ring: n x n RGBA8, toroidal (REPEAT wraps it)
 uniform sampler2DArray uPreviousColour;  // what they were drawn as when their morph started
@@ -82,5 +83,5 @@ void main()
     }
     albedo *= detailFactor(vLocal, vRelative, materials, n);
 #endif
-    fragColour = vec4(litAndHazed(albedo, n, vRelative, vec2(colour.a, 1.0)), 1.0);
+    fragColour = vec4(litAndHazed(albedo, n, vRelative, vec2(colour.a, vSkyVisibility)), 1.0);
 }

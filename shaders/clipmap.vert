@@ -6,13 +6,15 @@
 // perimeter of a ring lies exactly on the coarser ring and nothing cracks or pops as the viewer moves.
 // Samples that change in view (a node arriving where its samples were upsampled) morph over uMorphSeconds
 // from the height drawn before (uMorph: previous height, time of the change; ClipmapTerrain::drawnSample is the
-// same in C++), and the fragment program blends their colours, material weights and normals the same way.
+// same in C++), and the fragment program blends their colours, material weights and normals the same way; the
+// sky's visibility is blended and morphed here, per vertex, as the quadtree's vertices do (shaders/surface.glsl).
 
 layout(location = GRID_LOCATION) in ivec2 aGrid;  // the vertex, cells from its footprint's corner
 
 uniform mat4 uViewProjection;    // camera-relative world -> clip
 uniform sampler2DArray uHeights; // per ring: n x n metres above the map's offset, texel = sample mod n
 uniform sampler2DArray uMorph;   // per ring, the same texels: (height drawn before the change, its time in s)
+uniform sampler2DArray uSkyVisibility;  // per ring, the same texels: the sky's visibility, and before the change
 uniform float uNow;              // the clipmap's clock (ClipmapTerrain::clock), seconds
 uniform float uMorphSeconds;     // > 0 (0 morphs are passed as a tiny time: every change is over)
 uniform int uSamples;            // n
@@ -36,6 +38,7 @@ out vec2 vCoarseUv;
 out float vBlend;
 out float vRemaining;        // of this vertex's morph
 out float vCoarseRemaining;  // of the coarser ring's at this vertex (bilinear, as its height)
+out float vSkyVisibility;    // the share of the sky the terrain around leaves the vertex, morphed and blended
 out vec2 vLocal;  // metres from the window origin (the detail layers count from there)
 #ifdef NORMAL_MAP
 uniform float uNormalTexelsPerCell;  // r: the normal layers have r n texels a side, sample g at texel r g
@@ -86,13 +89,23 @@ float coarseAt(ivec2 c)
     return drawn(coarseTexel(c));
 }
 
-// The coarser ring's remaining morph at this ring's sample `local`, bilinear like its surface.
-float coarseRemaining(ivec2 local)
+// A sample's sky visibility as drawn now: on its way from what it was drawn as before its change.
+float drawnSky(ivec3 texel)
+{
+    vec2 sky = texelFetch(uSkyVisibility, texel, 0).rg;
+    return mix(sky.r, sky.g, remaining(texel));
+}
+
+// The coarser ring's remaining morph (x) and drawn sky visibility (y) at this ring's sample `local`, bilinear
+// like its surface.
+vec2 coarseRemainingAndSky(ivec2 local)
 {
     ivec2 c = uCoarseOffset + (local >> 1);
     vec2 f = 0.5 * vec2(local & 1);
-    return mix(mix(remaining(coarseTexel(c)), remaining(coarseTexel(c + ivec2(1, 0))), f.x),
-               mix(remaining(coarseTexel(c + ivec2(0, 1))), remaining(coarseTexel(c + ivec2(1, 1))), f.x), f.y);
+    ivec3 t00 = coarseTexel(c), t10 = coarseTexel(c + ivec2(1, 0)), t01 = coarseTexel(c + ivec2(0, 1)),
+          t11 = coarseTexel(c + ivec2(1, 1));
+    return mix(mix(vec2(remaining(t00), drawnSky(t00)), vec2(remaining(t10), drawnSky(t10)), f.x),
+               mix(vec2(remaining(t01), drawnSky(t01)), vec2(remaining(t11), drawnSky(t11)), f.x), f.y);
 }
 
 // The coarser ring's surface at this ring's sample `local` (bilinear: exact at even samples, the mean of two
@@ -131,7 +144,13 @@ void main()
     vCoarseUv = (vec2(uCoarseTexel + uCoarseOffset) + 0.5 * vec2(local) + 0.5) / float(uSamples);
     vBlend = alpha;
     vRemaining = remaining(fineTexel(local));
-    vCoarseRemaining = uHasCoarser != 0 ? coarseRemaining(local) : 0.0;
+    vSkyVisibility = drawnSky(fineTexel(local));
+    vCoarseRemaining = 0.0;
+    if (uHasCoarser != 0) {
+        vec2 coarser = coarseRemainingAndSky(local);
+        vCoarseRemaining = coarser.x;
+        vSkyVisibility = mix(vSkyVisibility, coarser.y, alpha);
+    }
     vLocal = vec2(local) * uSpacing;
 #ifdef NORMAL_MAP
     float side = uNormalTexelsPerCell * float(uSamples);

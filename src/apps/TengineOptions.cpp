@@ -598,7 +598,7 @@ void addLightOptions(std::vector<OptionSpec>& t)
     t.push_back(boolOption("shadows", kGroupDisplay,
                            "Terrain shadows and sky visibility: the sun hidden behind the relief (soft, from the "
                            "horizons of every node's surface over the static map) and the sky hidden in valleys "
-                           "(lod_mode = clipmap: the sun's shadows, for the sun the session starts with).",
+                           "(lod_mode = clipmap: for the sun the session starts with).",
                            &O::shadows));
     t.push_back(boolOption("atmosphere", kGroupDisplay,
                            "A physically based sky and air: sunlight and skylight through an atmosphere of Rayleigh "

@@ -37,6 +37,7 @@ ClipmapTerrain::ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int t
         }
         ring.colour.assign(samples * 4, 255);
         ring.previousColour = ring.colour;
+        ring.sky.assign(samples * 2, 255);
         if (materials) {
             ring.materials.assign(samples * 4, 0);
             ring.previousMaterials = ring.materials;
@@ -68,7 +69,7 @@ std::size_t ClipmapTerrain::bytes() const
     std::size_t total = 0;
     for (const ClipmapRing& ring : mRings) {
         total += (ring.heights.size() + ring.morph.size()) * sizeof(float) + 2 * ring.colour.size() +
-                 2 * ring.materials.size() + 2 * ring.normals.size();
+                 2 * ring.materials.size() + ring.sky.size() + 2 * ring.normals.size();
     }
     return total;
 }
@@ -146,6 +147,37 @@ Channel mixed(Channel previous, Channel current, float done)
 
 }  // namespace
 
+namespace {
+
+/// One of a ring's 8-bit layers: `channels` bytes a sample, sample t's at current[t stride + c], what they were
+/// drawn as when its morph started at previous[t stride + c]; `coarser` the coarser ring's current layer (null
+/// for the coarsest ring).
+struct ByteLayer {
+    std::uint8_t* current;
+    std::uint8_t* previous;
+    const std::uint8_t* coarser;
+    std::size_t stride;
+    int channels;
+};
+
+/// The bytes of a sample over all its ByteLayers.
+constexpr int kSampleBytes = 9;
+
+/// Sets what sample t's bytes were drawn as when its morph started: `drawn` (the layers' bytes in order), or
+/// with null their current values (no morph).
+void setPrevious(const std::vector<ByteLayer>& layers, std::size_t t, const std::uint8_t* drawn)
+{
+    int b = 0;
+    for (const ByteLayer& layer : layers) {
+        for (int c = 0; c < layer.channels; ++c, ++b) {
+            const std::size_t i = t * layer.stride + static_cast<std::size_t>(c);
+            layer.previous[i] = drawn ? drawn[b] : layer.current[i];
+        }
+    }
+}
+
+}  // namespace
+
 void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, const ResidentNodeLookup& resident,
                           Fill how)
 {
@@ -157,10 +189,29 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
     }
     const int level = layout.window(r).level;
     const int w = windowSize(mChunk);
-    const bool coarser = r + 1 < ringCount();
-    const ClipmapRing* up = coarser ? &mRings[static_cast<std::size_t>(r + 1)] : nullptr;
-    const bool withMaterials = !ring.materials.empty();
+    const ClipmapRing* up = r + 1 < ringCount() ? &mRings[static_cast<std::size_t>(r + 1)] : nullptr;
     const bool morphs = how == Fill::kSeen && mMorphSeconds > 0.0;
+    // The 8-bit layers in nodeBytes()'s order: colour, sky visibility, material weights.
+    std::vector<ByteLayer> layers{
+        {ring.colour.data(), ring.previousColour.data(), up ? up->colour.data() : nullptr, 4, 4},
+        {ring.sky.data(), ring.sky.data() + 1, up ? up->sky.data() : nullptr, 2, 1}};
+    if (!ring.materials.empty()) {
+        layers.push_back(
+            {ring.materials.data(), ring.previousMaterials.data(), up ? up->materials.data() : nullptr, 4, 4});
+    }
+    // The coarser ring's bilinear value at level-grid sample (gx, gy) of byte c of a sample of `layer` (stride
+    // 1 for the heights, as floats): its window holds the point, windows nest.
+    auto coarseValue = [&](const auto* layer, std::size_t stride, int c, std::int64_t gx, std::int64_t gy) {
+        const std::int64_t cx = gx >> 1, cy = gy >> 1, dx = gx & 1, dy = gy & 1;
+        float value = 0.0f;
+        for (std::int64_t j = 0; j <= dy; ++j) {
+            for (std::int64_t i = 0; i <= dx; ++i) {
+                const std::size_t u = static_cast<std::size_t>(toroidalTexel(cy + j, n)) * n + toroidalTexel(cx + i, n);
+                value += (dx ? 0.5f : 1.0f) * (dy ? 0.5f : 1.0f) * static_cast<float>(layer[u * stride + c]);
+            }
+        }
+        return value;
+    };
     // Per sample of `rect` (row-major), for its normal texels: how far its morph had gone when it restarted
     // (in [0, 1]), kReset when its morph was cleared, kKept when it was left as it was.
     std::vector<float> state(static_cast<std::size_t>(rect.area()), kKept);
@@ -179,86 +230,42 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                 visibility = sunVisibility(node.get(), visibilities);
             }
             const std::size_t t = static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n);
-            const bool haveColour = node && !node->texture.empty();
-            const bool haveMaterials = withMaterials && node && !node->materialWeights.empty();
             // What the sample is drawn as now, before it changes: where a morph starts from.
             const float done = morphDone(r, t);
             const float drawn = drawnSample(r, t);
-            std::array<std::uint8_t, 4> drawnColour{}, drawnMaterials{};
-            for (int c = 0; c < 4; ++c) {
-                drawnColour[c] = mixed(ring.previousColour[t * 4 + c], ring.colour[t * 4 + c], done);
-                drawnMaterials[c] =
-                    withMaterials ? mixed(ring.previousMaterials[t * 4 + c], ring.materials[t * 4 + c], done) : 0;
-            }
-            const float before = ring.heights[t];
-            std::array<std::uint8_t, 4> colourBefore{}, materialsBefore{};
-            std::copy_n(ring.colour.begin() + static_cast<std::ptrdiff_t>(t * 4), 4, colourBefore.begin());
-            if (withMaterials) {
-                std::copy_n(ring.materials.begin() + static_cast<std::ptrdiff_t>(t * 4), 4, materialsBefore.begin());
-            }
+            const float heightBefore = ring.heights[t];
+            std::array<std::uint8_t, kSampleBytes> fresh{};
+            const std::array<bool, 3> have =
+                nodeBytes(node.get(), visibility, at.u - kBorder, at.v - kBorder, !ring.materials.empty(), fresh);
             if (node) {
                 ring.heights[t] = node->heights.height(static_cast<std::size_t>(at.v) * w + at.u);
+            } else if (up) {
+                ring.heights[t] = coarseValue(up->heights.data(), 1, 0, gx, gy);
             }
-            if (haveColour) {
-                colourOf(*node, visibility, at.u - kBorder, at.v - kBorder, &ring.colour[t * 4]);
-            }
-            if (haveMaterials) {
-                const std::size_t k =
-                    (static_cast<std::size_t>(at.v - kBorder) * static_cast<std::size_t>(mChunk) + (at.u - kBorder)) *
-                    4;
-                for (int c = 0; c < 4; ++c) {
-                    ring.materials[t * 4 + c] = node->materialWeights[k + c];
-                }
-            }
-            if ((!node || !haveColour || (withMaterials && !haveMaterials)) && up) {
-                // The coarser ring's bilinear value at this point (its window holds it: windows nest).
-                const std::int64_t cx = gx >> 1, cy = gy >> 1;
-                const std::int64_t dx = gx & 1, dy = gy & 1;
-                float h = 0.0f;
-                float rgba[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-                float weights[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-                for (std::int64_t j = 0; j <= dy; ++j) {
-                    for (std::int64_t i = 0; i <= dx; ++i) {
-                        const float weight = (dx ? 0.5f : 1.0f) * (dy ? 0.5f : 1.0f);
-                        const std::size_t u =
-                            static_cast<std::size_t>(toroidalTexel(cy + j, n)) * n + toroidalTexel(cx + i, n);
-                        h += weight * up->heights[u];
-                        for (int c = 0; c < 4; ++c) {
-                            rgba[c] += weight * up->colour[u * 4 + c];
-                        }
-                        for (int c = 0; c < 4 && withMaterials; ++c) {
-                            weights[c] += weight * up->materials[u * 4 + c];
-                        }
+            bool changed = ring.heights[t] != heightBefore;
+            std::array<std::uint8_t, kSampleBytes> drawnBytes{};
+            int b = 0;
+            for (std::size_t l = 0; l < layers.size(); ++l) {
+                const ByteLayer& layer = layers[l];
+                for (int c = 0; c < layer.channels; ++c, ++b) {
+                    std::uint8_t& current = layer.current[t * layer.stride + c];
+                    drawnBytes[b] = mixed(layer.previous[t * layer.stride + c], current, done);
+                    if (have[l] || up) {  // else kept: nothing to take it from
+                        const std::uint8_t value = have[l] ? fresh[b]
+                                                           : static_cast<std::uint8_t>(std::lround(
+                                                                 coarseValue(layer.coarser, layer.stride, c, gx, gy)));
+                        changed = changed || value != current;
+                        current = value;
                     }
                 }
-                if (!node) {
-                    ring.heights[t] = h;
-                }
-                for (int c = 0; c < 4 && !haveColour; ++c) {
-                    ring.colour[t * 4 + c] = static_cast<std::uint8_t>(std::lround(rgba[c]));
-                }
-                for (int c = 0; c < 4 && withMaterials && !haveMaterials; ++c) {
-                    ring.materials[t * 4 + c] = static_cast<std::uint8_t>(std::lround(weights[c]));
-                }
             }
-            const bool changed =
-                ring.heights[t] != before ||
-                !std::equal(colourBefore.begin(), colourBefore.end(),
-                            ring.colour.begin() + static_cast<std::ptrdiff_t>(t * 4)) ||
-                (withMaterials && !std::equal(materialsBefore.begin(), materialsBefore.end(),
-                                              ring.materials.begin() + static_cast<std::ptrdiff_t>(t * 4)));
             const std::size_t k = static_cast<std::size_t>((gy - rect.y0) * (rect.x1 - rect.x0) + (gx - rect.x0));
             if (morphs && (changed || done >= 1.0f)) {
                 // A sample of a node that arrives morphs from what is drawn: changed ones, and unchanged ones
                 // from themselves (their normal texels may change); unchanged ones on their way keep going.
                 ring.morph[2 * t] = drawn;
                 ring.morph[2 * t + 1] = clock();
-                std::copy(drawnColour.begin(), drawnColour.end(),
-                          ring.previousColour.begin() + static_cast<std::ptrdiff_t>(t * 4));
-                if (withMaterials) {
-                    std::copy(drawnMaterials.begin(), drawnMaterials.end(),
-                              ring.previousMaterials.begin() + static_cast<std::ptrdiff_t>(t * 4));
-                }
+                setPrevious(layers, t, drawnBytes.data());
                 state[k] = done;
             } else if (how == Fill::kEntered || (how == Fill::kUnseen && changed)) {
                 // No morph: entered samples are new to the window (at its perimeter, where the transition blend
@@ -267,12 +274,7 @@ void ClipmapTerrain::fill(const ClipmapLayout& layout, int r, LatticeRect rect, 
                 // under way (a neighbour's edge).
                 ring.morph[2 * t] = ring.heights[t];
                 ring.morph[2 * t + 1] = kNoMorph;
-                std::copy_n(ring.colour.begin() + static_cast<std::ptrdiff_t>(t * 4), 4,
-                            ring.previousColour.begin() + static_cast<std::ptrdiff_t>(t * 4));
-                if (withMaterials) {
-                    std::copy_n(ring.materials.begin() + static_cast<std::ptrdiff_t>(t * 4), 4,
-                                ring.previousMaterials.begin() + static_cast<std::ptrdiff_t>(t * 4));
-                }
+                setPrevious(layers, t, nullptr);
                 state[k] = kReset;
             }
             if (!node) {
@@ -300,20 +302,31 @@ const std::vector<std::uint8_t>* ClipmapTerrain::sunVisibility(
     return &it->second;
 }
 
-void ClipmapTerrain::colourOf(const NodeData& node, const std::vector<std::uint8_t>* visibility, int u, int v,
-                              std::uint8_t* rgba) const
+std::array<bool, 3> ClipmapTerrain::nodeBytes(const NodeData* node, const std::vector<std::uint8_t>* visibility, int u,
+                                              int v, bool materials, std::span<std::uint8_t> out) const
 {
-    // Texel nearest the sample (textures have T x T texels over the node's square, corners on corners).
-    const int tx = static_cast<int>(std::lround(u * (mTexture - 1.0) / (mChunk - 1)));
-    const int ty = static_cast<int>(std::lround(v * (mTexture - 1.0) / (mChunk - 1)));
-    const std::size_t k = (static_cast<std::size_t>(ty) * mTexture + tx) * 3;
-    for (int c = 0; c < 3; ++c) {
-        rgba[c] = node.texture[k + c];
+    std::array<bool, 3> have{};
+    if (!node) {
+        return have;
     }
-    rgba[3] = visibility ? (*visibility)[(static_cast<std::size_t>(v) * static_cast<std::size_t>(mChunk) +
-                                          static_cast<std::size_t>(u)) *
-                                         2]
-                         : 255;
+    const std::size_t sample = static_cast<std::size_t>(v) * static_cast<std::size_t>(mChunk) + u;
+    // The colour: the texel nearest the sample (textures have T x T texels over the node's square, corners on
+    // corners), and the sun's visibility.
+    have[0] = !node->texture.empty();
+    if (have[0]) {
+        const int tx = static_cast<int>(std::lround(u * (mTexture - 1.0) / (mChunk - 1)));
+        const int ty = static_cast<int>(std::lround(v * (mTexture - 1.0) / (mChunk - 1)));
+        const std::size_t k = (static_cast<std::size_t>(ty) * mTexture + tx) * 3;
+        std::copy_n(node->texture.begin() + static_cast<std::ptrdiff_t>(k), 3, out.begin());
+        out[3] = visibility ? (*visibility)[sample * 2] : 255;
+    }
+    have[1] = true;
+    out[4] = visibility ? (*visibility)[sample * 2 + 1] : 255;
+    have[2] = materials && !node->materialWeights.empty();
+    if (have[2]) {
+        std::copy_n(node->materialWeights.begin() + static_cast<std::ptrdiff_t>(sample * 4), 4, out.begin() + 5);
+    }
+    return have;
 }
 
 void ClipmapTerrain::fillNormals(const ClipmapLayout& layout, int r, const LatticeRect& rect,

@@ -4,14 +4,16 @@
 // node is not resident yet is upsampled from the coarser ring (bilinear: seed 002's prediction without the
 // residual) and filled again once the node arrives. What changed is kept as rectangles for the renderer to
 // upload. Upsampled samples the viewer has seen change to their node's heights over morphSeconds once it
-// arrives, from what was drawn before (heights, colours, material weights, normals: no pop as data streams in).
-// Memory: 20 bytes per sample per ring (28 with material weights, plus 4 r^2 with normal maps), fixed by n and the
+// arrives, from what was drawn before (heights, colours, sky visibility, material weights, normals: no pop as data
+// streams in).
+// Memory: 22 bytes per sample per ring (30 with material weights, plus 4 r^2 with normal maps), fixed by n and the
 // ring count.
 #pragma once
 
 #include "lod/ClipmapLayout.h"
 #include "lod/NodeData.h"
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -26,6 +28,9 @@ struct ClipmapRing {
     /// RGBA8, the nodes' textures at the samples; alpha the sun's visibility there (255 without shadows)
     std::vector<std::uint8_t> colour;
     std::vector<std::uint8_t> materials;  ///< RGBA8, the nodes' 4 material weights at the samples; or empty
+    /// Per sample (current, previous): the sky's visibility at the samples (the nodes' horizons; 255 where a
+    /// node has none), and what it was drawn as when the sample's morph started.
+    std::vector<std::uint8_t> sky;
     /// The nodes' normal maps (NodeData::normalMap: x, y as RG8_SNORM) on a toroidal (r n)^2 texel grid, r texels
     /// a cell (normalTexelsPerCell), sample g's texel at r g mod r n; or empty.
     std::vector<std::int8_t> normals;
@@ -134,10 +139,12 @@ private:
     /// `cache`; null without a sun or without the node's horizons.
     const std::vector<std::uint8_t>* sunVisibility(
         const NodeData* node, std::unordered_map<std::uint64_t, std::vector<std::uint8_t>>& cache) const;
-    /// The colour (RGBA8) of `node`'s sample (u, v) (inner samples, 0 .. N - 1): its nearest texel, and the sun's
-    /// visibility there (`visibility`, sunVisibility's) or 255.
-    void colourOf(const NodeData& node, const std::vector<std::uint8_t>* visibility, int u, int v,
-                  std::uint8_t* rgba) const;
+    /// `node`'s bytes at its sample (u, v) (inner samples, 0 .. N - 1) into out: the colour (RGBA8: its nearest
+    /// texel, and the sun's visibility there, `visibility`'s (sunVisibility) or 255), the sky's visibility (the
+    /// same way), and with `materials` the material weights (RGBA8). Which of the three the node has (none
+    /// without a node).
+    std::array<bool, 3> nodeBytes(const NodeData* node, const std::vector<std::uint8_t>* visibility, int u, int v,
+                                  bool materials, std::span<std::uint8_t> out) const;
     /// The normal texels of the samples of `rect` (level grid, within the window) of ring `r`; `state` is
     /// fill()'s per sample of `rect`: a restarted morph's fraction done before, or whether it was reset.
     void fillNormals(const ClipmapLayout& layout, int r, const LatticeRect& rect, const ResidentNodeLookup& resident,

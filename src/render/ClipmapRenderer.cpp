@@ -90,7 +90,9 @@ Expected<std::unique_ptr<ClipmapRenderer>> ClipmapRenderer::create(const std::fi
     r->mColour = createTextureArray(ringFormat(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR), n, layout.ringCount());
     r->mPreviousColour =
         createTextureArray(ringFormat(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR), n, layout.ringCount());
-    r->mTextureBytes = static_cast<std::size_t>(n) * n * layout.ringCount() * 20;
+    r->mSkyVisibility =
+        createTextureArray(ringFormat(GL_RG8, GL_RG, GL_UNSIGNED_BYTE, GL_NEAREST), n, layout.ringCount());
+    r->mTextureBytes = static_cast<std::size_t>(n) * n * layout.ringCount() * 22;
     if (!r->mDetail.empty()) {
         r->mMaterials =
             createTextureArray(ringFormat(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR), n, layout.ringCount());
@@ -198,6 +200,7 @@ void ClipmapRenderer::upload(const ClipmapTerrain& terrain, int ring, ClipmapSta
         layer(mColour, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RGBA, GL_UNSIGNED_BYTE, data.colour.data(), 4);
         layer(mPreviousColour, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RGBA, GL_UNSIGNED_BYTE,
               data.previousColour.data(), 4);
+        layer(mSkyVisibility, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RG, GL_UNSIGNED_BYTE, data.sky.data(), 2);
         if (mMaterials) {
             layer(mMaterials, n, rect.x0, rect.y0, rect.x1, rect.y1, GL_RGBA, GL_UNSIGNED_BYTE, data.materials.data(),
                   4);
@@ -227,7 +230,8 @@ void ClipmapRenderer::bindRingTextures() const
                                                            {units::kMorph, &mMorph},
                                                            {units::kPreviousColour, &mPreviousColour},
                                                            {units::kPreviousMaterials, &mPreviousMaterials},
-                                                           {units::kPreviousNormals, &mPreviousNormals}};
+                                                           {units::kPreviousNormals, &mPreviousNormals},
+                                                           {units::kSkyVisibility, &mSkyVisibility}};
     for (const auto& [unit, texture] : bindings) {
         if (*texture) {
             glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));

@@ -1,8 +1,8 @@
 // The geometry clipmap renderer (seed 002: Asirvatham & Hoppe, GPU Gems 2 chapter 2), lod_mode = clipmap:
-// per ring an n x n elevation layer (R32F), morph layer (RG32F) and colour layer (RGBA8) in texture arrays, updated
-// toroidally with the samples lod/ClipmapTerrain changed (glTexSubImage3D of the rectangles, split where they
-// wrap); the rings drawn by instancing the footprints of lod/ClipmapLayout (one vertex and index buffer per
-// footprint size, SW-NE diagonals like the quadtree's template), each footprint culled against the view
+// per ring an n x n elevation layer (R32F), morph layer (RG32F), sky visibility layer (RG8) and colour layer (RGBA8) in
+// texture arrays, updated toroidally with the samples lod/ClipmapTerrain changed (glTexSubImage3D of the rectangles,
+// split where they wrap); the rings drawn by instancing the footprints of lod/ClipmapLayout (one vertex and index
+// buffer per footprint size, SW-NE diagonals like the quadtree's template), each footprint culled against the view
 // frustum by its box, finest ring first (front to back). The vertex program blends heights and normals to
 // the coarser ring in the transition region (shaders/clipmap.vert); zero-area triangles along each ring's
 // perimeter close the T-junctions with the coarser ring exactly as the seed's degenerate triangles do.
@@ -86,9 +86,10 @@ private:
     static constexpr std::size_t kFar = 1;
     DetailLayers mDetail;
     Sky mSky;
-    gl::Texture mHeights;  ///< GL_TEXTURE_2D_ARRAY R32F, a layer per ring
-    gl::Texture mMorph;    ///< GL_TEXTURE_2D_ARRAY RG32F (ClipmapRing::morph), a layer per ring
-    gl::Texture mColour;   ///< GL_TEXTURE_2D_ARRAY RGBA8, a layer per ring
+    gl::Texture mHeights;        ///< GL_TEXTURE_2D_ARRAY R32F, a layer per ring
+    gl::Texture mMorph;          ///< GL_TEXTURE_2D_ARRAY RG32F (ClipmapRing::morph), a layer per ring
+    gl::Texture mSkyVisibility;  ///< GL_TEXTURE_2D_ARRAY RG8 (ClipmapRing::sky: current, previous), a layer per ring
+    gl::Texture mColour;         ///< GL_TEXTURE_2D_ARRAY RGBA8, a layer per ring
     /// ClipmapRing's previous colours, material weights and normals, as mColour, mMaterials and mNormals.
     gl::Texture mPreviousColour;
     gl::Texture mPreviousMaterials;

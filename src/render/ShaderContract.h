@@ -99,8 +99,9 @@ inline constexpr int kPreviousColour = 6;
 inline constexpr int kPreviousMaterials = 7;
 inline constexpr int kPreviousNormals = 8;
 inline constexpr int kAerialTable = 9;
+inline constexpr int kSkyVisibility = 10;
 }  // namespace clipmap_units
-inline constexpr std::array<SamplerUnit, 10> kClipmapSamplers = {{
+inline constexpr std::array<SamplerUnit, 11> kClipmapSamplers = {{
     {"uHeights", clipmap_units::kHeights},
     {"uColour", clipmap_units::kColour},
     {"uDetail", clipmap_units::kDetail},
@@ -111,6 +112,7 @@ inline constexpr std::array<SamplerUnit, 10> kClipmapSamplers = {{
     {"uPreviousMaterials", clipmap_units::kPreviousMaterials},
     {"uPreviousNormals", clipmap_units::kPreviousNormals},
     {"uAerialTable", clipmap_units::kAerialTable},
+    {"uSkyVisibility", clipmap_units::kSkyVisibility},
 }};
 
 /// The sky's program (sky.*): the frame's sky table (AtmosphereTables).

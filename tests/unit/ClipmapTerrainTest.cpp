@@ -126,7 +126,7 @@ TEST_F(ClipmapTerrainTest, SettledRingsHoldTheirNodesSamplesAlongAFlight)
     ASSERT_TRUE(streamer);
     ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 4, 0);
     ClipmapTerrain terrain(layout, 17, 17);
-    EXPECT_EQ(terrain.bytes(), std::size_t{5} * 31 * 31 * 20);
+    EXPECT_EQ(terrain.bytes(), std::size_t{5} * 31 * 31 * 22);
     // Small steps, a jump, the edge of the terrain and beyond.
     const std::pair<double, double> flight[] = {{200, 300}, {203, 301}, {211, 290}, {260, 250},
                                                 {20, 500},  {-30, 530}, {400, 100}, {401.5, 99}};
@@ -355,7 +355,7 @@ TEST_F(ClipmapTerrainTest, RingsBelowTheStaticLevelsHoldTheSynthesizedNodes)
     ASSERT_TRUE(streamer);
     ClipmapLayout layout(extentOf(mMap->header()), 17, 31, 6, 0);  // two levels of dynamic nodes
     ClipmapTerrain terrain(layout, 17, 17, /*materials=*/true);
-    EXPECT_EQ(terrain.bytes(), std::size_t{7} * 31 * 31 * 28);
+    EXPECT_EQ(terrain.bytes(), std::size_t{7} * 31 * 31 * 30);
     settle(layout, terrain, *streamer, 130.0, 170.0);
     EXPECT_EQ(terrain.upsampledNodes(), 0u);
     int materialMismatches = 0;
@@ -414,7 +414,7 @@ TEST_F(ClipmapTerrainTest, RingsHoldTheNodesNormalMapsAtTheirTexels)
     ClipmapLayout layout(extentOf(mMap->header()), 17, n, 5, 0);
     ClipmapTerrain terrain(layout, 17, 17, false, normalMapTexels(32));
     ASSERT_EQ(terrain.normalTexelsPerCell(), 2);
-    EXPECT_EQ(terrain.bytes(), std::size_t{6} * n * n * (20 + 4 * 4));
+    EXPECT_EQ(terrain.bytes(), std::size_t{6} * n * n * (22 + 4 * 4));
     settle(layout, terrain, *streamer, 140.0, 90.0);
     ASSERT_EQ(terrain.upsampledNodes(), 0u);
     const int side = 2 * n;
@@ -453,10 +453,11 @@ TEST_F(ClipmapTerrainTest, RingsHoldTheNodesNormalMapsAtTheirTexels)
     EXPECT_GT(tilted, checked / 10) << "the hills' normals are not all flat";
 }
 
-TEST_F(ClipmapTerrainTest, RingsHoldTheSunsVisibilityOfTheirNodesSamplesInTheColoursAlpha)
+TEST_F(ClipmapTerrainTest, RingsHoldTheSunsAndTheSkysVisibilityOfTheirNodesSamples)
 {
-    // Under a low sun every sample's colour alpha is its node's sun visibility there (latticeVisibility of the
-    // node's horizons); without a sun it stays 255.
+    // Under a low sun every sample's colour alpha is its node's sun visibility there and its sky layer the sky's
+    // (latticeVisibility of the node's horizons, both current and drawn before: nothing morphs); without a sun
+    // both stay 255.
     auto grid = staticHeightGrid(*mMap, 2049);
     ASSERT_TRUE(grid.ok()) << grid.error().message;
     DetailPolicy policy;
@@ -473,7 +474,7 @@ TEST_F(ClipmapTerrainTest, RingsHoldTheSunsVisibilityOfTheirNodesSamplesInTheCol
     settle(layout, terrain, *streamer, 140.0, 90.0);
     settle(plainLayout, plain, *streamer, 140.0, 90.0);
     ASSERT_EQ(terrain.upsampledNodes(), 0u);
-    int checked = 0, mismatches = 0, shadowed = 0;
+    int checked = 0, mismatches = 0, shadowed = 0, hidden = 0;
     for (int r = 0; r < layout.ringCount(); ++r) {
         const ClipmapWindow& win = layout.window(r);
         const std::int64_t last = std::int64_t{16} << win.level;
@@ -498,8 +499,18 @@ TEST_F(ClipmapTerrainTest, RingsHoldTheSunsVisibilityOfTheirNodesSamplesInTheCol
                                   << node->id.toString() << ": " << int{terrain.ring(r).colour[t]} << ", not "
                                   << int{want};
                 }
+                const std::size_t s = (static_cast<std::size_t>(toroidalTexel(gy, n)) * n + toroidalTexel(gx, n)) * 2;
+                const std::uint8_t sky = visibility[(v * 17 + u) * 2 + 1];
+                if ((terrain.ring(r).sky[s] != sky || terrain.ring(r).sky[s + 1] != sky) && ++mismatches <= 3) {
+                    ADD_FAILURE() << "ring " << r << " sample (" << gx << ", " << gy
+                                  << ")'s sky: " << int{terrain.ring(r).sky[s]} << " and "
+                                  << int{terrain.ring(r).sky[s + 1]} << ", not " << int{sky};
+                }
                 ASSERT_EQ(plain.ring(r).colour[t], 255);
+                ASSERT_EQ(plain.ring(r).sky[s], 255);
+                ASSERT_EQ(plain.ring(r).sky[s + 1], 255);
                 shadowed += want < 128;
+                hidden += sky < 230;
                 ++checked;
             }
         }
@@ -509,6 +520,7 @@ TEST_F(ClipmapTerrainTest, RingsHoldTheSunsVisibilityOfTheirNodesSamplesInTheCol
     EXPECT_GT(shadowed, checked / 50)
         << "a 60 degree sun over the steep hills (60 m bumps 36 m apart) leaves some samples in shadow";
     EXPECT_GT(checked - shadowed, checked / 50) << "and some in the sun";
+    EXPECT_GT(hidden, checked / 50) << "and some samples in hollows that see less of the sky";
 }
 
 TEST_F(ClipmapTerrainTest, MemoryIsBoundedByTheClipmapSizeOverALongFlight)
@@ -530,7 +542,7 @@ TEST_F(ClipmapTerrainTest, MemoryIsBoundedByTheClipmapSizeOverALongFlight)
     ClipmapLayout layout(extentOf(mMap->header()), 17, n, finest, 0);
     ClipmapTerrain terrain(layout, 17, 17);
     const std::size_t bytes = terrain.bytes();
-    EXPECT_EQ(bytes, std::size_t{finest + 1} * n * n * 20);
+    EXPECT_EQ(bytes, std::size_t{finest + 1} * n * n * 22);
     // A long flight: three laps of a figure of eight over the whole terrain (5.9 km in 3 to 10 m steps).
     std::size_t largestCache = 0, largestWanted = 0, evictionsBefore = 0;
     constexpr int steps = 900;
