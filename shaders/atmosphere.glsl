@@ -19,8 +19,10 @@ uniform float uCameraAltitude;  // metres (world z)
 uniform vec2 uCameraDensities;  // the Rayleigh and Mie densities at the camera, exp(-altitude / scale height)
 uniform float uExposure;
 uniform float uSunAirMass;  // airMass() of the sun's elevation, per frame
-// psi_ms (light/Atmosphere.h, multipleScattering) at altitudes top (i / (n - 1))^2, for the frame's sun.
+// psi_ms (light/Atmosphere.h, multipleScattering) at altitudes top (i / (n - 1))^2, for the frame's sun, and the
+// sky's irradiance on a horizontal surface at the same altitudes (MultipleScattering::irradiance).
 uniform vec3 uMultipleScattering[MULTIPLE_SCATTERING_ALTITUDES];
+uniform vec3 uSkyIrradiance[MULTIPLE_SCATTERING_ALTITUDES];
 uniform float uMultipleScatteringTop;
 
 const float kPi = 3.14159265358979;
@@ -67,12 +69,6 @@ vec3 sunTransmittance(float altitude)
     return sunTransmittanceAt(exp(-altitude / uRayleighHeight), exp(-altitude / uMieHeight));
 }
 
-// The sky's irradiance on a horizontal surface whose sunlight is `sunlight` (sunTransmittance), sun in `sun`.
-vec3 skyIrradiance(vec3 sunlight, vec3 sun)
-{
-    return 0.5 * max(sun.z, 0.0) * (vec3(1.0) - sunlight);
-}
-
 float rayleighPhase(float mu)
 {
     return 3.0 / (16.0 * kPi) * (1.0 + mu * mu);
@@ -84,17 +80,39 @@ float miePhase(float mu, float g)
     return 3.0 / (8.0 * kPi) * (1.0 - g2) * (1.0 + mu * mu) / ((2.0 + g2) * pow(1.0 + g2 - 2.0 * g * mu, 1.5));
 }
 
-// psi_ms at `altitude` metres, linear between the altitudes held (MultipleScattering::at).
-vec3 multipleScatteringAt(float altitude)
+// The altitudes held below and above `altitude` metres: the lower one's index, and in `weight` the upper one's
+// share (the ground's below 0 and for NaN, the top's above; MultipleScattering::at).
+int altitudeCell(float altitude, out float weight)
 {
     const int n = MULTIPLE_SCATTERING_ALTITUDES;
-    if (!(uMultipleScatteringTop > 0.0)) {
-        return vec3(0.0);  // not set: single scattering
-    }
     float share = altitude / uMultipleScatteringTop;
     float x = sqrt(share >= 0.0 ? min(share, 1.0) : 0.0) * float(n - 1);  // NaN reads the ground's
     int i = clamp(int(x), 0, n - 2);
-    return mix(uMultipleScattering[i], uMultipleScattering[i + 1], x - float(i));
+    weight = x - float(i);
+    return i;
+}
+
+// psi_ms at `altitude` metres, linear between the altitudes held (MultipleScattering::at).
+vec3 multipleScatteringAt(float altitude)
+{
+    if (!(uMultipleScatteringTop > 0.0)) {
+        return vec3(0.0);  // not set: single scattering
+    }
+    float weight;
+    int i = altitudeCell(altitude, weight);
+    return mix(uMultipleScattering[i], uMultipleScattering[i + 1], weight);
+}
+
+// The sky's irradiance on a horizontal surface at `altitude` metres (MultipleScattering::irradianceAt); none
+// where the frame's uniforms are not set.
+vec3 skyIrradianceAt(float altitude)
+{
+    if (!(uMultipleScatteringTop > 0.0)) {
+        return vec3(0.0);
+    }
+    float weight;
+    int i = altitudeCell(altitude, weight);
+    return mix(uSkyIrradiance[i], uSkyIrradiance[i + 1], weight);
 }
 
 // The in-scattered light of a segment from `altitude`, `len` metres rising `slope` a metre, at cos(view, sun)
@@ -210,10 +228,12 @@ vec3 aerialInscattered(vec3 c)
 // the aerial table). All three change smoothly over a triangle: the terrain's vertex programs make them per vertex
 // (surface.glsl), and the fragments interpolate them, which saves a fetch of a 3D table and eight exponentials a
 // pixel. (The table's coordinates would not interpolate: their azimuth folds at the sun's.)
+// With them the sky's irradiance there (skyIrradianceAt: a lookup by altitude, made wherever the point is).
 struct Air {
     vec3 sunlight;
     vec3 transmittance;
     vec3 inscattered;
+    vec3 skylight;
 };
 
 Air airAt(vec3 relative, vec3 sun)
@@ -222,7 +242,7 @@ Air airAt(vec3 relative, vec3 sun)
     vec2 depth, density;
     viewRay(relative.z, len, depth, density);
     return Air(sunTransmittanceAt(density.x, density.y), transmittanceOf(depth),
-               aerialInscattered(aerialCoordinate(relative, len, sun)));
+               aerialInscattered(aerialCoordinate(relative, len, sun)), skyIrradianceAt(uCameraAltitude + relative.z));
 }
 
 // The light of a surface point `relative` metres from the camera, `radiance` where it is, as it reaches the

@@ -22,7 +22,7 @@ vec3 litThroughAir(vec3 albedo, vec3 n, vec2 visibility, Air air)
 {
     vec3 reflectance = albedo * albedo;  // the display's gamma 2 (toneMap) undone
     vec3 sunlight = air.sunlight;
-    vec3 sky = skyIrradiance(sunlight, uSunDirection);
+    vec3 sky = air.skylight;
     // What the ground around receives, reflected back to a tilted surface from below its horizon: the
     // surroundings taken as a lit flat ground of reflectance kGroundAlbedo, seen over (1 - n.z) / 2 of the sphere.
     vec3 ground = kGroundAlbedo * (sunlight * max(uSunDirection.z, 0.0) + sky);

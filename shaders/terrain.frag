@@ -20,7 +20,8 @@ in vec2 vNodeUv;
 in vec2 vLocal;
 in vec4 vMaterials;
 #ifdef ATMOSPHERE
-in vec3 vSunlight;  // the air at the fragment, interpolated between the vertices' (atmosphere.glsl, Air)
+in vec3 vSunlight;  // the air at the fragment, interpolated between the vertices' (atmosphere.glsl, Air; its
+                    // skylight, a lookup by altitude, is made here)
 in vec3 vAirTransmittance;
 in vec3 vAerial;
 #endif
@@ -121,7 +122,8 @@ void main()
     albedo *= detailFactor(vLocal, vRelative, vMaterials, n);
 #endif
 #ifdef ATMOSPHERE
-    fragColour = vec4(litThroughAir(albedo, n, visibility(own, parent), Air(vSunlight, vAirTransmittance, vAerial)), 1.0);
+    Air air = Air(vSunlight, vAirTransmittance, vAerial, skyIrradianceAt(uCameraAltitude + vRelative.z));
+    fragColour = vec4(litThroughAir(albedo, n, visibility(own, parent), air), 1.0);
 #else
     fragColour = vec4(litAndHazed(albedo, n, vRelative, visibility(own, parent)), 1.0);
 #endif

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
+#include <vector>
 
 namespace terrain {
 
@@ -60,12 +62,6 @@ glm::dvec3 sunTransmittance(const AtmosphereModel& air, double altitude, double 
     return glm::exp(-(rayleighOpticalDepth(air, rayleigh) + glm::dvec3(air.mieExtinction * mie)) * m);
 }
 
-glm::dvec3 skyIrradiance(const AtmosphereModel& air, double altitude, double sunElevation)
-{
-    const double above = std::max(std::sin(sunElevation), 0.0);
-    return 0.5 * above * (glm::dvec3(1.0) - sunTransmittance(air, altitude, sunElevation));
-}
-
 double rayleighPhase(double mu)
 {
     return 3.0 / (16.0 * kPi) * (1.0 + mu * mu);
@@ -80,16 +76,16 @@ double miePhase(double mu, double g)
 namespace {
 
 /// The in-scattered light of a straight segment from `altitude`, `length` metres rising `slope` metres a metre,
-/// at cos(view, sun) `mu`, sun elevation `sunElevation`, summed over `samples` midpoints of u in [0, 1] with
-/// t = length u^2: denser near the viewer, where the light that is not yet attenuated comes from (a long
-/// sky ray loses most of its light in its first tenth). With `multiple`, each point adds its scattering
+/// with phase functions `rayleighPhaseValue` and `miePhaseValue` (their values at cos(view, sun), or their means
+/// over the directions the segment stands for), sun elevation `sunElevation`, summed over `samples` midpoints of u
+/// in [0, 1] with t = length u^2: denser near the viewer, where the light that is not yet attenuated comes from
+/// (a long sky ray loses most of its light in its first tenth). With `multiple`, each point adds its scattering
 /// coefficient times psi_ms there.
-glm::dvec3 inscatter(const AtmosphereModel& air, double altitude, double slope, double length, double mu,
-                     double sunElevation, int samples, const MultipleScattering* multiple)
+glm::dvec3 inscatter(const AtmosphereModel& air, double altitude, double slope, double length,
+                     double rayleighPhaseValue, double miePhaseValue, double sunElevation, int samples,
+                     const MultipleScattering* multiple)
 {
     TERRAIN_EXPECTS(samples >= 1, "at least one sample");
-    const double rayleighPhaseValue = rayleighPhase(mu);
-    const double miePhaseValue = miePhase(mu, air.mieAnisotropy);
     glm::dvec3 sum(0.0);
     for (int k = 0; k < samples; ++k) {
         const double u = (k + 0.5) / samples;
@@ -109,6 +105,14 @@ glm::dvec3 inscatter(const AtmosphereModel& air, double altitude, double slope, 
     return sum / static_cast<double>(samples);
 }
 
+/// The sky ray in a direction of elevation `elevation` (radians): its slope (the air mass's, so that it leaves
+/// the air at the horizon too) and its length (to topScaleHeights above the viewer).
+std::pair<double, double> skyRay(const AtmosphereModel& air, double elevation)
+{
+    const double slope = 1.0 / airMass(elevation);
+    return {slope, air.topScaleHeights * air.rayleighHeight / slope};
+}
+
 }  // namespace
 
 AerialPerspective aerialPerspective(const AtmosphereModel& air, double altitude, const glm::dvec3& relative,
@@ -122,28 +126,103 @@ AerialPerspective aerialPerspective(const AtmosphereModel& air, double altitude,
     const glm::dvec3 view = relative / length;
     const double sunElevation = std::asin(std::clamp(sun.z, -1.0, 1.0));
     out.transmittance = transmittance(air, altitude, relative.z, length);
-    out.inscattered = inscatter(air, altitude, view.z, length, glm::dot(view, sun), sunElevation, samples, multiple);
+    const double mu = glm::dot(view, sun);
+    out.inscattered = inscatter(air, altitude, view.z, length, rayleighPhase(mu), miePhase(mu, air.mieAnisotropy),
+                                sunElevation, samples, multiple);
     return out;
 }
 
 glm::dvec3 skyRadiance(const AtmosphereModel& air, double altitude, const glm::dvec3& view, const glm::dvec3& sun,
                        int samples, const MultipleScattering* multiple)
 {
-    const double elevation = std::asin(std::clamp(view.z, -1.0, 1.0));
-    const double slope = 1.0 / airMass(elevation);
-    const double length = air.topScaleHeights * air.rayleighHeight / slope;
+    const auto [slope, length] = skyRay(air, std::asin(std::clamp(view.z, -1.0, 1.0)));
     const double sunElevation = std::asin(std::clamp(sun.z, -1.0, 1.0));
-    return inscatter(air, altitude, slope, length, glm::dot(view, sun), sunElevation, samples, multiple);
+    const double mu = glm::dot(view, sun);
+    return inscatter(air, altitude, slope, length, rayleighPhase(mu), miePhase(mu, air.mieAnisotropy), sunElevation,
+                     samples, multiple);
 }
 
-glm::dvec3 MultipleScattering::at(double altitude) const
+namespace {
+
+/// Per elevation band of the upper hemisphere (skyIrradiance), the phase functions' means over its azimuths.
+struct BandPhases {
+    std::vector<double> rayleigh, mie;
+};
+
+BandPhases bandPhases(const AtmosphereModel& air, double sunElevation, int elevations, int azimuths)
+{
+    TERRAIN_EXPECTS(elevations >= 1 && azimuths >= 1, "at least one elevation and one azimuth");
+    const double sunCos = std::cos(sunElevation), sunSin = std::sin(sunElevation);
+    BandPhases out{std::vector<double>(static_cast<std::size_t>(elevations)),
+                   std::vector<double>(static_cast<std::size_t>(elevations))};
+    for (int e = 0; e < elevations; ++e) {
+        const double elevation = 0.5 * kPi * (e + 0.5) / elevations;
+        const double sinE = std::sin(elevation), cosE = std::cos(elevation);
+        double rayleigh = 0.0, mie = 0.0;
+        for (int a = 0; a < azimuths; ++a) {
+            const double mu = cosE * sunCos * std::cos(2.0 * kPi * (a + 0.5) / azimuths) + sinE * sunSin;
+            rayleigh += rayleighPhase(mu);
+            mie += miePhase(mu, air.mieAnisotropy);
+        }
+        out.rayleigh[static_cast<std::size_t>(e)] = rayleigh / azimuths;
+        out.mie[static_cast<std::size_t>(e)] = mie / azimuths;
+    }
+    return out;
+}
+
+/// skyIrradiance with the bands' phases made.
+glm::dvec3 skyIrradiance(const AtmosphereModel& air, double altitude, double sunElevation,
+                         const MultipleScattering* multiple, const BandPhases& phases)
+{
+    // cos(zenith angle) dw = sin(e) cos(e) de dphi over elevations e in [0, pi / 2]: the irradiance is 2 pi times
+    // the sum over the bands (even in elevation: fine at the horizon, where the haze brightens the sky fast) of
+    // the radiance's mean over azimuths times sin(e) cos(e) de. Only the phase functions depend on the azimuth:
+    // each band's ray is summed once with their means.
+    const std::size_t bands = phases.rayleigh.size();
+    const double step = 0.5 * kPi / static_cast<double>(bands);
+    glm::dvec3 sum(0.0);
+    for (std::size_t e = 0; e < bands; ++e) {
+        const double elevation = step * (static_cast<double>(e) + 0.5);
+        const auto [slope, length] = skyRay(air, elevation);
+        sum += inscatter(air, altitude, slope, length, phases.rayleigh[e], phases.mie[e], sunElevation, kSkySamples,
+                         multiple) *
+               (std::sin(elevation) * std::cos(elevation) * step);
+    }
+    return 2.0 * kPi * sum;
+}
+
+}  // namespace
+
+glm::dvec3 skyIrradiance(const AtmosphereModel& air, double altitude, double sunElevation,
+                         const MultipleScattering* multiple, int elevations, int azimuths)
+{
+    return skyIrradiance(air, altitude, sunElevation, multiple, bandPhases(air, sunElevation, elevations, azimuths));
+}
+
+namespace {
+
+/// `values` held at MultipleScattering's altitudes, linear between them at `altitude` (the ground's below 0 and
+/// for NaN, the top's above).
+glm::dvec3 atAltitude(const std::array<glm::dvec3, kMultipleScatteringAltitudes>& values, double top, double altitude)
 {
     // NaN reads the ground's (a NaN index would be undefined).
     const double share = altitude / top;
     const double x = std::sqrt(share >= 0.0 ? std::min(share, 1.0) : 0.0) * (kMultipleScatteringAltitudes - 1);
     const int i = std::min(static_cast<int>(x), kMultipleScatteringAltitudes - 2);
     const double f = x - i;
-    return psi[static_cast<std::size_t>(i)] * (1.0 - f) + psi[static_cast<std::size_t>(i + 1)] * f;
+    return values[static_cast<std::size_t>(i)] * (1.0 - f) + values[static_cast<std::size_t>(i + 1)] * f;
+}
+
+}  // namespace
+
+glm::dvec3 MultipleScattering::at(double altitude) const
+{
+    return atAltitude(psi, top, altitude);
+}
+
+glm::dvec3 MultipleScattering::irradianceAt(double altitude) const
+{
+    return atAltitude(irradiance, top, altitude);
 }
 
 MultipleScattering multipleScattering(const AtmosphereModel& air, double sunElevation, double groundAlbedo,
@@ -188,6 +267,11 @@ MultipleScattering multipleScattering(const AtmosphereModel& air, double sunElev
             transfer += scattered / static_cast<double>(directions);
         }
         out.psi[static_cast<std::size_t>(a)] = second / (glm::dvec3(1.0) - glm::min(transfer, glm::dvec3(0.99)));
+    }
+    const BandPhases phases = bandPhases(air, sunElevation, kSkyIrradianceBands, kSkyIrradianceAzimuths);
+    for (int a = 0; a < kMultipleScatteringAltitudes; ++a) {
+        const double f = static_cast<double>(a) / (kMultipleScatteringAltitudes - 1);
+        out.irradiance[static_cast<std::size_t>(a)] = skyIrradiance(air, out.top * f * f, sunElevation, &out, phases);
     }
     return out;
 }

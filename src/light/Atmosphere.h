@@ -7,8 +7,8 @@
 // Kasten & Young air mass stands in for the Earth's curvature towards a low sun). Light scattered more than once
 // enters as Hillaire 2020's multiple-scattering term (section 5.5): per altitude, the isotropic light psi_ms that
 // the orders from the second on add to each scattering event (multipleScattering), summed into the in-scattered
-// light wherever a MultipleScattering is given. The sky's irradiance on the ground is half the sunlight the air
-// above scatters out of the sun's beam. Ozone is left out.
+// light wherever a MultipleScattering is given. The sky's irradiance on the ground is the sky's radiance over the
+// hemisphere, cosine-weighted, held per altitude beside psi_ms. Ozone is left out.
 //
 // shaders/atmosphere.glsl computes the same in float; this is its reference (AtmosphereGLTest) and what the
 // tests measure the frames against. Units: metres, radiance relative to the sun's irradiance at the top of the
@@ -45,6 +45,10 @@ inline constexpr double kGroundAlbedo = 0.2;
 inline constexpr int kAerialSamples = 8;
 /// Midpoints of a sky ray, as a cell of the sky table sums it: within 1% of many samples (2% with 16, 10% with 8).
 inline constexpr int kSkySamples = 32;
+/// Elevation bands and azimuths the sky's irradiance is summed over: within 1% of the sky's
+/// radiance over 128 x 256 directions (AtmosphereTest). A band costs a ray, an azimuth only the phase functions.
+inline constexpr int kSkyIrradianceBands = 32;
+inline constexpr int kSkyIrradianceAzimuths = 128;
 
 /// The integral of exp(-h / scaleHeight) along a straight segment from altitude `altitude` rising `rise` metres
 /// over its `length` metres (rise in [-length, length]): exp(-h0 / H) L (1 - e^-x) / x with x = rise / H.
@@ -61,10 +65,6 @@ double airMass(double elevationRadians);
 /// Transmittance of sunlight reaching altitude `altitude` from the sun at elevation `sunElevation` (radians).
 glm::dvec3 sunTransmittance(const AtmosphereModel& air, double altitude, double sunElevation);
 
-/// The sky's irradiance on a horizontal surface at `altitude` (relative to the sun's irradiance above the air):
-/// half the sunlight the air above scatters out of the beam, sin(elevation) (1 - T_sun) / 2 per channel.
-glm::dvec3 skyIrradiance(const AtmosphereModel& air, double altitude, double sunElevation);
-
 /// Rayleigh's and Cornette-Shanks's phase functions at cos(angle between view and sun) `mu`, per steradian.
 double rayleighPhase(double mu);
 double miePhase(double mu, double g);
@@ -75,12 +75,17 @@ inline constexpr int kMultipleScatteringAltitudes = 16;
 
 /// Hillaire's psi_ms over altitude, for one sun: radiance per unit of scattering coefficient (times the
 /// scattering coefficient at a point, the light that scattering more than once adds there, in every direction).
+/// With it, for the same sun and altitudes, the sky's irradiance on a horizontal surface (skyIrradiance with
+/// these orders of scattering): what the ground receives from the sky.
 struct MultipleScattering {
     std::array<glm::dvec3, kMultipleScatteringAltitudes> psi{};
+    std::array<glm::dvec3, kMultipleScatteringAltitudes> irradiance{};
     double top = 1.0;  ///< the highest altitude, metres (AtmosphereModel::topScaleHeights Rayleigh scale heights)
     /// psi_ms at `altitude` metres, linear between the altitudes held (the ground's below 0 and for NaN, the top's
     /// above).
     glm::dvec3 at(double altitude) const;
+    /// The sky's irradiance at `altitude` metres, the same way.
+    glm::dvec3 irradianceAt(double altitude) const;
     bool operator==(const MultipleScattering&) const = default;
 };
 
@@ -90,6 +95,7 @@ struct MultipleScattering {
 /// light that the air around scatters back (the same rays' scattering, summed), psi_ms = L2 / (1 - f_ms): the
 /// orders from the second on as a geometric series. Rays climb at the air mass's slope (as the sky's) and
 /// descend at the ground's; `samples` midpoints a ray.
+/// The sky's irradiance at each altitude follows (skyIrradiance with these orders).
 MultipleScattering multipleScattering(const AtmosphereModel& air, double sunElevation,
                                       double groundAlbedo = kGroundAlbedo, int directions = 64, int samples = 32);
 
@@ -112,6 +118,14 @@ AerialPerspective aerialPerspective(const AtmosphereModel& air, double altitude,
 /// with the ray climbing at the air mass's slope so that it leaves the air at the horizon too.
 glm::dvec3 skyRadiance(const AtmosphereModel& air, double altitude, const glm::dvec3& view, const glm::dvec3& sun,
                        int samples = kSkySamples, const MultipleScattering* multiple = nullptr);
+
+/// The sky's irradiance on a horizontal surface at `altitude` (relative to the sun's irradiance above the air; the
+/// sun's disc not included): skyRadiance over the upper hemisphere weighted by cos(zenith angle), with `multiple`
+/// the light scattered more than once too. Summed over `elevations` bands even in elevation; each band's ray once,
+/// with the phase functions' means over `azimuths` directions around the zenith.
+glm::dvec3 skyIrradiance(const AtmosphereModel& air, double altitude, double sunElevation,
+                         const MultipleScattering* multiple, int elevations = kSkyIrradianceBands,
+                         int azimuths = kSkyIrradianceAzimuths);
 
 /// The filmic tone map (Narkowicz's fit of ACES) of `exposure` times linear radiance, then the display's gamma
 /// 2 (a square root, as shaders/atmosphere.glsl): what the frames show of a radiance, each channel in [0, 1].

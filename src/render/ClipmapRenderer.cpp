@@ -258,6 +258,7 @@ ClipmapStats ClipmapRenderer::draw(const ClipmapLayout& layout, const ClipmapTer
     const double vx0 = valid.x, vy0 = valid.y, vx1 = valid.z, vy1 = valid.w;
     for (const ShaderProgram& program : mPrograms) {
         setSceneUniforms(program, camera, style, mHeader);
+        mSky.setSkylight(program);
         mDetail.setCameraUniforms(program, camera.position);
         glUniform1f(program.uniform("uNow"), terrain.clock());
         // A morph of no time is over at once (the shader divides by it).

@@ -68,11 +68,13 @@ void setAtmosphereUniforms(const ShaderProgram& program, const Camera& camera, c
 
 void setMultipleScatteringUniforms(const ShaderProgram& program, const MultipleScattering& multiple)
 {
-    std::array<glm::vec3, kMultipleScatteringAltitudes> psi{};
+    std::array<glm::vec3, kMultipleScatteringAltitudes> psi{}, irradiance{};
     for (std::size_t i = 0; i < psi.size(); ++i) {
         psi[i] = glm::vec3(multiple.psi[i]);
+        irradiance[i] = glm::vec3(multiple.irradiance[i]);
     }
     glUniform3fv(program.uniform("uMultipleScattering"), kMultipleScatteringAltitudes, glm::value_ptr(psi[0]));
+    glUniform3fv(program.uniform("uSkyIrradiance"), kMultipleScatteringAltitudes, glm::value_ptr(irradiance[0]));
     glUniform1f(program.uniform("uMultipleScatteringTop"), static_cast<float>(multiple.top));
 }
 

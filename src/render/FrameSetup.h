@@ -33,8 +33,8 @@ glm::dvec4 validRectangle(const MapHeader& header);
 /// and the exposure of `style`, the camera's altitude (its z) and the aerial table's range (aerialTableRange).
 /// Programs without the atmosphere ignore them.
 void setAtmosphereUniforms(const ShaderProgram& program, const Camera& camera, const SceneStyle& style);
-/// psi_ms (light/Atmosphere.h) as `program`'s uMultipleScattering and uMultipleScatteringTop (atmosphere.glsl's
-/// in-scattering sums; the program is in use).
+/// psi_ms and the sky's irradiance (light/Atmosphere.h) as `program`'s uMultipleScattering, uSkyIrradiance and
+/// uMultipleScatteringTop (atmosphere.glsl's in-scattering sums and the ground's skylight; the program is in use).
 void setMultipleScatteringUniforms(const ShaderProgram& program, const MultipleScattering& multiple);
 
 /// Sets the uniforms every terrain program takes from the frame on `program` (which it uses): uViewProjection,

@@ -42,6 +42,13 @@ void Sky::bindAerialTable(int unit) const
     }
 }
 
+void Sky::setSkylight(const ShaderProgram& program) const
+{
+    if (mTables && mTables->multipleScattering()) {
+        setMultipleScatteringUniforms(program, *mTables->multipleScattering());
+    }
+}
+
 void Sky::draw(const Camera& camera, const SceneStyle& style) const
 {
     if (mTables) {

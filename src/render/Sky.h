@@ -57,6 +57,9 @@ public:
     void draw(const Camera& camera, const SceneStyle& style) const;
     /// With the atmosphere: binds the aerial table the terrain's programs read (uAerialTable) to unit `unit`.
     void bindAerialTable(int unit) const;
+    /// With the atmosphere, after prepare: sets the sky's irradiance on the ground for the frame's sun (and psi_ms)
+    /// on terrain program `program`, which must be in use (setMultipleScatteringUniforms).
+    void setSkylight(const ShaderProgram& program) const;
 
 private:
     ShaderProgram mProgram;

@@ -688,6 +688,7 @@ void TerrainRenderer::setFrameUniforms(const Camera& camera, const SceneStyle& s
     glFrontFace(GL_CCW);
     for (ShaderProgram& program : mPrograms) {
         setSceneUniforms(program, camera, style, mHeader);
+        mSky.setSkylight(program);
         mDetail.setCameraUniforms(program, camera.position);
         glUniform1f(program.uniform("uInverseCells"), 1.0f / static_cast<float>(mHeader.chunkSize - 1));
         glUniform1f(program.uniform("uTexels"), static_cast<float>(mHeader.textureSize));

@@ -33,6 +33,7 @@ using test::direction;
 
 constexpr double kPi = std::numbers::pi;
 constexpr int kCases = 64;  // the probe's uniform arrays
+constexpr int kRows = 4;    // what the probe computes per case (kProbeFragment)
 
 const char* kProbeVertex = R"(#version 330 core
 void main()
@@ -43,8 +44,9 @@ void main()
 )";
 
 // Row 0: the in-scattered light of the segment to the case's point; row 1: its transmittance; row 2: the sky's
-// radiance in the case's direction. Column: the case. With LOOKUP: what the terrain's vertex programs take
-// (airAt): rows 0 and 2 from the tables, row 1 the sunlight at the case's point.
+// radiance in the case's direction; row 3: the sky's irradiance at the case's point. Column: the case. With
+// LOOKUP: what the terrain's vertex programs take (airAt): rows 0 and 2 from the tables, row 1 the sunlight at the
+// case's point.
 const char* kProbeFragment = R"(#version 330 core
 #include "atmosphere.glsl"
 uniform vec3 uRelative[64];
@@ -64,6 +66,7 @@ void main()
                : p.y == 1 ? airAt(relative, uSun).transmittance
                           : skySum(view, uSun);
 #endif
+    value = p.y == 3 ? airAt(relative, uSun).skylight : value;
     fragColour = vec4(value, 1.0);
 }
 )";
@@ -84,7 +87,7 @@ std::vector<glm::dvec3> probeCases(double altitude)
     return cases;
 }
 
-/// A kCases x 3 float framebuffer the probe draws into, and its reading.
+/// A kCases x kRows float framebuffer the probe draws into, and its reading.
 class ProbeTarget {
 public:
     ProbeTarget()
@@ -92,7 +95,7 @@ public:
         glGenFramebuffers(1, &mFramebuffer);
         glGenRenderbuffers(1, &mColour);
         glBindRenderbuffer(GL_RENDERBUFFER, mColour);
-        glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA32F, kCases, 3);
+        glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA32F, kCases, kRows);
         glBindFramebuffer(GL_FRAMEBUFFER, mFramebuffer);
         glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, mColour);
         glGenVertexArrays(1, &mVao);
@@ -116,12 +119,12 @@ public:
         const glm::vec3 sunFloat(sun);
         glUniform3fv(program.uniform("uSun"), 1, glm::value_ptr(sunFloat));
         glBindFramebuffer(GL_FRAMEBUFFER, mFramebuffer);
-        glViewport(0, 0, kCases, 3);
+        glViewport(0, 0, kCases, kRows);
         glDisable(GL_DEPTH_TEST);
         glBindVertexArray(mVao);
         glDrawArrays(GL_TRIANGLES, 0, 3);
-        mPixels.assign(static_cast<std::size_t>(kCases) * 3 * 4, 0.0f);
-        glReadPixels(0, 0, kCases, 3, GL_RGBA, GL_FLOAT, mPixels.data());
+        mPixels.assign(static_cast<std::size_t>(kCases) * kRows * 4, 0.0f);
+        glReadPixels(0, 0, kCases, kRows, GL_RGBA, GL_FLOAT, mPixels.data());
     }
     double at(int row, int k, int c) const { return mPixels[(static_cast<std::size_t>(row) * kCases + k) * 4 + c]; }
 
@@ -170,6 +173,7 @@ TEST(AtmosphereGLTest, TheShadersAirIsTheModels)
                     aerialPerspective(air, altitude, relative, sun, kAerialSamples, &multiple);
                 const glm::dvec3 sky =
                     skyRadiance(air, altitude, glm::normalize(relative), sun, kSkySamples, &multiple);
+                const glm::dvec3 skylight = multiple.irradianceAt(altitude + relative.z);
                 for (int c = 0; c < 3; ++c) {
                     const std::string where = "sun " + std::to_string(sunElevation) + ", altitude " +
                                               std::to_string(altitude) + ", case " + std::to_string(k) + ", channel " +
@@ -180,6 +184,7 @@ TEST(AtmosphereGLTest, TheShadersAirIsTheModels)
                                 2e-3 * reference.transmittance[c] + 1e-6)
                         << where;
                     EXPECT_NEAR(target.at(2, k, c), sky[c], 2e-3 * sky[c] + 1e-7) << where;
+                    EXPECT_NEAR(target.at(3, k, c), skylight[c], 1e-3 * skylight[c] + 1e-7) << where;
                     ++compared;
                 }
             }

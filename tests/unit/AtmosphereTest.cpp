@@ -144,9 +144,47 @@ TEST(AtmosphereTest, TheSkyIsBlueOverheadAndHazeBrightensAndWhitensWithDistance)
         EXPECT_GT(a.inscattered.g, previous);
         previous = a.inscattered.g;
     }
-    const glm::dvec3 sky = skyIrradiance(air, 2500.0, 35.0 * kPi / 180.0);
+    const glm::dvec3 sky = skyIrradiance(air, 2500.0, 35.0 * kPi / 180.0, nullptr);
     EXPECT_GT(sky.b, sky.r) << "skylight is blue";
-    EXPECT_EQ(skyIrradiance(air, 2500.0, -0.1), glm::dvec3(0.0)) << "no sun, no single-scattered skylight";
+    EXPECT_LT(skyIrradiance(air, 2500.0, -0.1, nullptr).g, 0.5 * sky.g) << "the sun set, only twilight";
+}
+
+TEST(AtmosphereTest, SkyIrradianceIsTheSkysRadianceOverTheHemisphere)
+{
+    // Against the sky's radiance summed over 128 x 256 directions of the upper hemisphere (cos-weighted solid
+    // angles: midpoints in sin^2 elevation and azimuth), with light scattered more than once, for a low, a middle
+    // and a high sun on the ground and 3 km up; and what the MultipleScattering holds at its altitudes.
+    const AtmosphereModel air;
+    for (double degrees : {5.0, 35.0, 80.0}) {
+        const double elevation = degrees * kPi / 180.0;
+        const MultipleScattering multiple = multipleScattering(air, elevation);
+        const glm::dvec3 sun(std::cos(elevation), 0.0, std::sin(elevation));
+        for (double altitude : {0.0, 3000.0}) {
+            constexpr int kBands = 128, kAzimuths = 256;
+            glm::dvec3 reference(0.0);
+            for (int e = 0; e < kBands; ++e) {
+                const double s = (e + 0.5) / kBands;
+                for (int a = 0; a < kAzimuths; ++a) {
+                    const double phi = 2.0 * kPi * (a + 0.5) / kAzimuths;
+                    const glm::dvec3 view(std::sqrt(1.0 - s) * std::cos(phi), std::sqrt(1.0 - s) * std::sin(phi),
+                                          std::sqrt(s));
+                    reference += skyRadiance(air, altitude, view, sun, kSkySamples, &multiple);
+                }
+            }
+            reference *= kPi / (kBands * kAzimuths);
+            const glm::dvec3 fast = skyIrradiance(air, altitude, elevation, &multiple);
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_NEAR(fast[c], reference[c], 0.01 * reference[c])
+                    << fast[c] / reference[c] << " of it, sun " << degrees << " degrees, altitude " << altitude
+                    << ", channel " << c;
+            }
+            EXPECT_GT(fast.b, fast.r) << "skylight is blue";
+        }
+        EXPECT_EQ(multiple.irradianceAt(0.0), skyIrradiance(air, 0.0, elevation, &multiple));
+        EXPECT_GT(multiple.irradianceAt(0.0).g, multiple.irradianceAt(5000.0).g) << "less air above, less skylight";
+        const glm::dvec3 single = skyIrradiance(air, 0.0, elevation, nullptr);
+        EXPECT_GT(multiple.irradianceAt(0.0).g, 1.05 * single.g) << "scattering more than once adds skylight";
+    }
 }
 
 TEST(AtmosphereTest, MultipleScatteringConvergesWithDirectionsAndSamples)
