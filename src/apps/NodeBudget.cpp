@@ -31,7 +31,7 @@ CacheChoice chooseCacheSize(const TengineOptions& o, const MapHeader& header, co
                       "node cache: quad_cache_size %zu nodes of %.1f KB (GPU %.1f KB, CPU %.1f KB): %.0f MiB", nodes,
                       kb(perNode), kb(slot.total()), kb(nodeBytes),
                       static_cast<double>(nodes) * static_cast<double>(perNode) / kMiB);
-        return {nodes, line};
+        return {nodes, SIZE_MAX, line};
     }
     const bool machine = o.memoryBudget == 0;
     const std::uint64_t budget =
@@ -44,7 +44,11 @@ CacheChoice chooseCacheSize(const TengineOptions& o, const MapHeader& header, co
                   s.limitedByMaxNodes ? ", as many as the node pools hold"
                   : s.belowMinimum    ? ", the fewest the cache can work with (a node and its four children)"
                                       : "");
-    return {s.nodes, line};
+    if (s.belowMinimum) {
+        return {s.nodes, SIZE_MAX, line};  // the fewest nodes the cache works with, whatever they cost
+    }
+    const std::uint64_t gpu = static_cast<std::uint64_t>(s.nodes) * slot.total();
+    return {s.nodes, static_cast<std::size_t>(std::min<std::uint64_t>(budget - gpu, SIZE_MAX - 1)), line};
 }
 
 bool compressNormalMaps(const TengineOptions& o, bool software)

@@ -7,12 +7,16 @@
 #include "synthesis/Material.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 namespace terrain {
 
 struct CacheChoice {
     std::size_t nodes = 0;
+    /// What memory_budget leaves the nodes' CPU data once the GPU's slots are paid (StreamerOptions::cacheBytes);
+    /// SIZE_MAX with quad_cache_size (a count alone).
+    std::size_t cpuBytes = SIZE_MAX;
     std::string description;  ///< one log line: how the capacity was chosen
 };
 
@@ -22,8 +26,9 @@ inline constexpr std::size_t kSlotsWithoutContext = 2048 * kMaxPoolArrays;
 
 /// quad_cache_size when it is set (> 0); else as many nodes as memory_budget pays for (0: the machine's
 /// defaultMemoryBudget), each costing its GPU slot in the pools `o` asks for (none in clipmap mode; DXT1 colour
-/// only where `s3tc`; RGTC2 normal maps where `compressNormals`) plus `nodeBytes` CPU bytes, at most
-/// `maxNodes` (what the node pools hold: TerrainRenderer::maxSlots).
+/// only where `s3tc`; RGTC2 normal maps where `compressNormals`) plus `nodeBytes` CPU bytes (a typical node's),
+/// at most `maxNodes` (what the node pools hold: TerrainRenderer::maxSlots), and the budget less the slots for
+/// the nodes' CPU bytes (nodes larger than `nodeBytes` leave slots empty; the budget holds either way).
 CacheChoice chooseCacheSize(const TengineOptions& o, const MapHeader& header, const MaterialSet* materials, bool s3tc,
                             bool compressNormals, std::size_t nodeBytes, std::size_t maxNodes);
 

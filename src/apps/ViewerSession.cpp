@@ -33,6 +33,26 @@ int clipmapFinestLevel(const TengineOptions& o, const MapHeader& header, bool sy
     return level;
 }
 
+/// What the viewer's node at a level holds, as a charge against the node cache's byte budget, for the viewer and
+/// the error tool alike (so both hold the same nodes, though the tool's make no textures or horizons): `baseBytes`
+/// (a static root's CPU data without horizons: at least a dynamic node's) plus, with shadows, the horizon lattices
+/// of its level (its own and its parent's quarter, horizonLatticeSize over the grid of staticHeightGrid).
+NodeCharge viewerNodeCharge(const MapHeader& header, std::size_t baseBytes, bool shadows, int azimuths)
+{
+    if (!shadows) {
+        return [baseBytes](const NodeData&) { return baseBytes; };
+    }
+    const int n = static_cast<int>(header.chunkSize);
+    const double gridSpacing = header.spacingAt(staticHeightGridLevel(header, kHorizonGridSide));
+    return [=](const NodeData& node) {
+        const int level = node.id.level;
+        const int own = horizonLatticeSize(n, header.spacingAt(level), gridSpacing);
+        const int parent = level > 0 ? (horizonLatticeSize(n, header.spacingAt(level - 1), gridSpacing) - 1) / 2 + 1
+                                     : (own - 1) / 2 + 1;
+        return baseBytes + static_cast<std::size_t>((own * own + parent * parent) * azimuths);
+    };
+}
+
 }  // namespace
 
 ViewerSession::ViewerSession(const TengineOptions& options, SessionUse use, std::function<void(const std::string&)> log)
@@ -187,28 +207,22 @@ Status ViewerSession::startStreaming(const GlCapabilities& gl)
         *mMap, view ? viewerPolicy : DetailPolicy{mSynthesizer.get(), o.lodMinimumSpacing, blockQuads});
     auto root = view ? mSource->loadRoot() : TerrainNodeSource(*mMap, viewerPolicy).loadRoot();
     TERRAIN_TRY(root);
-    // With shadows a node holds horizons, its own lattice and its parent's quarter: at most what a node of the
-    // grid's level holds (a point a sample, static nodes no finer than the grid), or the first dynamic level's
-    // (the leaves' quarter, twice), whichever is larger.
-    std::size_t nodeBytes =
-        residentBytes(**root) - (*root)->horizons.codes.capacity() - (*root)->parentHorizons.codes.capacity();
-    if (o.shadows) {
-        const int n = static_cast<int>(header().chunkSize);
-        const int gridLevel = staticHeightGridLevel(header(), kHorizonGridSide);
-        const double gridSpacing = header().spacingAt(gridLevel);
-        auto latticeBytes = [&](int level) {
-            const int own = horizonLatticeSize(n, header().spacingAt(level), gridSpacing);
-            const int parent = level > 0
-                                   ? (horizonLatticeSize(n, header().spacingAt(level - 1), gridSpacing) - 1) / 2 + 1
-                                   : (own - 1) / 2 + 1;
-            return static_cast<std::size_t>((own * own + parent * parent) * viewerPolicy.horizonOptions.azimuths);
-        };
-        nodeBytes += std::max(latticeBytes(gridLevel), latticeBytes(static_cast<int>(header().levels)));
-    }
+    // Every node is charged what the viewer's node at its level holds. The slots are sized for the deepest
+    // level's (the first dynamic level's, or the leaves' without dynamic nodes): most nodes of a detailed view are
+    // there, and the static nodes no finer than the horizon grid, with a point a sample, are fewer. The cache's
+    // byte budget holds whatever the mix (NodeCache: larger nodes leave slots empty).
+    const NodeCharge charge = viewerNodeCharge(
+        header(), residentBytes(**root) - (*root)->horizons.codes.capacity() - (*root)->parentHorizons.codes.capacity(),
+        o.shadows, viewerPolicy.horizonOptions.azimuths);
+    NodeData deepest;
+    deepest.id.level = static_cast<int>(header().levels) - (o.detailCreateNewNodes ? 0 : 1);
+    const std::size_t nodeBytes = charge(deepest);
     mCache = chooseCacheSize(o, header(), materials(), gl.s3tc, mRgtc2, nodeBytes, clipmap ? SIZE_MAX : gl.maxSlots);
 
     StreamerOptions streamerOptions;
     streamerOptions.cacheSize = mCache.nodes;
+    streamerOptions.cacheBytes = mCache.cpuBytes;
+    streamerOptions.cacheCharge = charge;
     streamerOptions.queueLimit = static_cast<std::size_t>(o.requestQueueSize);
     streamerOptions.workers = o.workerThreads;
     streamerOptions.velocityLimit = view ? o.detailVelocityLimit : 0.0;  // measured: loaded to completion

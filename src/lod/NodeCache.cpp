@@ -2,10 +2,17 @@
 #include "lod/NodeCache.h"
 
 #include "core/Check.h"
+#include "lod/NodeMemory.h"
+
+#include <algorithm>
+#include <utility>
 
 namespace terrain {
 
-NodeCache::NodeCache(std::size_t capacity) : mCapacity(capacity)
+NodeCache::NodeCache(std::size_t capacity, std::size_t byteBudget, NodeCharge charge)
+    : mCapacity(capacity),
+      mByteBudget(byteBudget),
+      mCharge(charge ? std::move(charge) : NodeCharge([](const NodeData& node) { return residentBytes(node); }))
 {
     TERRAIN_EXPECTS(capacity >= 5, "the cache must hold at least the root and one group of four");
     mGroups.reserve(capacity / 4 + 1);
@@ -28,6 +35,7 @@ void NodeCache::setRoot(NodePtr root)
 {
     TERRAIN_EXPECTS(root && root->id.isRoot(), "the root must be node 0/0/0");
     mRoot = std::move(root);
+    mBytes = mGroupBytes + mCharge(*mRoot);
 }
 
 const ChildNodes* NodeCache::children(const NodeId& parent) const
@@ -71,10 +79,17 @@ bool NodeCache::isEvictable(const Group& group) const
 std::size_t NodeCache::groupsInsertable() const
 {
     std::size_t free = (mCapacity - size()) / 4;
+    std::size_t freeBytes = mByteBudget - std::min(mBytes, mByteBudget);
     for (const auto& [key, group] : mGroups) {
-        free += isEvictable(group) ? 1 : 0;
+        if (isEvictable(group)) {
+            ++free;
+            freeBytes += group.bytes;
+        }
     }
-    return free;
+    if (mByteBudget == SIZE_MAX || mGroups.empty()) {
+        return free;
+    }
+    return std::min(free, freeBytes / std::max<std::size_t>(1, mGroupBytes / mGroups.size()));
 }
 
 bool NodeCache::evictOne()
@@ -87,6 +102,8 @@ bool NodeCache::evictOne()
         }
         mLru.erase(found->second.lru);
         mFreeGroupSlots.push_back(found->second.slot);
+        mBytes -= found->second.bytes;
+        mGroupBytes -= found->second.bytes;
         mGroups.erase(found);
         ++mEvictions;
         return true;
@@ -107,7 +124,21 @@ NodeCache::Insert NodeCache::insertChildren(const NodeId& parent, ChildNodes chi
     if (!isResident(parent)) {
         return Insert::ParentNotResident;  // evicted while its children were loading
     }
-    while (size() + 4 > mCapacity) {
+    std::size_t bytes = 0;
+    for (const NodePtr& child : children) {
+        bytes += mCharge(*child);
+    }
+    if (mByteBudget != SIZE_MAX && mBytes + bytes > mByteBudget) {
+        // Nothing is evicted for a group that would not fit with every evictable group gone.
+        std::size_t evictable = 0;
+        for (const auto& [key, group] : mGroups) {
+            evictable += isEvictable(group) ? group.bytes : 0;
+        }
+        if (mBytes - evictable + bytes > mByteBudget) {
+            return Insert::NoRoom;
+        }
+    }
+    while (size() + 4 > mCapacity || (mByteBudget != SIZE_MAX && mBytes + bytes > mByteBudget)) {
         if (!evictOne()) {
             return Insert::NoRoom;
         }
@@ -118,7 +149,9 @@ NodeCache::Insert NodeCache::insertChildren(const NodeId& parent, ChildNodes chi
     mLru.push_front(parent.key());
     // A group arrives because the traversal wants it: it counts as used this frame, so a later insertion in
     // the same frame cannot evict it again.
-    mGroups.emplace(parent.key(), Group{std::move(children), mFrame, mLru.begin(), slot});
+    mGroups.emplace(parent.key(), Group{std::move(children), mFrame, mLru.begin(), slot, bytes});
+    mBytes += bytes;
+    mGroupBytes += bytes;
     return Insert::Inserted;
 }
 

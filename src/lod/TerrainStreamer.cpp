@@ -10,7 +10,7 @@ namespace terrain {
 TerrainStreamer::TerrainStreamer(NodeSource& source, const QuadtreeExtent& extent, const StreamerOptions& options)
     : mOptions(options),
       mTree(*this, extent),
-      mCache(options.cacheSize),
+      mCache(options.cacheSize, options.cacheBytes, options.cacheCharge),
       mServer(source, {options.workers, options.queueLimit})
 {
 }

@@ -19,8 +19,12 @@ namespace terrain {
 
 struct StreamerOptions {
     std::size_t cacheSize = 512;  ///< quad_cache_size, nodes
-    std::size_t queueLimit = 8;   ///< most load requests waiting at once
-    int workers = 1;              ///< loader threads; 0 = inline (loads happen in drain())
+    /// The most CPU bytes the cached nodes hold together (NodeCache's byte budget; memory_budget's share of the
+    /// nodes' CPU data); SIZE_MAX: the count alone.
+    std::size_t cacheBytes = SIZE_MAX;
+    NodeCharge cacheCharge;      ///< what a node is charged against cacheBytes; empty: its residentBytes
+    std::size_t queueLimit = 8;  ///< most load requests waiting at once
+    int workers = 1;             ///< loader threads; 0 = inline (loads happen in drain())
     /// detail_velocity_limit (3.4.4): no new dynamic nodes while the camera moves faster than this many of
     /// their sample spacings per second; 0 = no limit. Static nodes are always loaded.
     double velocityLimit = 0.0;

@@ -1,8 +1,11 @@
 #include "lod/NodeCache.h"
+#include "lod/NodeMemory.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <set>
 #include <vector>
 
 namespace terrain {
@@ -158,6 +161,88 @@ TEST(NodeCacheTest, RandomWorkloadKeepsCapacityAndReachability)
     expectReachable(cache, inserted);
     expectSlots(cache, inserted);
     EXPECT_GT(cache.evictions(), 0u);
+}
+
+TEST(NodeCacheTest, AByteBudgetHoldsWhateverTheNodesSizes)
+{
+    // Nodes of 1 to 64 KB of texture under a 600 KB budget and 201 slots (far more than the bytes allow): the
+    // cache's bytes are always the resident nodes' residentBytes summed, never above the budget; groups go for
+    // bytes while slots are free; a group larger than the budget is refused without evicting anything; and
+    // groupsInsertable() never promises room for a mean-sized group that an insertion would not find.
+    std::mt19937 random(11);
+    constexpr std::size_t kBudget = 600 * 1024;
+    NodeCache cache(201, kBudget);
+    cache.setRoot(makeNode(NodeId::root()));
+    auto sized = [&](const NodeId& parent) {
+        ChildNodes children = makeChildren(parent);
+        for (NodePtr& child : children) {
+            auto node = std::make_shared<NodeData>(*child);
+            node->texture.resize(1024 * (1 + random() % 64));
+            child = node;
+        }
+        return children;
+    };
+    std::vector<NodeId> inserted;
+    bool evictedWithSlotsFree = false;
+    for (int frame = 0; frame < 2000; ++frame) {
+        cache.beginFrame();
+        NodeId id = NodeId::root();
+        while (id.level < 7 && cache.touchChildren(id)) {
+            id = id.child(static_cast<int>(random() % 4));
+        }
+        if (id.level < 7 && cache.isResident(id)) {
+            const std::uint64_t evictions = cache.evictions();
+            const std::size_t insertable = cache.groupsInsertable();
+            const ChildNodes children = sized(id);
+            std::size_t bytes = 0;
+            for (const NodePtr& child : children) {
+                bytes += residentBytes(*child);
+            }
+            const NodeCache::Insert result = cache.insertChildren(id, children);
+            evictedWithSlotsFree = evictedWithSlotsFree || (cache.evictions() > evictions && cache.size() + 4 < 201);
+            if (result == NodeCache::Insert::Inserted) {
+                inserted.push_back(id);
+            } else {
+                ASSERT_EQ(result, NodeCache::Insert::NoRoom);
+                ASSERT_EQ(cache.evictions(), evictions) << "nothing evicted for a refused group";
+                const std::size_t mean =
+                    (cache.bytes() - residentBytes(*cache.root())) / std::max<std::size_t>(1, (cache.size() - 1) / 4);
+                EXPECT_TRUE(insertable == 0 || bytes > mean) << "room was promised for a group of the mean size";
+            }
+        }
+        std::size_t held = residentBytes(*cache.root());
+        std::set<std::uint64_t> counted;  // a group evicted and inserted again is in `inserted` twice
+        for (const NodeId& parent : inserted) {
+            const ChildNodes* group = cache.children(parent);
+            if (group && counted.insert(parent.key()).second) {
+                for (const NodePtr& node : *group) {
+                    held += residentBytes(*node);
+                }
+            }
+        }
+        ASSERT_EQ(cache.bytes(), held);
+        ASSERT_LE(cache.bytes(), kBudget);
+        ASSERT_LE(cache.size(), cache.capacity());
+    }
+    expectReachable(cache, inserted);
+    EXPECT_TRUE(evictedWithSlotsFree) << "the budget, not the slots, bounds these nodes";
+
+    // A group larger than the budget: refused, and the groups that could have gone stay.
+    NodeCache small(201, kBudget);
+    small.setRoot(makeNode(NodeId::root()));
+    ASSERT_EQ(small.insertChildren(NodeId::root(), makeChildren(NodeId::root())), NodeCache::Insert::Inserted);
+    const NodeId parent = NodeId::root().child(0);
+    ASSERT_EQ(small.insertChildren(parent, makeChildren(parent)), NodeCache::Insert::Inserted);
+    small.beginFrame();  // nothing used in this frame: every group without resident children may go
+    ChildNodes huge = makeChildren(parent.child(3));
+    for (NodePtr& child : huge) {
+        auto node = std::make_shared<NodeData>(*child);
+        node->texture.resize(kBudget / 2);
+        child = node;
+    }
+    EXPECT_EQ(small.insertChildren(parent.child(3), huge), NodeCache::Insert::NoRoom);
+    EXPECT_EQ(small.evictions(), 0u);
+    EXPECT_EQ(small.size(), 9u);
 }
 
 }  // namespace

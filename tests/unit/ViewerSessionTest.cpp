@@ -6,8 +6,10 @@
 #include "apps/ViewerSession.h"
 #include "lod/CameraPath.h"
 #include "lod/HeightQuery.h"
+#include "lod/NodeMemory.h"
 #include "lod/TessellationLevels.h"
 
+#include <array>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -27,6 +29,9 @@ protected:
         options.spacing = 10.0;
         auto report = buildMap(test::hillyField(257, 257), options, *sDir / "hills.map");
         ASSERT_TRUE(report.ok()) << report.error().message;
+        // The same hills with the leaves' detail errors: the viewer refines them into dynamic nodes.
+        ASSERT_TRUE(test::detailErrorMap(test::hillyField(257, 257), 10.0, *test::grassAndRockSynthesizer(17),
+                                         *sDir / "detail.map"));
     }
     static void TearDownTestSuite()
     {
@@ -287,6 +292,47 @@ TEST_F(ViewerSessionTest, TheViewerAndTheErrorToolHoldTheSameCacheAndSplitTauAli
     ASSERT_TRUE(error.ok()) << error.error().message;
     EXPECT_GT(error->points, 0u);
     EXPECT_LE(error->maxPixels, o.lodError * 1.5);
+}
+
+TEST_F(ViewerSessionTest, AMemoryBudgetHoldsTheViewersNodesWhateverTheirLevels)
+{
+    // Dynamic nodes with textures, normal maps and horizons under a small memory_budget: every resident node the
+    // frames draw is charged at least the CPU bytes it holds (the charge of its level stands for them, for the
+    // error tool too), the cache's charges stay within what the budget leaves after the GPU's slots, and the
+    // bytes, not the slots, bound the cache.
+    TengineOptions o = options();
+    o.mapFile = *sDir / "detail.map";
+    o.detailCreateNewNodes = true;
+    o.dynamicTextureSize = 64;  // the most the test map's 17-sample nodes take
+    o.shadows = true;
+    o.quadCacheSize = 0;
+    o.memoryBudget = 24;
+    auto session = open(o);
+    ASSERT_TRUE(session);
+    const NodeCache& cache = session->streamer().cache();
+    ASSERT_LT(session->cache().cpuBytes, SIZE_MAX);
+    std::size_t checked = 0, dynamic = 0;
+    bool bytesBound = false;
+    for (const auto& [x, y, yaw] : {std::array{300.0, 400.0, 45.0}, std::array{2000.0, 1200.0, 200.0},
+                                    std::array{1200.0, 2400.0, 150.0}, std::array{2400.0, 600.0, 300.0}}) {
+        const auto ground = staticHeightAt(session->map(), x, y);
+        ASSERT_TRUE(ground.ok()) << ground.error().message;
+        session->advance(lowCamera(x, y, ground->height + 15.0, yaw), 0.0, 0.0, Settle::Complete);
+        for (const SelectedNode& selected : session->drawnSelection().nodes) {
+            const NodePtr node = session->streamer().node(selected.id);
+            ASSERT_TRUE(node);
+            EXPECT_LE(residentBytes(*node), cache.chargeOf(*node)) << selected.id.toString();
+            dynamic += node->isStatic ? 0 : 1;
+            ++checked;
+        }
+        EXPECT_LE(cache.bytes(), session->cache().cpuBytes);
+        bytesBound = bytesBound || (cache.bytes() > 0.9 * static_cast<double>(session->cache().cpuBytes) &&
+                                    cache.size() + 4 <= cache.capacity());
+    }
+    EXPECT_GT(dynamic, 0u) << "the cameras are low enough for synthesized nodes";
+    EXPECT_GT(checked, 40u);
+    EXPECT_TRUE(bytesBound) << "the bytes run out with slots free: the slots are sized for the deepest level's "
+                               "nodes, and the static levels' horizons hold more";
 }
 
 TEST_F(ViewerSessionTest, WithoutTessellationInTheGlTheSelectionGetsAllOfTauAndTheViewerIsTold)
