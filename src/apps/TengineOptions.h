@@ -88,7 +88,7 @@ struct TengineOptions {
     double sunElevation = 35.0;               ///< sun_elevation: degrees in [-90, 90] above the horizon
     double hazeDistance = 60000.0;            ///< haze_distance: metres, >= 0; 0 = no haze
     bool shadows = true;                      ///< shadows: terrain shadows and sky visibility (lod/NodeHorizons.h)
-    bool atmosphere = false;                  ///< atmosphere: physically based sky and air (light/Atmosphere.h)
+    bool atmosphere = true;                   ///< atmosphere: physically based sky and air (light/Atmosphere.h)
     double exposure = 5.0;                    ///< exposure: the tone map's, of radiance relative to the sun's, > 0
     glm::vec3 clearColor{0.55f, 0.7f, 0.9f};  ///< clear_color: r, g, b in [0, 1]
     std::filesystem::path shaderPath;         ///< shader_path: empty = the shaders/ directory of this build

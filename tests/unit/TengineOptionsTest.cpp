@@ -163,7 +163,7 @@ const std::vector<ValidCase>& validCases()
         {"sun_azimuth=360", [](const O& o) { return o.sunAzimuth == 360.0; }},
         {"sun_elevation=-5", [](const O& o) { return o.sunElevation == -5.0; }},
         {"haze_distance=0", [](const O& o) { return o.hazeDistance == 0.0; }},
-        {"atmosphere=true", [](const O& o) { return o.atmosphere; }},
+        {"atmosphere=false", [](const O& o) { return !o.atmosphere; }},
         {"shadows=false", [](const O& o) { return !o.shadows; }},
         {"exposure=0.25", [](const O& o) { return o.exposure == 0.25; }},
         {"clear_color=0, 0.5,1", [](const O& o) { return o.clearColor == glm::vec3(0.0f, 0.5f, 1.0f); }},

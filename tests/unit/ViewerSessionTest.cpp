@@ -326,8 +326,9 @@ TEST_F(ViewerSessionTest, AMemoryBudgetHoldsTheViewersNodesWhateverTheirLevels)
             ++checked;
         }
         EXPECT_LE(cache.bytes(), session->cache().cpuBytes);
-        bytesBound = bytesBound || (cache.bytes() > 0.9 * static_cast<double>(session->cache().cpuBytes) &&
-                                    cache.size() + 4 <= cache.capacity());
+        bytesBound =
+            bytesBound || (static_cast<double>(cache.bytes()) > 0.9 * static_cast<double>(session->cache().cpuBytes) &&
+                           cache.size() + 4 <= cache.capacity());
     }
     EXPECT_GT(dynamic, 0u) << "the cameras are low enough for synthesized nodes";
     EXPECT_GT(checked, 40u);
