@@ -228,7 +228,8 @@ vec3 aerialInscattered(vec3 c)
 // the aerial table). All three change smoothly over a triangle: the terrain's vertex programs make them per vertex
 // (surface.glsl), and the fragments interpolate them, which saves a fetch of a 3D table and eight exponentials a
 // pixel. (The table's coordinates would not interpolate: their azimuth folds at the sun's.)
-// With them the sky's irradiance there (skyIrradianceAt: a lookup by altitude, made wherever the point is).
+// With them the sky's irradiance there (skyIrradianceAt: a lookup by altitude, which terrain.frag makes per pixel;
+// the vertex programs leave it).
 struct Air {
     vec3 sunlight;
     vec3 transmittance;

@@ -591,10 +591,11 @@ void addLightOptions(std::vector<OptionSpec>& t)
                            &O::sunAzimuth, closedInterval(0, 360), "degrees"));
     t.push_back(realOption("sun_elevation", kGroupDisplay, "Height of the sun above the horizon.", &O::sunElevation,
                            closedInterval(-90, 90), "degrees"));
-    t.push_back(realOption("haze_distance", kGroupDisplay,
-                           "Aerial perspective: at distance d the terrain keeps exp(-d / haze_distance) of its own "
-                           "colour. 0 turns haze off.",
-                           &O::hazeDistance, atLeast(0), "metres"));
+    t.push_back(
+        realOption("haze_distance", kGroupDisplay,
+                   "With atmosphere = false: at distance d the terrain keeps exp(-d / haze_distance) of its own "
+                   "colour. 0 turns haze off.",
+                   &O::hazeDistance, atLeast(0), "metres"));
     t.push_back(boolOption("shadows", kGroupDisplay,
                            "Terrain shadows and sky visibility: the sun hidden behind the relief (soft, from the "
                            "horizons of every node's surface over the static map) and the sky hidden in valleys "

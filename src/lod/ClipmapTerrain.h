@@ -71,8 +71,9 @@ public:
     /// `normalMapTexels` > 0, the nodes' normal maps of that many texels a side (dynamic_texture_size,
     /// normalMapTexels()), at r = max(1, (normalMapTexels - 1) / (chunkSize - 1)) texels a cell. Samples that
     /// were drawn upsampled morph to their node's heights over `morphSeconds` (clipmap_morph_seconds; 0 pops).
-    /// With `sun`, the colours' alpha is the sun's visibility at the samples (the nodes' horizons,
-    /// NodeData::horizons; 1 where a node has none), blended and morphed with the colours.
+    /// With `sun`, the colours' alpha is the sun's visibility at the samples and ClipmapRing::sky the sky's (the
+    /// nodes' horizons, NodeData::horizons; 1 where a node has none), blended and morphed with the colours;
+    /// without, both are 1 (the viewer's shadows = false).
     ClipmapTerrain(const ClipmapLayout& layout, int chunkSize, int textureSize, bool materials = false,
                    int normalMapTexels = 0, double morphSeconds = 0.0, std::optional<ClipmapSun> sun = std::nullopt);
 

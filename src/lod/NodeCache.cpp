@@ -86,18 +86,18 @@ std::size_t NodeCache::groupsInsertable() const
             freeBytes += group.bytes;
         }
     }
-    if (mByteBudget == SIZE_MAX || mGroups.empty()) {
+    if (mByteBudget == SIZE_MAX || mLargestGroupBytes == 0) {
         return free;
     }
-    return std::min(free, freeBytes / std::max<std::size_t>(1, mGroupBytes / mGroups.size()));
+    return std::min(free, freeBytes / mLargestGroupBytes);
 }
 
-bool NodeCache::evictOne()
+bool NodeCache::evictOne(std::uint64_t keep)
 {
     for (auto it = mLru.rbegin(); it != mLru.rend(); ++it) {
         auto found = mGroups.find(*it);
         TERRAIN_ASSERT(found != mGroups.end());
-        if (!isEvictable(found->second)) {
+        if (*it == keep || !isEvictable(found->second)) {
             continue;
         }
         mLru.erase(found->second.lru);
@@ -128,18 +128,21 @@ NodeCache::Insert NodeCache::insertChildren(const NodeId& parent, ChildNodes chi
     for (const NodePtr& child : children) {
         bytes += mCharge(*child);
     }
+    mLargestGroupBytes = std::max(mLargestGroupBytes, bytes);
+    // The group holding `parent` stays: evicting it would leave the new group unreachable.
+    const std::uint64_t keep = parent.isRoot() ? kNoGroup : parent.parent().key();
     if (mByteBudget != SIZE_MAX && mBytes + bytes > mByteBudget) {
         // Nothing is evicted for a group that would not fit with every evictable group gone.
         std::size_t evictable = 0;
         for (const auto& [key, group] : mGroups) {
-            evictable += isEvictable(group) ? group.bytes : 0;
+            evictable += key != keep && isEvictable(group) ? group.bytes : 0;
         }
         if (mBytes - evictable + bytes > mByteBudget) {
             return Insert::NoRoom;
         }
     }
     while (size() + 4 > mCapacity || (mByteBudget != SIZE_MAX && mBytes + bytes > mByteBudget)) {
-        if (!evictOne()) {
+        if (!evictOne(keep)) {
             return Insert::NoRoom;
         }
     }

@@ -53,7 +53,7 @@ public:
     Insert insertChildren(const NodeId& parent, ChildNodes children);
 
     /// Groups that insertChildren() could make room for now: free space plus groups it may evict, in slots and,
-    /// with a byte budget, in bytes (groups of the resident groups' mean size).
+    /// with a byte budget, in bytes (groups as large as the largest offered so far).
     std::size_t groupsInsertable() const;
 
     std::size_t size() const { return 1 + 4 * mGroups.size(); }
@@ -80,7 +80,10 @@ private:
         int slot = 0;                            ///< g: its nodes' slots are 4g + 1 .. 4g + 4
         std::size_t bytes = 0;                   ///< its nodes' charges
     };
-    bool evictOne();
+    /// A parent key no group has (the root's children's group is keyed by the root).
+    static constexpr std::uint64_t kNoGroup = ~std::uint64_t{0};
+    /// Evicts the least recently used evictable group but the one keyed `keep`; false when there is none.
+    bool evictOne(std::uint64_t keep);
     bool isEvictable(const Group& group) const;
 
     std::size_t mCapacity;
@@ -88,6 +91,9 @@ private:
     NodeCharge mCharge;
     std::size_t mBytes = 0;       ///< resident nodes' bytes, the root's included
     std::size_t mGroupBytes = 0;  ///< the groups' part of mBytes
+    /// The largest charge of a group inserted or offered so far: what groupsInsertable() counts room for in
+    /// bytes, so that it never promises room a group no larger than those before would not find.
+    std::size_t mLargestGroupBytes = 0;
     NodePtr mRoot;
     std::unordered_map<std::uint64_t, Group> mGroups;  ///< by parent key
     std::list<std::uint64_t> mLru;                     ///< parent keys, most recently used first

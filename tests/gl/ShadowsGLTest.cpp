@@ -62,6 +62,63 @@ double marchedSkyVisibility(const HeightGrid& data, double x, double y, double z
     return sum / kAzimuths;
 }
 
+/// What the test draws: the camera's frame of the streamer's nodes in `mode` (the draw list for chunks and
+/// tessellation; clipmap rings of 255 samples, the default, from the map's leaves to the root, every node
+/// resident), with the sun the rings' shadows are made for.
+struct ShadowScene {
+    Mode mode;
+    const MapHeader& header;
+    const Camera& camera;
+    TerrainStreamer& streamer;
+    const DrawList& frame;
+    int normalMapTexels;
+    std::size_t slots;
+    ClipmapSun sun;
+};
+
+/// The scene drawn with or without shadows in `style`: the frame and its depth buffer.
+DrawnFrame drawScene(const ShadowScene& s, bool shadows, const SceneStyle& style)
+{
+    DrawnFrame drawn;
+    if (s.mode == Mode::kClipmap) {
+        const int chunk = static_cast<int>(s.header.chunkSize);
+        ClipmapLayout layout(extentOf(s.header), chunk, 255, static_cast<int>(s.header.levels) - 1, 0);
+        ClipmapTerrain rings(layout, chunk, static_cast<int>(s.header.textureSize), false, 0, 0.0,
+                             shadows ? std::optional(s.sun) : std::nullopt);
+        const ResidentNodeLookup lookup = [&](const NodeId& id) { return s.streamer.node(id); };
+        rings.update(layout, layout.moveTo(s.camera.position.x, s.camera.position.y), lookup);
+        const std::vector<std::vector<LatticeRect>> none(static_cast<std::size_t>(layout.ringCount()));
+        for (int round = 0; round < 32 && rings.upsampledNodes() > 0; ++round) {
+            s.streamer.updateFor(rings.wanted(layout));
+            s.streamer.drain();
+            rings.update(layout, none, lookup);
+        }
+        EXPECT_EQ(rings.upsampledNodes(), 0u);
+        auto renderer = ClipmapRenderer::create(TERRAIN_SHADER_DIR, s.header, layout);
+        EXPECT_TRUE(renderer.ok()) << renderer.error().message;
+        if (!renderer.ok()) {
+            return drawn;
+        }
+        (*renderer)->draw(layout, rings, 0, s.camera, style);
+    } else {
+        PoolOptions pools;
+        pools.slots = s.slots;
+        pools.tessellation = s.mode == Mode::kTessellation;
+        pools.normalMapTexels = s.normalMapTexels;
+        pools.shadows = shadows;
+        auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, s.header, 16, pools);
+        EXPECT_TRUE(renderer.ok()) << renderer.error().message;
+        if (!renderer.ok()) {
+            return drawn;
+        }
+        (*renderer)->draw(s.frame, style);
+    }
+    glFinish();
+    drawn.depth = TerrainRenderer::readDepth(s.camera.viewportWidth, s.camera.viewportHeight);
+    drawn.image = captureFrame(s.camera.viewportWidth, s.camera.viewportHeight);
+    return drawn;
+}
+
 class ShadowsGLTest : public ::testing::TestWithParam<Mode> {};
 
 TEST_P(ShadowsGLTest, DrawnShadowsAndSkyAreThoseOfRaysMarchedOverTheHeightData)
@@ -120,48 +177,11 @@ TEST_P(ShadowsGLTest, DrawnShadowsAndSkyAreThoseOfRaysMarchedOverTheHeightData)
     SceneStyle skyOnly = sunOnly;
     skyOnly.sunColour = glm::vec3(0.0f);
     skyOnly.ambient = glm::vec3(1.0f);
-    auto draw = [&](bool shadows, const SceneStyle& style) {
-        DrawnFrame drawn;
-        if (mode == Mode::kClipmap) {
-            // Rings of 255 samples (the default) from the map's leaves to the root, every node resident.
-            const int chunk = static_cast<int>(header.chunkSize);
-            ClipmapLayout layout(extentOf(header), chunk, 255, static_cast<int>(header.levels) - 1, 0);
-            const ClipmapSun sun{std::atan2(toSun.y, toSun.x), sunElevation};
-            ClipmapTerrain rings(layout, chunk, static_cast<int>(header.textureSize), false, 0, 0.0,
-                                 shadows ? std::optional(sun) : std::nullopt);
-            const ResidentNodeLookup lookup = [&](const NodeId& id) { return (*streamer)->node(id); };
-            rings.update(layout, layout.moveTo(camera.position.x, camera.position.y), lookup);
-            const std::vector<std::vector<LatticeRect>> none(static_cast<std::size_t>(layout.ringCount()));
-            for (int round = 0; round < 32 && rings.upsampledNodes() > 0; ++round) {
-                (*streamer)->updateFor(rings.wanted(layout));
-                (*streamer)->drain();
-                rings.update(layout, none, lookup);
-            }
-            EXPECT_EQ(rings.upsampledNodes(), 0u);
-            auto renderer = ClipmapRenderer::create(TERRAIN_SHADER_DIR, header, layout);
-            EXPECT_TRUE(renderer.ok()) << renderer.error().message;
-            if (!renderer.ok()) {
-                return drawn;
-            }
-            (*renderer)->draw(layout, rings, 0, camera, style);
-        } else {
-            PoolOptions pools;
-            pools.slots = kSlots;
-            pools.tessellation = tessellation;
-            pools.normalMapTexels = normalMapTexels(policy.normalMapSize);
-            pools.shadows = shadows;
-            auto renderer = TerrainRenderer::create(TERRAIN_SHADER_DIR, header, 16, pools);
-            EXPECT_TRUE(renderer.ok()) << renderer.error().message;
-            if (!renderer.ok()) {
-                return drawn;
-            }
-            (*renderer)->draw(frame, style);
-        }
-        glFinish();
-        drawn.depth = TerrainRenderer::readDepth(kWidth, kHeight);
-        drawn.image = captureFrame(kWidth, kHeight);
-        return drawn;
-    };
+    const ShadowScene drawn{mode,   header,
+                            camera, **streamer,
+                            frame,  normalMapTexels(policy.normalMapSize),
+                            kSlots, {std::atan2(toSun.y, toSun.x), sunElevation}};
+    auto draw = [&](bool shadows, const SceneStyle& style) { return drawScene(drawn, shadows, style); };
     const DrawnFrame open = draw(false, sunOnly);
     const DrawnFrame shadowed = draw(true, sunOnly);
     const DrawnFrame openSky = draw(false, skyOnly);

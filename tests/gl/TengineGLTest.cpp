@@ -389,8 +389,8 @@ TEST_F(TengineGLTest, ClipmapModeHasNoHolesAndIdenticalFrames)
         ASSERT_EQ(first.pixels.size(), second.pixels.size());
         EXPECT_TRUE(first.pixels == second.pixels) << "frame " << f << " differs";
     }
-    // 255 x 255 samples, 20 bytes each (heights, morphs, colours and the colours morphs start from) on the CPU and on
-    // the GPU, for levels 0 to the finest.
+    // 255 x 255 samples, 22 bytes each (heights, morphs, colours and the colours morphs start from, sky visibility
+    // now and before) on the CPU and on the GPU, for levels 0 to the finest.
     EXPECT_NE(run.output.find("clipmap: "), std::string::npos) << run.output;
     // The cache within the capacity memory_budget pays for (the log says how many nodes).
     const std::size_t holds = run.output.find(" holds ");
