@@ -38,6 +38,17 @@ void expectReachable(const NodeCache& cache, const std::vector<NodeId>& everInse
     }
 }
 
+/// Walks from the root down random resident groups (touching them) to a node whose children are not resident,
+/// above `maxLevel`; or to where the walk stopped at `maxLevel` (then the caller inserts nothing).
+NodeId walkToMissingGroup(NodeCache& cache, std::mt19937& random, int maxLevel)
+{
+    NodeId id = NodeId::root();
+    while (id.level < maxLevel && cache.touchChildren(id)) {
+        id = id.child(static_cast<int>(random() % 4));
+    }
+    return id;
+}
+
 TEST(NodeCacheTest, RootIsAlwaysResident)
 {
     NodeCache cache(5);
@@ -145,10 +156,7 @@ TEST(NodeCacheTest, RandomWorkloadKeepsCapacityAndReachability)
     for (int frame = 0; frame < 2000; ++frame) {
         cache.beginFrame();
         // Touch a random resident path, then insert a random group below a resident node.
-        NodeId id = NodeId::root();
-        while (id.level < 6 && cache.touchChildren(id)) {
-            id = id.child(static_cast<int>(random() % 4));
-        }
+        const NodeId id = walkToMissingGroup(cache, random, 6);
         if (id.level < 6 && cache.isResident(id)) {
             cache.insertChildren(id, makeChildren(id));
             inserted.push_back(id);
@@ -215,10 +223,7 @@ TEST(NodeCacheTest, AByteBudgetHoldsWhateverTheNodesSizes)
     std::size_t largest = 0;  // the largest group offered so far
     for (int frame = 0; frame < 2000; ++frame) {
         cache.beginFrame();
-        NodeId id = NodeId::root();
-        while (id.level < 7 && cache.touchChildren(id)) {
-            id = id.child(static_cast<int>(random() % 4));
-        }
+        const NodeId id = walkToMissingGroup(cache, random, 7);
         if (id.level < 7 && cache.isResident(id)) {
             const std::uint64_t evictions = cache.evictions();
             const std::size_t insertable = cache.groupsInsertable();
